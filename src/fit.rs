@@ -1,0 +1,1 @@
+//! The floating tangents pipeline: spline → N-element G1 piecewise helix.

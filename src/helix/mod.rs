@@ -1,0 +1,1 @@
+//! Helices: Ghosh interpolation, point relaxation, piecewise helices.

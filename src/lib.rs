@@ -1,0 +1,23 @@
+//! # strandfit
+//!
+//! Fit 3D curves to compact, smooth primitives. The core (this crate's CPU
+//! reference path, in `f64`) is the *floating tangents* method of
+//! Derouet-Jourdan, Bertails-Descoubes and Thollot (CAGD 30(5), 2013):
+//!
+//! 1. sample a Bézier spline at `N + 1` points equally spaced in arc length,
+//!    with their unit tangents ([`spline`]);
+//! 2. relax the points so that every consecutive pair is co-helical,
+//!    `⟨p'ᵢ₊₁ − p'ᵢ, tᵢ₊₁ − tᵢ⟩ = 0` ([`helix::relax`]);
+//! 3. join each pair by Ghosh's unique short helix ([`helix::ghosh`]),
+//!    giving a G1 piecewise helix of `N` elements ([`helix::PiecewiseHelix`]).
+//!
+//! Conventions: lengths are in the input's units; curvature is `κ ≥ 0`;
+//! torsion follows the standard Frenet–Serret sign (a right-handed helix has
+//! `τ > 0`).
+
+pub mod fit;
+pub mod helix;
+pub mod metrics;
+pub mod spline;
+
+pub use glam::DVec3;
