@@ -1,1 +1,33 @@
-//! Helices: Ghosh interpolation, point relaxation, piecewise helices.
+//! Helices: single elements, Ghosh's short-helix interpolation, the
+//! floating-tangents point relaxation, and G1 piecewise helices.
+
+mod element;
+pub mod ghosh;
+mod piecewise;
+pub mod relax;
+
+pub use element::{sinc, sinc_defect3, versinc2, Frame, HelixElement};
+pub use ghosh::{interpolate, ShortHelix, DEFAULT_COHELICAL_TOL, PARALLEL_EPS};
+pub use piecewise::{ChainParams, ElementParams, PiecewiseHelix};
+pub use relax::{relax, relax_dense, relax_tridiagonal, RelaxScratch, Relaxation};
+
+use thiserror::Error;
+
+/// Why two point–tangent pairs have no short helix.
+#[derive(Debug, Clone, Copy, PartialEq, Error)]
+pub enum HelixError {
+    #[error("non-finite coordinate in points or tangents")]
+    NonFinite,
+    #[error("a tangent has zero length")]
+    ZeroTangent,
+    #[error("p0 and p1 coincide: no helix joins a point to itself")]
+    CoincidentPoints,
+    #[error(
+        "points and tangents are not co-helical: |<p1-p0, t1-t0>|/(|p1-p0||t1-t0|) = {residual:.3e} exceeds tolerance {tolerance:.1e} (Ghosh's condition, Eq. (6))"
+    )]
+    NotCoHelical { residual: f64, tolerance: f64 },
+    #[error(
+        "tangents are parallel but the chord is {deviation:.3e} rad off the tangent: only a full-turn helix joins them, not a short one"
+    )]
+    ParallelTangentsOffChord { deviation: f64 },
+}

@@ -1,0 +1,242 @@
+//! G1 piecewise helices, and their compact parameter form.
+
+use glam::DVec3;
+
+use super::element::{Frame, HelixElement};
+use super::ghosh::orthonormalize;
+
+/// A chain of helix elements, each starting where (and with the tangent
+/// with which) the previous one ends, up to the fitting's rounding.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PiecewiseHelix {
+    elements: Vec<HelixElement>,
+    /// `cum[i]` = arc length at the start of element `i`; `cum[n]` = total.
+    cum: Vec<f64>,
+}
+
+/// Per-element parameters of the compact form: three shape numbers plus the
+/// rotation of the element's frame (equivalently of its axis) about its start
+/// tangent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ElementParams {
+    pub length: f64,
+    pub curvature: f64,
+    pub torsion: f64,
+    /// Signed angle (radians, about the start tangent) from the reference
+    /// normal carried over from the previous element's end to this element's
+    /// start normal. 0 for straight elements (which carry the reference on).
+    pub twist: f64,
+}
+
+/// The compact form of a piecewise helix: a start point and frame, then
+/// `(L, κ, τ, twist)` per element. Evaluation from this alone reproduces
+/// the chain (see [`PiecewiseHelix::from_params`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainParams {
+    pub start: DVec3,
+    pub tangent: DVec3,
+    /// Reference normal at the start (the first curved element's normal).
+    pub normal: DVec3,
+    pub elements: Vec<ElementParams>,
+}
+
+impl PiecewiseHelix {
+    /// Build from elements (their start points are taken as given).
+    pub fn new(elements: Vec<HelixElement>) -> Self {
+        let mut cum = Vec::with_capacity(elements.len() + 1);
+        let mut acc = 0.0;
+        cum.push(0.0);
+        for e in &elements {
+            acc += e.length;
+            cum.push(acc);
+        }
+        PiecewiseHelix { elements, cum }
+    }
+
+    pub fn elements(&self) -> &[HelixElement] {
+        &self.elements
+    }
+
+    pub fn len(&self) -> usize {
+        self.elements.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.elements.is_empty()
+    }
+
+    /// Total arc length.
+    pub fn length(&self) -> f64 {
+        *self.cum.last().unwrap_or(&0.0)
+    }
+
+    /// The paper's complexity `∫√(κ² + τ²) ds` (Eq. 12): exactly `Σ ωᵢLᵢ`.
+    pub fn complexity(&self) -> f64 {
+        self.elements.iter().map(|e| e.phi()).sum()
+    }
+
+    /// Element index and local arc length for a global arc length `s`
+    /// (clamped to `[0, length]`).
+    pub fn locate(&self, s: f64) -> Option<(usize, f64)> {
+        if self.elements.is_empty() {
+            return None;
+        }
+        let s = s.clamp(0.0, self.length());
+        // Last i with cum[i] <= s, limited to a valid element.
+        let i = self.cum.partition_point(|&c| c <= s).saturating_sub(1);
+        let i = i.min(self.elements.len() - 1);
+        Some((i, s - self.cum[i]))
+    }
+
+    /// Point at global arc length `s` (clamped).
+    pub fn point(&self, s: f64) -> Option<DVec3> {
+        self.locate(s).map(|(i, u)| self.elements[i].point(u))
+    }
+
+    /// Frenet frame at global arc length `s` (clamped).
+    pub fn frame(&self, s: f64) -> Option<Frame> {
+        self.locate(s).map(|(i, u)| self.elements[i].frame(u))
+    }
+
+    /// Unit tangent at global arc length `s` (clamped).
+    pub fn tangent(&self, s: f64) -> Option<DVec3> {
+        self.frame(s).map(|f| f.tangent)
+    }
+
+    /// `m ≥ 2` points equally spaced in arc length, first and last included.
+    pub fn sample(&self, m: usize) -> Vec<DVec3> {
+        let mut out = Vec::with_capacity(m);
+        self.sample_into(m, &mut out);
+        out
+    }
+
+    /// [`sample`](Self::sample) into a reusable buffer.
+    pub fn sample_into(&self, m: usize, out: &mut Vec<DVec3>) {
+        out.clear();
+        if self.elements.is_empty() || m == 0 {
+            return;
+        }
+        if m == 1 {
+            out.push(self.elements[0].start);
+            return;
+        }
+        let total = self.length();
+        let mut i = 0;
+        for k in 0..m {
+            let s = total * k as f64 / (m - 1) as f64;
+            while i + 1 < self.elements.len() && self.cum[i + 1] <= s {
+                i += 1;
+            }
+            out.push(self.elements[i].point(s - self.cum[i]));
+        }
+    }
+
+    /// Points every `step` of arc length (plus the end point).
+    pub fn sample_step(&self, step: f64) -> Vec<DVec3> {
+        if !(step > 0.0) || self.elements.is_empty() {
+            return Vec::new();
+        }
+        let m = (self.length() / step).ceil() as usize + 1;
+        self.sample(m.max(2))
+    }
+
+    /// The largest gap between an element's end and the next one's start
+    /// (position), and the largest tangent mismatch (radians).
+    pub fn continuity_defects(&self) -> (f64, f64) {
+        let mut gap: f64 = 0.0;
+        let mut angle: f64 = 0.0;
+        for w in self.elements.windows(2) {
+            let end = w[0].end_frame();
+            gap = gap.max((w[0].end_point() - w[1].start).length());
+            let c = end.tangent.cross(w[1].tangent).length();
+            angle = angle.max(c.atan2(end.tangent.dot(w[1].tangent)));
+        }
+        (gap, angle)
+    }
+
+    /// The compact form (start frame + `(L, κ, τ, twist)` per element).
+    pub fn to_params(&self) -> Option<ChainParams> {
+        let first = self.elements.first()?;
+        // Reference normal: the first curved element's normal (twist 0 there),
+        // carried back over any leading straight run.
+        let mut reference = self
+            .elements
+            .iter()
+            .find(|e| e.curvature > 0.0)
+            .map(|e| e.normal)
+            .unwrap_or(first.normal);
+        reference = orthonormalize_or_any(reference, first.tangent);
+        let start_normal = reference;
+        let mut elements = Vec::with_capacity(self.elements.len());
+        for e in &self.elements {
+            let t = e.tangent;
+            let r = orthonormalize_or_any(reference, t);
+            if e.curvature > 0.0 {
+                let twist = r.cross(e.normal).dot(t).atan2(r.dot(e.normal));
+                elements.push(ElementParams {
+                    length: e.length,
+                    curvature: e.curvature,
+                    torsion: e.torsion,
+                    twist,
+                });
+                reference = e.end_frame().normal;
+            } else {
+                elements.push(ElementParams {
+                    length: e.length,
+                    curvature: 0.0,
+                    torsion: 0.0,
+                    twist: 0.0,
+                });
+                reference = r;
+            }
+        }
+        Some(ChainParams {
+            start: first.start,
+            tangent: first.tangent,
+            normal: start_normal,
+            elements,
+        })
+    }
+
+    /// Rebuild a chain from its compact form alone. Each element starts
+    /// exactly at the previous one's end, with its end tangent (G1 by
+    /// construction).
+    pub fn from_params(params: &ChainParams) -> Self {
+        let mut p = params.start;
+        let mut t = params.tangent.normalize();
+        let mut r = orthonormalize_or_any(params.normal, t);
+        let mut elements = Vec::with_capacity(params.elements.len());
+        for ep in &params.elements {
+            let (s, c) = ep.twist.sin_cos();
+            // Rotate r about t by the twist (r ⊥ t).
+            let n = c * r + s * t.cross(r);
+            let e = HelixElement {
+                start: p,
+                tangent: t,
+                normal: n,
+                curvature: ep.curvature,
+                torsion: ep.torsion,
+                length: ep.length,
+            };
+            let end = e.end_frame();
+            p = e.end_point();
+            t = end.tangent.normalize();
+            r = if ep.curvature > 0.0 {
+                orthonormalize_or_any(end.normal, t)
+            } else {
+                orthonormalize_or_any(n, t)
+            };
+            elements.push(e);
+        }
+        PiecewiseHelix::new(elements)
+    }
+}
+
+fn orthonormalize_or_any(v: DVec3, t: DVec3) -> DVec3 {
+    let w = v - v.dot(t) * t;
+    if w.length_squared() > 1e-24 {
+        orthonormalize(v, t)
+    } else {
+        t.any_orthonormal_vector()
+    }
+}

@@ -1,0 +1,360 @@
+//! Point relaxation (paper 000, Section 4): move the break points as little
+//! as possible so that every consecutive pair becomes co-helical,
+//!
+//! ```text
+//! min Σᵢ ‖p'ᵢ − pᵢ‖²   subject to   ⟨p'ᵢ₊₁ − p'ᵢ, dᵢ⟩ = 0,  dᵢ = tᵢ₊₁ − tᵢ,
+//! ```
+//!
+//! for `i = 0..N−1` (N + 1 points). Two solvers give the same unique minimiser:
+//!
+//! * [`relax_tridiagonal`] (default, `O(N)`): the Lagrange conditions give
+//!   `p'ᵢ = pᵢ − ½(λᵢ₋₁ êᵢ₋₁ − λᵢ êᵢ)`; substituting into the constraints gives
+//!   the symmetric tridiagonal system
+//!   `λᵢ − ½⟨êᵢ, êᵢ₋₁⟩λᵢ₋₁ − ½⟨êᵢ, êᵢ₊₁⟩λᵢ₊₁ = ⟨pᵢ₊₁ − pᵢ, êᵢ⟩`.
+//!   We use the unit directions `êᵢ = dᵢ/|dᵢ|` (the constraints are unchanged);
+//!   the matrix then has unit diagonal and off-diagonals of size ≤ ½, so it is
+//!   diagonally dominant and symmetric positive definite, and the Thomas
+//!   algorithm is stable without pivoting.
+//! * [`relax_dense`] (the paper's reference): `p'ᵢ₊₁ = p'ᵢ + Dᵢaᵢ` with `Dᵢ` an
+//!   orthonormal basis of the plane ⊥ `dᵢ` (Eq. (3)); the unconstrained least
+//!   squares in `(p'₀, a₀ … aₙ₋₁)` has the `2N + 3` normal equations (5),
+//!   solved by dense LU with partial pivoting (faer).
+//!
+//! A constraint whose `dᵢ` vanishes (`|dᵢ| ≤` [`PARALLEL_EPS`], parallel
+//! tangents) says nothing and is dropped: `λᵢ = 0`, and in the dense form `Dᵢ`
+//! becomes the full 3×3 identity (3 unknowns instead of 2).
+
+use faer::linalg::solvers::Solve;
+use faer::Mat;
+use glam::DVec3;
+
+use super::ghosh::PARALLEL_EPS;
+
+/// Which solver [`relax`] uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Relaxation {
+    /// `O(N)` symmetric tridiagonal solve in the Lagrange multipliers.
+    #[default]
+    Tridiagonal,
+    /// The paper's `2N + 3` normal equations by dense LU (`O(N³)`).
+    DenseLu,
+}
+
+/// Relax `points` (N + 1 of them) against `tangents` (unit, same count).
+pub fn relax(points: &[DVec3], tangents: &[DVec3], method: Relaxation) -> Vec<DVec3> {
+    match method {
+        Relaxation::Tridiagonal => {
+            let mut out = Vec::new();
+            let mut scratch = RelaxScratch::default();
+            relax_tridiagonal(points, tangents, &mut out, &mut scratch);
+            out
+        }
+        Relaxation::DenseLu => relax_dense(points, tangents),
+    }
+}
+
+/// Reusable buffers for [`relax_tridiagonal`] (no allocation in hot loops).
+#[derive(Default, Debug)]
+pub struct RelaxScratch {
+    dirs: Vec<DVec3>,
+    rhs: Vec<f64>,
+    diag: Vec<f64>,
+    off: Vec<f64>,
+}
+
+/// `O(N)` relaxation; writes the relaxed points into `out`.
+///
+/// # Panics
+/// If `points` and `tangents` differ in length (a programming error).
+pub fn relax_tridiagonal(
+    points: &[DVec3],
+    tangents: &[DVec3],
+    out: &mut Vec<DVec3>,
+    scratch: &mut RelaxScratch,
+) {
+    assert_eq!(points.len(), tangents.len(), "one tangent per point");
+    out.clear();
+    out.extend_from_slice(points);
+    let n = points.len().saturating_sub(1); // number of constraints
+    if n == 0 {
+        return;
+    }
+    let RelaxScratch {
+        dirs,
+        rhs,
+        diag,
+        off,
+    } = scratch;
+    dirs.clear();
+    rhs.clear();
+    for i in 0..n {
+        let d = tangents[i + 1] - tangents[i];
+        let len = d.length();
+        if len > PARALLEL_EPS {
+            let e = d / len;
+            dirs.push(e);
+            rhs.push((points[i + 1] - points[i]).dot(e));
+        } else {
+            // Dropped constraint: λᵢ = 0 (unit row, zero right-hand side).
+            dirs.push(DVec3::ZERO);
+            rhs.push(0.0);
+        }
+    }
+    // Thomas algorithm on M λ = r, M_ii = 1, M_{i,i+1} = −½⟨êᵢ, êᵢ₊₁⟩.
+    // Forward elimination: diag[i] = M_ii − off[i−1]²/diag[i−1].
+    diag.clear();
+    off.clear();
+    for i in 0..n {
+        let sub = if i > 0 { off[i - 1] } else { 0.0 };
+        let di = if i > 0 { 1.0 - sub * sub / diag[i - 1] } else { 1.0 };
+        if i > 0 {
+            rhs[i] -= sub / diag[i - 1] * rhs[i - 1];
+        }
+        diag.push(di);
+        if i + 1 < n {
+            off.push(-0.5 * dirs[i].dot(dirs[i + 1]));
+        }
+    }
+    // Back substitution, in place: rhs becomes λ.
+    rhs[n - 1] /= diag[n - 1];
+    for i in (0..n - 1).rev() {
+        rhs[i] = (rhs[i] - off[i] * rhs[i + 1]) / diag[i];
+    }
+    let lambda = &*rhs;
+    // p'ᵢ = pᵢ − ½(λᵢ₋₁ êᵢ₋₁ − λᵢ êᵢ)
+    for i in 0..=n {
+        let mut corr = DVec3::ZERO;
+        if i > 0 {
+            corr += lambda[i - 1] * dirs[i - 1];
+        }
+        if i < n {
+            corr -= lambda[i] * dirs[i];
+        }
+        out[i] -= 0.5 * corr;
+    }
+}
+
+/// The paper's dense normal equations (5), solved by LU with partial pivoting.
+///
+/// Points are centred on their centroid first (translation does not change
+/// the minimiser, and it keeps the right-hand side small).
+///
+/// # Panics
+/// If `points` and `tangents` differ in length (a programming error).
+pub fn relax_dense(points: &[DVec3], tangents: &[DVec3]) -> Vec<DVec3> {
+    assert_eq!(points.len(), tangents.len(), "one tangent per point");
+    let n = points.len().saturating_sub(1);
+    if n == 0 {
+        return points.to_vec();
+    }
+    let centroid = points.iter().copied().sum::<DVec3>() / points.len() as f64;
+    let p: Vec<DVec3> = points.iter().map(|&q| q - centroid).collect();
+
+    // Basis columns of each Dⱼ and their offsets in the unknown vector.
+    let mut bases: Vec<Vec<DVec3>> = Vec::with_capacity(n);
+    for j in 0..n {
+        let d = tangents[j + 1] - tangents[j];
+        let len = d.length();
+        if len > PARALLEL_EPS {
+            let (v0, v1) = (d / len).any_orthonormal_pair();
+            bases.push(vec![v0, v1]);
+        } else {
+            bases.push(vec![DVec3::X, DVec3::Y, DVec3::Z]);
+        }
+    }
+    let mut offset = Vec::with_capacity(n);
+    let mut size = 3;
+    for b in &bases {
+        offset.push(size);
+        size += b.len();
+    }
+
+    // Suffix sums S_j = Σ_{i>j} p_i for the right-hand side.
+    let mut suffix = vec![DVec3::ZERO; n + 1];
+    for j in (0..n).rev() {
+        suffix[j] = suffix[j + 1] + p[j + 1];
+    }
+    let total: DVec3 = p.iter().copied().sum();
+
+    let mut a = Mat::<f64>::zeros(size, size);
+    let mut rhs = Mat::<f64>::zeros(size, 1);
+    let np1 = (n + 1) as f64;
+    for r in 0..3 {
+        a[(r, r)] = np1;
+        rhs[(r, 0)] = total[r];
+    }
+    for j in 0..n {
+        let wj = (n - j) as f64; // number of points i > j
+        for (cj, v) in bases[j].iter().enumerate() {
+            let col = offset[j] + cj;
+            // p'₀ block × Dⱼ block: (N − j) Dⱼ
+            for r in 0..3 {
+                a[(r, col)] = wj * v[r];
+                a[(col, r)] = wj * v[r];
+            }
+            rhs[(col, 0)] = v.dot(suffix[j]);
+            // Dⱼᵀ D_k blocks: (N − max(j, k)) ⟨v, u⟩
+            for k in j..n {
+                let wk = (n - k) as f64;
+                for (ck, u) in bases[k].iter().enumerate() {
+                    let col2 = offset[k] + ck;
+                    let val = wk * v.dot(*u);
+                    a[(col, col2)] = val;
+                    a[(col2, col)] = val;
+                }
+            }
+        }
+    }
+    let lu = a.partial_piv_lu();
+    let x = lu.solve(&rhs);
+
+    let mut out = Vec::with_capacity(n + 1);
+    let mut cur = DVec3::new(x[(0, 0)], x[(1, 0)], x[(2, 0)]);
+    out.push(cur + centroid);
+    for j in 0..n {
+        for (cj, v) in bases[j].iter().enumerate() {
+            cur += x[(offset[j] + cj, 0)] * *v;
+        }
+        out.push(cur + centroid);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn random_unit(rng: &mut impl Rng) -> DVec3 {
+        loop {
+            let v = DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
+            if v.length() > 0.1 && v.length() < 1.0 {
+                return v.normalize();
+            }
+        }
+    }
+
+    /// Random smooth-ish polyline with slowly turning tangents.
+    fn random_data(rng: &mut impl Rng, n: usize) -> (Vec<DVec3>, Vec<DVec3>) {
+        let mut p = vec![DVec3::new(10.0, -3.0, 7.0)];
+        let mut t = vec![random_unit(rng)];
+        for i in 0..n {
+            let step = rng.gen_range(0.5..1.5);
+            let noise = 0.3 * random_unit(rng);
+            let nt = (t[i] + noise).normalize();
+            p.push(p[i] + step * (t[i] + nt).normalize() + 0.05 * random_unit(rng));
+            t.push(nt);
+        }
+        (p, t)
+    }
+
+    fn max_constraint_residual(p: &[DVec3], t: &[DVec3]) -> f64 {
+        (0..p.len() - 1)
+            .map(|i| {
+                let d = t[i + 1] - t[i];
+                let chord = p[i + 1] - p[i];
+                if d.length() <= PARALLEL_EPS {
+                    0.0
+                } else {
+                    chord.dot(d).abs() / (chord.length() * d.length())
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn both_solvers_agree_and_satisfy_constraints() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for &n in &[1usize, 2, 3, 10, 57, 200] {
+            for _ in 0..5 {
+                let (p, t) = random_data(&mut rng, n);
+                let a = relax(&p, &t, Relaxation::DenseLu);
+                let b = relax(&p, &t, Relaxation::Tridiagonal);
+                let scale = p.iter().map(|q| (*q - p[0]).length()).fold(0.0, f64::max);
+                let diff = a.iter().zip(&b).map(|(x, y)| (*x - *y).length()).fold(0.0, f64::max);
+                assert!(diff <= 1e-9 * scale, "n={n}: solvers differ by {diff}");
+                assert!(max_constraint_residual(&a, &t) < 1e-10, "dense residual");
+                assert!(max_constraint_residual(&b, &t) < 1e-10, "tridiagonal residual");
+            }
+        }
+    }
+
+    #[test]
+    fn relaxation_is_the_minimiser() {
+        // Any feasible perturbation (a move along the constraint manifold)
+        // increases the objective: compare with random feasible points
+        // obtained by relaxing perturbed data (feasible for the same tangents).
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let (p, t) = random_data(&mut rng, 12);
+        let best = relax(&p, &t, Relaxation::Tridiagonal);
+        let cost = |q: &[DVec3]| q.iter().zip(&p).map(|(a, b)| (*a - *b).length_squared()).sum::<f64>();
+        let c0 = cost(&best);
+        for _ in 0..50 {
+            let pert: Vec<DVec3> = p.iter().map(|q| *q + 0.2 * random_unit(&mut rng)).collect();
+            let feasible = relax(&pert, &t, Relaxation::Tridiagonal);
+            assert!(max_constraint_residual(&feasible, &t) < 1e-10);
+            assert!(cost(&feasible) >= c0 - 1e-12);
+        }
+    }
+
+    #[test]
+    fn already_cohelical_points_do_not_move_and_translation_commutes() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let (p, t) = random_data(&mut rng, 20);
+        let once = relax(&p, &t, Relaxation::Tridiagonal);
+        let twice = relax(&once, &t, Relaxation::Tridiagonal);
+        for (a, b) in once.iter().zip(&twice) {
+            assert!((*a - *b).length() < 1e-12);
+        }
+        let shift = DVec3::new(1e3, -2e3, 5e2);
+        let moved: Vec<DVec3> = p.iter().map(|q| *q + shift).collect();
+        let r = relax(&moved, &t, Relaxation::DenseLu);
+        for (a, b) in once.iter().zip(&r) {
+            assert!((*a + shift - *b).length() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn vanishing_constraints_are_dropped() {
+        // Straight run in the middle: t2 = t3 = t4 exactly.
+        let t = vec![
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0).normalize(),
+            DVec3::Y,
+            DVec3::Y,
+            DVec3::Y,
+            DVec3::new(0.0, 1.0, 1.0).normalize(),
+        ];
+        let p = vec![
+            DVec3::ZERO,
+            DVec3::new(1.0, 0.4, 0.1),
+            DVec3::new(1.5, 1.3, 0.0),
+            DVec3::new(1.6, 2.3, -0.1),
+            DVec3::new(1.5, 3.3, 0.2),
+            DVec3::new(1.5, 4.0, 0.9),
+        ];
+        let a = relax(&p, &t, Relaxation::DenseLu);
+        let b = relax(&p, &t, Relaxation::Tridiagonal);
+        for (x, y) in a.iter().zip(&b) {
+            assert!((*x - *y).length() < 1e-12);
+        }
+        assert!(max_constraint_residual(&b, &t) < 1e-12);
+        // All tangents equal: nothing to satisfy, nothing moves.
+        let t_same = vec![DVec3::Z; 5];
+        let p_any: Vec<DVec3> = (0..5).map(|i| DVec3::new(i as f64, (i * i) as f64, 0.0)).collect();
+        assert_eq!(relax(&p_any, &t_same, Relaxation::Tridiagonal), p_any);
+        let dense = relax(&p_any, &t_same, Relaxation::DenseLu);
+        for (x, y) in dense.iter().zip(&p_any) {
+            assert!((*x - *y).length() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn degenerate_sizes() {
+        assert!(relax(&[], &[], Relaxation::Tridiagonal).is_empty());
+        assert!(relax(&[], &[], Relaxation::DenseLu).is_empty());
+        let one = [DVec3::ONE];
+        assert_eq!(relax(&one, &[DVec3::X], Relaxation::DenseLu), one.to_vec());
+    }
+}
