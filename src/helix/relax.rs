@@ -21,8 +21,12 @@
 //!   solved by dense LU with partial pivoting (faer).
 //!
 //! A constraint whose `dᵢ` vanishes (`|dᵢ| ≤` [`PARALLEL_EPS`], parallel
-//! tangents) says nothing and is dropped: `λᵢ = 0`, and in the dense form `Dᵢ`
-//! becomes the full 3×3 identity (3 unknowns instead of 2).
+//! tangents) says nothing by itself. Dropping it would leave the chord free,
+//! and for parallel tangents the only short helix is the straight segment
+//! along them (Ghosh's theorem excludes `t₁ = t₀`; the limit is a full turn).
+//! So we replace it by that condition, chord ∥ `t`: two constraints (chord ⊥
+//! `u`, `v`) in the multiplier form, and `Dᵢ = [t̂]` (one unknown) in the dense
+//! form. Both solvers still solve the same problem.
 
 use faer::linalg::solvers::Solve;
 use faer::Mat;
@@ -56,13 +60,45 @@ pub fn relax(points: &[DVec3], tangents: &[DVec3], method: Relaxation) -> Vec<DV
 /// Reusable buffers for [`relax_tridiagonal`] (no allocation in hot loops).
 #[derive(Default, Debug)]
 pub struct RelaxScratch {
-    dirs: Vec<DVec3>,
-    rhs: Vec<f64>,
-    diag: Vec<f64>,
-    off: Vec<f64>,
+    segs: Vec<Seg>,
+    schur: Vec<Block>,
+}
+
+/// The constraint directions of one segment: `ê` for a proper constraint, or
+/// an orthonormal pair `(u, v)` ⊥ `t` when the tangents are parallel (the
+/// chord must then run along the tangent: the straight short helix).
+#[derive(Clone, Copy, Debug, Default)]
+struct Seg {
+    dirs: [DVec3; 2],
+    m: usize,
+    /// Right-hand side, then the eliminated `y`, then the multipliers `λ`.
+    y: [f64; 2],
+    /// Off-diagonal block to the next segment, `−½ Eᵢᵀ Eᵢ₊₁`.
+    b: Block,
+}
+
+/// A small dense block, `m × m'` with `m, m' ≤ 2`.
+type Block = [[f64; 2]; 2];
+
+/// Constraint directions of segment `i`: see [`Seg`].
+#[inline]
+fn segment_dirs(t0: DVec3, t1: DVec3) -> ([DVec3; 2], usize) {
+    let d = t1 - t0;
+    let len = d.length();
+    if len > PARALLEL_EPS {
+        ([d / len, DVec3::ZERO], 1)
+    } else {
+        let (u, v) = (t0 + t1).normalize().any_orthonormal_pair();
+        ([u, v], 2)
+    }
 }
 
 /// `O(N)` relaxation; writes the relaxed points into `out`.
+///
+/// With parallel tangents the vanished constraint is replaced by the
+/// straight-segment condition (chord ⊥ two directions ⊥ `t`), making the
+/// system block tridiagonal with 1×1 or 2×2 blocks; the block Thomas
+/// algorithm solves it in `O(N)` (the blocks are SPD Schur complements).
 ///
 /// # Panics
 /// If `points` and `tangents` differ in length (a programming error).
@@ -75,63 +111,129 @@ pub fn relax_tridiagonal(
     assert_eq!(points.len(), tangents.len(), "one tangent per point");
     out.clear();
     out.extend_from_slice(points);
-    let n = points.len().saturating_sub(1); // number of constraints
+    let n = points.len().saturating_sub(1); // number of segments
     if n == 0 {
         return;
     }
-    let RelaxScratch {
-        dirs,
-        rhs,
-        diag,
-        off,
-    } = scratch;
-    dirs.clear();
-    rhs.clear();
+    let RelaxScratch { segs, schur } = scratch;
+    segs.clear();
     for i in 0..n {
-        let d = tangents[i + 1] - tangents[i];
-        let len = d.length();
-        if len > PARALLEL_EPS {
-            let e = d / len;
-            dirs.push(e);
-            rhs.push((points[i + 1] - points[i]).dot(e));
-        } else {
-            // Dropped constraint: λᵢ = 0 (unit row, zero right-hand side).
-            dirs.push(DVec3::ZERO);
-            rhs.push(0.0);
+        let (dirs, m) = segment_dirs(tangents[i], tangents[i + 1]);
+        let chord = points[i + 1] - points[i];
+        let mut y = [0.0; 2];
+        for k in 0..m {
+            y[k] = chord.dot(dirs[k]);
+        }
+        segs.push(Seg { dirs, m, y, b: [[0.0; 2]; 2] });
+    }
+    for i in 0..n.saturating_sub(1) {
+        let (a, b) = (segs[i], segs[i + 1]);
+        for r in 0..a.m {
+            for c in 0..b.m {
+                segs[i].b[r][c] = -0.5 * a.dirs[r].dot(b.dirs[c]);
+            }
         }
     }
-    // Thomas algorithm on M λ = r, M_ii = 1, M_{i,i+1} = −½⟨êᵢ, êᵢ₊₁⟩.
-    // Forward elimination: diag[i] = M_ii − off[i−1]²/diag[i−1].
-    diag.clear();
-    off.clear();
+    // Forward elimination: Sᵢ = I − Bᵢ₋₁ᵀ Sᵢ₋₁⁻¹ Bᵢ₋₁, yᵢ −= Bᵢ₋₁ᵀ Sᵢ₋₁⁻¹ yᵢ₋₁.
+    schur.clear();
     for i in 0..n {
-        let sub = if i > 0 { off[i - 1] } else { 0.0 };
-        let di = if i > 0 { 1.0 - sub * sub / diag[i - 1] } else { 1.0 };
+        let m = segs[i].m;
+        let mut s = identity(m);
         if i > 0 {
-            rhs[i] -= sub / diag[i - 1] * rhs[i - 1];
+            let prev = segs[i - 1];
+            let inv = inverse(&schur[i - 1], prev.m);
+            // W = S⁻¹ B (prev.m × m)
+            let w = mul(&inv, prev.m, prev.m, &prev.b, m);
+            let winv_y = mat_vec(&inv, prev.m, prev.m, &prev.y);
+            for r in 0..m {
+                for c in 0..m {
+                    for k in 0..prev.m {
+                        s[r][c] -= prev.b[k][r] * w[k][c];
+                    }
+                }
+                for k in 0..prev.m {
+                    segs[i].y[r] -= prev.b[k][r] * winv_y[k];
+                }
+            }
         }
-        diag.push(di);
+        schur.push(s);
+    }
+    // Back substitution: λᵢ = Sᵢ⁻¹ (yᵢ − Bᵢ λᵢ₊₁), stored in y.
+    for i in (0..n).rev() {
+        let m = segs[i].m;
+        let mut rhs = segs[i].y;
         if i + 1 < n {
-            off.push(-0.5 * dirs[i].dot(dirs[i + 1]));
+            let next = segs[i + 1];
+            for r in 0..m {
+                for c in 0..next.m {
+                    rhs[r] -= segs[i].b[r][c] * next.y[c];
+                }
+            }
         }
+        let inv = inverse(&schur[i], m);
+        segs[i].y = mat_vec(&inv, m, m, &rhs);
     }
-    // Back substitution, in place: rhs becomes λ.
-    rhs[n - 1] /= diag[n - 1];
-    for i in (0..n - 1).rev() {
-        rhs[i] = (rhs[i] - off[i] * rhs[i + 1]) / diag[i];
-    }
-    let lambda = &*rhs;
-    // p'ᵢ = pᵢ − ½(λᵢ₋₁ êᵢ₋₁ − λᵢ êᵢ)
+    // p'ᵢ = pᵢ − ½(Eᵢ₋₁λᵢ₋₁ − Eᵢλᵢ)
     for i in 0..=n {
         let mut corr = DVec3::ZERO;
         if i > 0 {
-            corr += lambda[i - 1] * dirs[i - 1];
+            let s = &segs[i - 1];
+            for k in 0..s.m {
+                corr += s.y[k] * s.dirs[k];
+            }
         }
         if i < n {
-            corr -= lambda[i] * dirs[i];
+            let s = &segs[i];
+            for k in 0..s.m {
+                corr -= s.y[k] * s.dirs[k];
+            }
         }
         out[i] -= 0.5 * corr;
     }
+}
+
+#[inline]
+fn identity(m: usize) -> Block {
+    let mut b = [[0.0; 2]; 2];
+    for (k, row) in b.iter_mut().enumerate().take(m) {
+        row[k] = 1.0;
+    }
+    b
+}
+
+/// Inverse of an SPD block of size 1 or 2.
+#[inline]
+fn inverse(a: &Block, m: usize) -> Block {
+    if m == 1 {
+        [[1.0 / a[0][0], 0.0], [0.0, 0.0]]
+    } else {
+        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        [[a[1][1] / det, -a[0][1] / det], [-a[1][0] / det, a[0][0] / det]]
+    }
+}
+
+#[inline]
+fn mul(a: &Block, r: usize, k: usize, b: &Block, c: usize) -> Block {
+    let mut out = [[0.0; 2]; 2];
+    for i in 0..r {
+        for j in 0..c {
+            for l in 0..k {
+                out[i][j] += a[i][l] * b[l][j];
+            }
+        }
+    }
+    out
+}
+
+#[inline]
+fn mat_vec(a: &Block, r: usize, c: usize, v: &[f64; 2]) -> [f64; 2] {
+    let mut out = [0.0; 2];
+    for i in 0..r {
+        for j in 0..c {
+            out[i] += a[i][j] * v[j];
+        }
+    }
+    out
 }
 
 /// The paper's dense normal equations (5), solved by LU with partial pivoting.
@@ -159,7 +261,8 @@ pub fn relax_dense(points: &[DVec3], tangents: &[DVec3]) -> Vec<DVec3> {
             let (v0, v1) = (d / len).any_orthonormal_pair();
             bases.push(vec![v0, v1]);
         } else {
-            bases.push(vec![DVec3::X, DVec3::Y, DVec3::Z]);
+            // Parallel tangents: the chord must run along them (1 unknown).
+            bases.push(vec![(tangents[j] + tangents[j + 1]).normalize()]);
         }
     }
     let mut offset = Vec::with_capacity(n);
@@ -255,7 +358,7 @@ mod tests {
                 let d = t[i + 1] - t[i];
                 let chord = p[i + 1] - p[i];
                 if d.length() <= PARALLEL_EPS {
-                    0.0
+                    chord.cross(t[i]).length() / chord.length()
                 } else {
                     chord.dot(d).abs() / (chord.length() * d.length())
                 }
@@ -316,7 +419,7 @@ mod tests {
     }
 
     #[test]
-    fn vanishing_constraints_are_dropped() {
+    fn parallel_tangents_force_straight_chords() {
         // Straight run in the middle: t2 = t3 = t4 exactly.
         let t = vec![
             DVec3::new(1.0, 0.0, 0.0),
@@ -340,13 +443,36 @@ mod tests {
             assert!((*x - *y).length() < 1e-12);
         }
         assert!(max_constraint_residual(&b, &t) < 1e-12);
-        // All tangents equal: nothing to satisfy, nothing moves.
+        // All tangents equal: the points are projected onto a common line
+        // along the tangent, through their centroid (least squares).
         let t_same = vec![DVec3::Z; 5];
-        let p_any: Vec<DVec3> = (0..5).map(|i| DVec3::new(i as f64, (i * i) as f64, 0.0)).collect();
-        assert_eq!(relax(&p_any, &t_same, Relaxation::Tridiagonal), p_any);
+        let p_any: Vec<DVec3> = (0..5).map(|i| DVec3::new(i as f64, (i * i) as f64, i as f64)).collect();
+        let tri = relax(&p_any, &t_same, Relaxation::Tridiagonal);
         let dense = relax(&p_any, &t_same, Relaxation::DenseLu);
-        for (x, y) in dense.iter().zip(&p_any) {
+        let c = p_any.iter().copied().sum::<DVec3>() / 5.0;
+        for ((x, y), p) in dense.iter().zip(&tri).zip(&p_any) {
             assert!((*x - *y).length() < 1e-12);
+            assert!((x.x - c.x).abs() < 1e-12 && (x.y - c.y).abs() < 1e-12);
+            assert!((x.z - p.z).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn random_data_with_parallel_runs_agree() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for n in [4usize, 9, 40, 150] {
+            let (p, mut t) = random_data(&mut rng, n);
+            // Make a few runs of equal tangents, including at the ends.
+            for i in [0usize, 1, n / 2, n / 2 + 1, n - 1] {
+                t[i + 1] = t[i];
+            }
+            let a = relax(&p, &t, Relaxation::DenseLu);
+            let b = relax(&p, &t, Relaxation::Tridiagonal);
+            let scale = p.iter().map(|q| (*q - p[0]).length()).fold(0.0, f64::max);
+            let diff = a.iter().zip(&b).map(|(x, y)| (*x - *y).length()).fold(0.0, f64::max);
+            assert!(diff <= 1e-9 * scale, "n={n}: {diff}");
+            assert!(max_constraint_residual(&a, &t) < 1e-10);
+            assert!(max_constraint_residual(&b, &t) < 1e-10);
         }
     }
 
