@@ -1,0 +1,95 @@
+//! Input from a file or standard input; output written atomically.
+
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+
+/// Display name of an input ("<stdin>" for standard input).
+pub fn input_name(path: &Option<PathBuf>) -> String {
+    match path {
+        Some(p) if p.as_os_str() != "-" => p.display().to_string(),
+        _ => "<stdin>".to_string(),
+    }
+}
+
+/// Open an input for buffered reading.
+pub fn open_input(path: &Option<PathBuf>) -> Result<Box<dyn BufRead>> {
+    match path {
+        Some(p) if p.as_os_str() != "-" => {
+            let f = File::open(p).with_context(|| format!("cannot open {}", p.display()))?;
+            Ok(Box::new(BufReader::new(f)))
+        }
+        _ => Ok(Box::new(BufReader::new(io::stdin()))),
+    }
+}
+
+/// Read a whole input into a string.
+pub fn read_input(path: &Option<PathBuf>) -> Result<String> {
+    let mut s = String::new();
+    open_input(path)?
+        .read_to_string(&mut s)
+        .with_context(|| format!("cannot read {}", input_name(path)))?;
+    Ok(s)
+}
+
+/// An output sink: standard output, or a temporary file next to the target
+/// that is renamed over it only by [`Output::commit`] — so a failed run never
+/// leaves a partial or truncated output file behind.
+pub struct Output {
+    target: Option<PathBuf>,
+    temp: Option<tempfile::NamedTempFile>,
+    writer: Box<dyn Write>,
+}
+
+impl Output {
+    pub fn create(path: &Option<PathBuf>) -> Result<Output> {
+        match path {
+            Some(p) if p.as_os_str() != "-" => {
+                let dir = match p.parent() {
+                    Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                    _ => PathBuf::from("."),
+                };
+                let temp = tempfile::Builder::new()
+                    .prefix(".strandfit-")
+                    .suffix(".tmp")
+                    .tempfile_in(&dir)
+                    .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
+                let file = temp.reopen().context("cannot reopen the temporary output")?;
+                Ok(Output {
+                    target: Some(p.clone()),
+                    temp: Some(temp),
+                    writer: Box::new(BufWriter::with_capacity(1 << 20, file)),
+                })
+            }
+            _ => Ok(Output {
+                target: None,
+                temp: None,
+                writer: Box::new(BufWriter::new(io::stdout())),
+            }),
+        }
+    }
+
+    pub fn writer(&mut self) -> &mut dyn Write {
+        &mut *self.writer
+    }
+
+    /// Flush, sync and move the temporary file into place.
+    pub fn commit(mut self) -> Result<()> {
+        self.writer.flush().context("cannot write output")?;
+        drop(self.writer);
+        if let (Some(temp), Some(target)) = (self.temp.take(), self.target.take()) {
+            temp.as_file().sync_all().context("cannot sync output")?;
+            persist(temp, &target)?;
+        }
+        Ok(())
+    }
+}
+
+fn persist(temp: tempfile::NamedTempFile, target: &Path) -> Result<()> {
+    temp.persist(target)
+        .map_err(|e| e.error)
+        .with_context(|| format!("cannot move output into place at {}", target.display()))?;
+    Ok(())
+}

@@ -1,0 +1,121 @@
+//! The `strandfit` command line: `helix`, `fit`, `bench`.
+
+mod bench_cmd;
+mod fit_cmd;
+mod helix_cmd;
+mod io_util;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+use crate::helix::Relaxation;
+
+#[derive(Parser, Debug)]
+#[command(name = "strandfit", version, about = "Fit 3D curves with G1 piecewise helices (floating tangents)")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Ghosh's short helix for each JSON Lines record {"p0","t0","p1","t1"}.
+    Helix(HelixArgs),
+    /// Fit Bézier splines ({"splines":[{"id","control_points"}]}) with N helices each.
+    Fit(FitArgs),
+    /// Measure whole-fit throughput on synthetic splines (elements per second).
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args, Debug)]
+pub struct HelixArgs {
+    /// Input JSON Lines file ("-" or absent: standard input).
+    pub input: Option<PathBuf>,
+    /// Output file (absent: standard output). Written atomically.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Relative co-helicity tolerance |<p1-p0, t1-t0>|/(|p1-p0||t1-t0|).
+    #[arg(long, default_value_t = crate::helix::DEFAULT_COHELICAL_TOL)]
+    pub tolerance: f64,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum RelaxationArg {
+    /// O(N) tridiagonal solve in the Lagrange multipliers (default).
+    Tridiagonal,
+    /// The paper's 2N+3 normal equations by dense LU (reference, O(N^3)).
+    Dense,
+}
+
+impl From<RelaxationArg> for Relaxation {
+    fn from(r: RelaxationArg) -> Self {
+        match r {
+            RelaxationArg::Tridiagonal => Relaxation::Tridiagonal,
+            RelaxationArg::Dense => Relaxation::DenseLu,
+        }
+    }
+}
+
+#[derive(clap::Args, Debug)]
+pub struct FitArgs {
+    /// Input JSON file ("-" or absent: standard input).
+    pub input: Option<PathBuf>,
+    /// Number of helix elements per curve.
+    #[arg(short = 'n', long)]
+    pub elements: usize,
+    /// Output JSON file (absent: standard output). Written atomically.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Relaxation solver.
+    #[arg(long, value_enum, default_value_t = RelaxationArg::Tridiagonal)]
+    pub relaxation: RelaxationArg,
+    /// Points per element used to sample both curves for the Fréchet and
+    /// Hausdorff distances (each curve gets K·N + 1 points equally spaced in
+    /// its own arc length).
+    #[arg(long, default_value_t = 32)]
+    pub samples_per_element: usize,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// Number of synthetic splines.
+    #[arg(long, default_value_t = 20_000)]
+    pub curves: usize,
+    /// Helix elements per curve.
+    #[arg(short = 'n', long, default_value_t = 20)]
+    pub elements: usize,
+    /// Cubic segments per synthetic spline.
+    #[arg(long, default_value_t = 8)]
+    pub segments: usize,
+    /// Timed repetitions (the best is reported with the median).
+    #[arg(long, default_value_t = 5)]
+    pub repeat: usize,
+}
+
+/// Run the command line; returns the process exit code.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    if let Some(n) = cli.threads {
+        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n).build_global() {
+            eprintln!("error: cannot set {n} threads: {e}");
+            return ExitCode::from(2);
+        }
+    }
+    let result = match &cli.command {
+        Command::Helix(a) => helix_cmd::run(a),
+        Command::Fit(a) => fit_cmd::run(a),
+        Command::Bench(a) => bench_cmd::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
