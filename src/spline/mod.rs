@@ -15,3 +15,6 @@ mod gauss;
 pub use bezier_spline::{BezierSpline, DEFAULT_ACCURACY};
 pub use cubic::CubicBez;
 pub use error::SplineError;
+
+#[cfg(test)]
+mod tests;
