@@ -53,3 +53,106 @@ impl CubicBez {
         6.0 * (self.p3 - 3.0 * self.p2 + 3.0 * self.p1 - self.p0)
     }
 }
+
+/// Multiple of `f64::EPSILON` below which a derivative counts as vanishing.
+///
+/// Why noise level and not a looser relative tolerance: a small *nonzero*
+/// `B'(t)` is the true (and accurately computed, since the Bernstein form
+/// keeps `Pᵢ₊₁ − Pᵢ` exact for coincident points) forward direction, e.g.
+/// just before a zero of `B'` at `t = 1` it points along `−B''(1)`, which a
+/// loose threshold followed by `+B''(t)` would flip. Only values that are
+/// indistinguishable from rounding of the control point differences are
+/// treated as zero.
+const NOISE: f64 = 64.0 * f64::EPSILON;
+
+/// Within this parameter distance of an end whose derivative vanishes, a
+/// noise-level `B'(t)` is attributed to that end's zero (one-sided rule of
+/// the end) rather than to an interior cusp.
+const END_SNAP: f64 = 1e-6;
+
+impl CubicBez {
+    /// `true` when all four control points coincide (a zero-length segment).
+    #[inline]
+    pub fn is_point(&self) -> bool {
+        self.p0 == self.p1 && self.p1 == self.p2 && self.p2 == self.p3
+    }
+
+    /// Longest control polygon leg `max |Pᵢ₊₁ − Pᵢ|`; `|B'(t)| ≤ 3·leg`.
+    #[inline]
+    pub fn leg_scale(&self) -> f64 {
+        let a = (self.p1 - self.p0).length();
+        let b = (self.p2 - self.p1).length();
+        let c = (self.p3 - self.p2).length();
+        a.max(b).max(c)
+    }
+
+    /// Unit forward tangent at `t` (clamped to `[0, 1]`; NaN reads as 0),
+    /// correct where `B'` vanishes; `None` only for a point segment.
+    ///
+    /// Where `B'(t) ≠ 0` this is `B'/|B'|`. Where it vanishes the direction
+    /// of motion comes from Taylor expansion of `B'` on the side the curve
+    /// continues to:
+    /// * `t < 1` (approached from the right): `B'(t+h) ≈ h B''(t) + h²/2 B'''`,
+    ///   so `+B''(t)`, or `+B'''` if that vanishes too;
+    /// * `t = 1` (approached from the left): `B'(1−h) ≈ −h B''(1) + h²/2 B'''`,
+    ///   so `−B''(1)`, or `+B'''`.
+    ///
+    /// `B'`, `B''`, `B'''` cannot all vanish for a non-point cubic (they
+    /// determine `B'` on `[0, 1]` by Taylor's formula), so the cascade ends.
+    pub fn unit_tangent(&self, t: f64) -> Option<DVec3> {
+        if self.is_point() {
+            return None;
+        }
+        // Noise floor of the computed derivatives: the leg differences carry
+        // rounding relative to the coordinates' magnitude, the lerps relative
+        // to the legs. B'' and B''' have 4× and 8× the range of B'.
+        let mag = self
+            .p0
+            .abs()
+            .max(self.p1.abs())
+            .max(self.p2.abs())
+            .max(self.p3.abs())
+            .max_element();
+        let thr = NOISE * (self.leg_scale() + mag);
+        let t = if t >= 1.0 {
+            1.0
+        } else if t > 0.0 {
+            t
+        } else {
+            0.0
+        };
+        let d1 = self.deriv(t);
+        if d1.length() > thr {
+            return Some(d1.normalize());
+        }
+        // Noise-level B'(t) strictly inside: if it belongs to the zero at the
+        // end t = 1 (P2 = P3), the forward direction is the end's one; the
+        // same holds at t = 0 but there the right-side rule is the same one.
+        let at_end = t == 1.0 || (1.0 - t <= END_SNAP && self.deriv(1.0).length() <= thr);
+        let d3 = self.deriv3();
+        if at_end {
+            let d2 = self.deriv2(1.0);
+            if d2.length() > 4.0 * thr {
+                return Some(-d2.normalize());
+            }
+        } else {
+            let d2 = self.deriv2(t);
+            if d2.length() > 4.0 * thr {
+                return Some(d2.normalize());
+            }
+        }
+        if d3.length() > 8.0 * thr {
+            return Some(d3.normalize());
+        }
+        // Unreachable for finite non-point input (see above) except through
+        // extreme cancellation; fall back to the chord, which is nonzero or
+        // to the longest leg.
+        let chord = self.p3 - self.p0;
+        if chord.length() > 0.0 {
+            return chord.try_normalize();
+        }
+        [self.p1 - self.p0, self.p2 - self.p1, self.p3 - self.p2]
+            .into_iter()
+            .find_map(|v| v.try_normalize())
+    }
+}
