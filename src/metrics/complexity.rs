@@ -1,0 +1,300 @@
+//! Curve complexity `C(Γ) = ∫ √(κ² + τ²) ds` of Bézier cubics.
+//!
+//! This is Eq. 12 of the floating tangents paper: the total angle through
+//! which the Frenet frame turns (its Darboux vector has length `√(κ² + τ²)`).
+//! It is dimensionless, so invariant under scaling. For a planar curve it is
+//! the total curvature `∫ κ ds`, which for an arc without inflection is the
+//! angle between its end tangents.
+//!
+//! For a cubic `B(t)`, with `c = B' × B''` and `D = det(B', B'', B''')`,
+//!
+//! ```text
+//! κ = |c| / |B'|³,   τ = D / |c|²,   ds = |B'| dt,
+//! C = ∫₀¹ √( |c|²/|B'|⁴ + D²|B'|²/|c|⁴ ) dt.
+//! ```
+//!
+//! Two facts about cubics shape the implementation:
+//!
+//! * `D` is constant in `t`: with `B'(t) = a + bt + et²`, `B'' = b + 2et`,
+//!   `B''' = 2e`, every term of `det(B', B'', B''')` with `e` outside the last
+//!   column vanishes, leaving `det(a, b, 2e)`. In terms of the control-point
+//!   differences `dᵢ = Pᵢ₊₁ − Pᵢ` it is `D = 108 d₀·(d₁ × d₂)`. So planarity is
+//!   a property of the segment, decided once.
+//! * `c(t) = a×b + 2t a×e + t² b×e` is a quadratic, so `|c|²` is a quartic
+//!   whose minima (where the curve is closest to an inflection) are the roots
+//!   of a cubic, found once per segment.
+//!
+//! Degenerate cases (documented choices):
+//!
+//! * Planar cubics (`|D|` within the rounding of the control points, see
+//!   `PLANAR_ULPS`): `τ ≡ 0` and the integrand is `κ|B'| = |c|/|B'|²`. This
+//!   also covers straight pieces and inflections, where `c = 0` and the
+//!   torsion formula is `0/0`. Treating such cubics as planar matters: a
+//!   *non*-planar cubic passing near an inflection has a narrow torsion spike
+//!   through which the binormal turns by nearly `π` (τ has the constant sign
+//!   of `D`), so `C` jumps by about `π` between an exactly planar S-curve and
+//!   a slightly lifted one. That is a property of `C`, not of the quadrature,
+//!   and it is computed faithfully: the integration is split at the minima of
+//!   `|c|` and graded geometrically towards them (see `breakpoints`), so the
+//!   spike is not stepped over.
+//! * `B' = 0` (a cusp, or a collapsed segment): the integrand is taken as 0
+//!   at that parameter. A cusp forces `D = 0` (evaluate `D` there), so it only
+//!   occurs in planar cubics, where `κ|B'|` stays bounded near the cusp. The
+//!   `π` flip of the tangent *at* the cusp is a point event and is not
+//!   counted, just as corners between segments are not counted by
+//!   [`complexity_cubics`].
+//! * Non-finite control points give NaN.
+//!
+//! Quadrature: adaptive 8-point Gauss–Legendre. A panel is accepted when its
+//! value and the sum over its two halves agree to within its share of `tol`
+//! (or to within rounding); otherwise both halves are refined with half the
+//! tolerance each, to a depth of at most `MAX_DEPTH`. Since the integrand of
+//! a cubic is smooth away from the isolated points split off in advance, the
+//! refinement stays local and the depth limit bounds the work even when
+//! `tol` is unreachably small.
+
+use glam::DVec3;
+
+use crate::spline::CubicBez;
+
+/// Deepest bisection of a panel; panels of width `2⁻³⁰` are far below any
+/// feature that survives the breakpoint grading.
+const MAX_DEPTH: u32 = 30;
+
+/// A panel whose refinement changes it by less than this many ulps (relative)
+/// is converged: further bisection only chases rounding.
+const REL_FLOOR: f64 = 32.0 * f64::EPSILON;
+
+/// Planarity threshold, in units of `ε·s·(|d₁||d₂| + |d₀||d₂| + |d₀||d₁|)`
+/// with `s` the largest control-point coordinate magnitude. Rounding each
+/// coordinate of the control points (to `ε·s/2`) moves each `dᵢ` by up to
+/// about `√3 ε s`, so `D/108` by up to that times the bracket; evaluating
+/// the triple product adds a few `ε|d₀||d₁||d₂| ≤ 2ε s(…)`. A cubic within
+/// 16 times that is planar "to the precision its control points can express".
+const PLANAR_ULPS: f64 = 16.0;
+
+/// Once the width of a torsion spike (in `t`) exceeds this, plain adaptive
+/// refinement resolves it and no grading is added.
+const GRADE_MAX_WIDTH: f64 = 0.125;
+
+/// Narrowest spike width graded towards; below this the parameter itself
+/// cannot resolve the spike (`t` has ulps of about `1e-16` near 1).
+const GRADE_MIN_WIDTH: f64 = 1e-15;
+
+/// Gauss–Legendre 8-point nodes (positive half) on `[−1, 1]`.
+const GL_X: [f64; 4] = [
+    0.183_434_642_495_649_8,
+    0.525_532_409_916_329_0,
+    0.796_666_477_413_626_7,
+    0.960_289_856_497_536_3,
+];
+/// Matching weights.
+const GL_W: [f64; 4] = [
+    0.362_683_783_378_362_0,
+    0.313_706_645_877_887_3,
+    0.222_381_034_453_374_5,
+    0.101_228_536_290_376_3,
+];
+
+/// Complexity `∫ √(κ² + τ²) ds` of one cubic, to an absolute accuracy of
+/// about `tol` (a non-positive or NaN `tol` asks for full precision; the
+/// work stays bounded by the depth limit). See the module documentation for
+/// the degenerate cases; non-finite control points give NaN.
+pub fn complexity_cubic(seg: &CubicBez, tol: f64) -> f64 {
+    if ![seg.p0, seg.p1, seg.p2, seg.p3].iter().all(|p| p.is_finite()) {
+        return f64::NAN;
+    }
+    let tol = if tol > 0.0 { tol } else { 0.0 };
+    let f = Integrand::new(seg);
+    let bps = f.breakpoints();
+    let share = tol / (bps.len() - 1) as f64;
+    bps.windows(2)
+        .map(|w| {
+            let whole = gl8(&f, w[0], w[1]);
+            adapt(&f, w[0], w[1], whole, share, 0)
+        })
+        .sum()
+}
+
+/// Sum of [`complexity_cubic`] over a spline's segments, each to `tol / n`
+/// so that the total is good to about `tol`. Only the segment interiors
+/// contribute: a G1 spline has no turning at the joins, and the turning at a
+/// corner of a G0 spline is not counted. An empty slice has complexity 0.
+pub fn complexity_cubics(segs: &[CubicBez], tol: f64) -> f64 {
+    if segs.is_empty() {
+        return 0.0;
+    }
+    let share = tol / segs.len() as f64;
+    segs.iter().map(|s| complexity_cubic(s, share)).sum()
+}
+
+/// The integrand `√(κ² + τ²)|B'|` of one cubic, with its per-segment
+/// constants.
+struct Integrand {
+    seg: CubicBez,
+    /// `B'(t) = a + bt + et²`.
+    a: DVec3,
+    b: DVec3,
+    e: DVec3,
+    /// `D = det(B', B'', B''')`, or exactly 0 if the cubic is planar.
+    det: f64,
+}
+
+impl Integrand {
+    fn new(seg: &CubicBez) -> Self {
+        let d0 = seg.p1 - seg.p0;
+        let d1 = seg.p2 - seg.p1;
+        let d2 = seg.p3 - seg.p2;
+        let a = 3.0 * d0;
+        let b = 6.0 * (d1 - d0);
+        let e = 3.0 * (d2 - 2.0 * d1 + d0);
+        let (l0, l1, l2) = (d0.length(), d1.length(), d2.length());
+        let s = [seg.p0, seg.p1, seg.p2, seg.p3]
+            .iter()
+            .map(|p| p.abs().max_element())
+            .fold(0.0, f64::max);
+        let triple = d0.dot(d1.cross(d2));
+        let noise = PLANAR_ULPS * f64::EPSILON * s * (l1 * l2 + l0 * l2 + l0 * l1);
+        let det = if triple.abs() <= noise { 0.0 } else { 108.0 * triple };
+        Integrand { seg: *seg, a, b, e, det }
+    }
+
+    /// `c(t) = B'(t) × B''(t) = u + vt + wt²`, as `(u, v, w)`.
+    fn c_coeffs(&self) -> (DVec3, DVec3, DVec3) {
+        (
+            self.a.cross(self.b),
+            2.0 * self.a.cross(self.e),
+            self.b.cross(self.e),
+        )
+    }
+
+    #[inline]
+    fn eval(&self, t: f64) -> f64 {
+        let b1 = self.seg.deriv(t);
+        let b2 = self.seg.deriv2(t);
+        let s2 = b1.length_squared();
+        if s2 == 0.0 {
+            return 0.0; // cusp or collapsed segment: see module docs
+        }
+        let c2 = b1.cross(b2).length_squared();
+        let k = c2.sqrt() / s2; // κ|B'|
+        if self.det == 0.0 || c2 == 0.0 {
+            // Planar (τ ≡ 0). `c2 == 0` with `det ≠ 0` is impossible in exact
+            // arithmetic (B', B'', B''' independent) and only reachable by
+            // underflow of a tiny segment.
+            return k;
+        }
+        // τ|B'| = D|B'|/|c|⁴, grouped so that neither factor under- or
+        // overflows for any reasonable scale.
+        let tau = (self.det / c2) * (s2.sqrt() / c2);
+        k.hypot(tau)
+    }
+
+    /// Sorted panel boundaries in `[0, 1]`: the endpoints, the local minima
+    /// of `|c(t)|²`, and, for non-planar cubics with a narrow torsion spike
+    /// there, geometrically graded points `t₀ ± w·2ᵏ` towards each minimum.
+    ///
+    /// Near a minimum `t₀`, `|c|² ≈ m² + |c'|²(t − t₀)²`, so `τ|B'|` is a
+    /// Lorentzian of width `w = m/|c'(t₀)|`. On the graded panels the
+    /// integrand varies on the scale of the panel, which Gauss–Legendre
+    /// resolves; without them both the panel and its halves can miss the
+    /// spike and agree, accepting a result that is short by up to `π`.
+    fn breakpoints(&self) -> Vec<f64> {
+        let (u, v, w) = self.c_coeffs();
+        // g(t) = c·c' = ½ d|c|²/dt, a cubic.
+        let g = [u.dot(v), 2.0 * u.dot(w) + v.dot(v), 3.0 * v.dot(w), 2.0 * w.dot(w)];
+        let g_at = |t: f64| ((g[3] * t + g[2]) * t + g[1]) * t + g[0];
+
+        let mut bps = vec![0.0, 1.0];
+        let mut centres: [f64; 4] = [0.0; 4];
+        let mut nc = 0;
+        if g_at(0.0) > 0.0 {
+            centres[nc] = 0.0;
+            nc += 1;
+        }
+        if g_at(1.0) < 0.0 {
+            centres[nc] = 1.0;
+            nc += 1;
+        }
+        // Interior minima: sign changes − → + of g. A cubic has at most two
+        // minima of |c|² inside; sampling finds them unless a minimum and a
+        // maximum lie within 1/32 of each other, in which case the minimum
+        // is shallow and adaptive refinement handles it.
+        const N: usize = 32;
+        let mut g_prev = g_at(0.0);
+        for k in 1..=N {
+            let (t0, t1) = ((k - 1) as f64 / N as f64, k as f64 / N as f64);
+            let g_next = g_at(t1);
+            if g_prev < 0.0 && g_next >= 0.0 && nc < centres.len() {
+                let (mut lo, mut hi) = (t0, t1);
+                // Bisection: robust, and 53 halvings exhaust the precision.
+                for _ in 0..53 {
+                    let mid = 0.5 * (lo + hi);
+                    if g_at(mid) < 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                let t = 0.5 * (lo + hi);
+                centres[nc] = t;
+                nc += 1;
+                bps.push(t);
+            }
+            g_prev = g_next;
+        }
+
+        if self.det != 0.0 {
+            for &t0 in &centres[..nc] {
+                let c = u + t0 * (v + t0 * w);
+                let dc = v + 2.0 * t0 * w;
+                let dcl = dc.length();
+                if dcl == 0.0 {
+                    continue;
+                }
+                let width = (c.length() / dcl).max(GRADE_MIN_WIDTH);
+                let mut h = width;
+                while h < GRADE_MAX_WIDTH {
+                    for t in [t0 - h, t0 + h] {
+                        if t > 0.0 && t < 1.0 {
+                            bps.push(t);
+                        }
+                    }
+                    h *= 2.0;
+                }
+            }
+        }
+        bps.sort_by(f64::total_cmp);
+        bps.dedup();
+        bps
+    }
+}
+
+/// 8-point Gauss–Legendre rule on `[a, b]`.
+#[inline]
+fn gl8(f: &Integrand, a: f64, b: f64) -> f64 {
+    let m = 0.5 * (a + b);
+    let h = 0.5 * (b - a);
+    let mut s = 0.0;
+    for (x, w) in GL_X.iter().zip(GL_W) {
+        s += w * (f.eval(m - h * x) + f.eval(m + h * x));
+    }
+    s * h
+}
+
+/// Adaptive bisection of `[a, b]`, whose single-panel value is `whole`.
+fn adapt(f: &Integrand, a: f64, b: f64, whole: f64, tol: f64, depth: u32) -> f64 {
+    let m = 0.5 * (a + b);
+    let l = gl8(f, a, m);
+    let r = gl8(f, m, b);
+    let both = l + r;
+    // A non-finite value (overflow) cannot converge; stop rather than
+    // recursing to the depth limit everywhere.
+    if !both.is_finite()
+        || depth >= MAX_DEPTH
+        || (both - whole).abs() <= tol.max(REL_FLOOR * both.abs())
+    {
+        return both;
+    }
+    adapt(f, a, m, l, 0.5 * tol, depth + 1) + adapt(f, m, b, r, 0.5 * tol, depth + 1)
+}
