@@ -1,1 +1,94 @@
-fn main(){}
+//! Throughput of each stage of the floating tangents fit, in helix elements
+//! per second: sampling, relaxation (dense LU vs tridiagonal), interpolation,
+//! and the whole fit (single-threaded per curve and rayon over curves).
+//!
+//! `cargo bench --bench fit` (add `-- <filter>` to pick a group).
+
+use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use glam::DVec3;
+use strandfit::fit::{fit_spline_with, fit_splines, FitOptions, FitScratch};
+use strandfit::helix::{interpolate, relax_dense, relax_tridiagonal, RelaxScratch};
+use strandfit::synthetic::synthetic_splines;
+
+/// Points and tangents of a synthetic spline at `n` elements.
+fn samples(n: usize) -> (Vec<DVec3>, Vec<DVec3>) {
+    let spline = &synthetic_splines(1, (n / 2).max(4))[0];
+    let (mut p, mut t) = (Vec::new(), Vec::new());
+    spline.sample_equal_arclen_into(n, &mut p, &mut t).expect("sampling");
+    (p, t)
+}
+
+fn sampling(c: &mut Criterion) {
+    let mut g = c.benchmark_group("sampling");
+    let spline = &synthetic_splines(1, 8)[0];
+    for n in [10usize, 20, 100, 1000] {
+        g.throughput(Throughput::Elements(n as u64));
+        let (mut p, mut t) = (Vec::new(), Vec::new());
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, &n| {
+            b.iter(|| spline.sample_equal_arclen_into(black_box(n), &mut p, &mut t).expect("sampling"))
+        });
+    }
+    g.finish();
+}
+
+fn relaxation(c: &mut Criterion) {
+    let mut g = c.benchmark_group("relaxation");
+    for n in [10usize, 100, 1000] {
+        let (p, t) = samples(n);
+        g.throughput(Throughput::Elements(n as u64));
+        let mut out = Vec::new();
+        let mut scratch = RelaxScratch::default();
+        g.bench_with_input(BenchmarkId::new("tridiagonal", n), &n, |b, _| {
+            b.iter(|| relax_tridiagonal(black_box(&p), &t, &mut out, &mut scratch))
+        });
+        if n == 1000 {
+            g.sample_size(10);
+        }
+        g.bench_with_input(BenchmarkId::new("dense_lu", n), &n, |b, _| {
+            b.iter(|| relax_dense(black_box(&p), &t))
+        });
+    }
+    g.finish();
+}
+
+fn interpolation(c: &mut Criterion) {
+    let mut g = c.benchmark_group("interpolation");
+    let n = 1000;
+    let (p, t) = samples(n);
+    let mut relaxed = Vec::new();
+    relax_tridiagonal(&p, &t, &mut relaxed, &mut RelaxScratch::default());
+    g.throughput(Throughput::Elements(n as u64));
+    g.bench_function("ghosh", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for i in 0..n {
+                let h = interpolate(relaxed[i], t[i], relaxed[i + 1], t[i + 1], 1e-6).expect("co-helical");
+                acc += h.phi;
+            }
+            black_box(acc)
+        })
+    });
+    g.finish();
+}
+
+fn whole_fit(c: &mut Criterion) {
+    let mut g = c.benchmark_group("whole_fit");
+    let splines = synthetic_splines(2000, 8);
+    for n in [20usize] {
+        let opts = FitOptions::new(n);
+        g.throughput(Throughput::Elements((n * splines.len()) as u64));
+        g.bench_with_input(BenchmarkId::new("rayon", n), &n, |b, _| b.iter(|| fit_splines(black_box(&splines), &opts)));
+        let mut scratch = FitScratch::default();
+        g.bench_with_input(BenchmarkId::new("one_thread", n), &n, |b, _| {
+            b.iter(|| {
+                for s in &splines {
+                    black_box(fit_spline_with(s, &opts, &mut scratch).expect("fit"));
+                }
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, sampling, relaxation, interpolation, whole_fit);
+criterion_main!(benches);

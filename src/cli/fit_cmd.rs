@@ -1,6 +1,5 @@
 //! `strandfit fit`: Bézier splines in, G1 piecewise helices out.
 
-use std::io::Write;
 
 use anyhow::{bail, Context, Result};
 use glam::DVec3;

@@ -1,6 +1,6 @@
 //! `strandfit helix`: one Ghosh short helix per JSON Lines record.
 
-use std::io::{BufRead, Write};
+use std::io::BufRead;
 
 use anyhow::{Context, Result};
 use glam::DVec3;

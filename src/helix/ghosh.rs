@@ -137,12 +137,16 @@ pub fn interpolate(
     };
     // Which half of I₀ holds the root: G(π) > 0 ⇒ (π, 2π − θ].
     let g_mid = g.eval(1.0, beta);
+    // G behaves like √w near the end (D ∝ √(c − cos φ)), which slows
+    // secant/inverse-quadratic steps; in z = √w it is smooth, so Brent
+    // converges superlinearly right up to the poles of H.
     let (side, w) = if g_mid == 0.0 {
         (1.0, beta)
     } else {
         let side = if g_mid > 0.0 { -1.0 } else { 1.0 };
-        let f = |w: f64| g.eval(side, w);
-        (side, brent(f, 0.0, beta, f(0.0), g_mid))
+        let f = |z: f64| g.eval(side, z * z);
+        let z = brent(f, 0.0, beta.sqrt(), f(0.0), g_mid);
+        (side, z * z)
     };
 
     // φ* and its half-angle functions from (side, w).
