@@ -145,8 +145,8 @@ impl CubicBez {
             return Some(d3.normalize());
         }
         // Unreachable for finite non-point input (see above) except through
-        // extreme cancellation; fall back to the chord, which is nonzero or
-        // to the longest leg.
+        // extreme cancellation; fall back to the chord, else the first
+        // nonzero leg.
         let chord = self.p3 - self.p0;
         if chord.length() > 0.0 {
             return chord.try_normalize();

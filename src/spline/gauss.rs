@@ -7,6 +7,9 @@
 //! converges extremely fast and adaptive bisection only has to work near the
 //! near-singular points.
 
+// Digits beyond f64 are kept so the constants can be checked against tables.
+#![allow(clippy::excessive_precision)]
+
 /// Abscissae `xᵢ > 0` of the 8-point rule on `[−1, 1]` (symmetric pairs ±xᵢ).
 const X: [f64; 4] = [
     0.183_434_642_495_649_804_939_476_142_360_2,

@@ -142,8 +142,8 @@ fn out_of_range_arguments_do_not_panic() {
 fn straight_line_with_uneven_handles_has_chord_length() {
     let a = v(0.3, -1.0, 2.0);
     let d = v(1.0, 2.0, -0.5);
-    // Uneven parameterisation: speed varies a lot along the segment, and
-    // the second segment even reverses no direction but is very nonuniform.
+    // Uneven parameterisation: the speed varies strongly along both
+    // segments (handles bunched towards one end).
     let pts = [a, a + 0.05 * d, a + 0.9 * d, a + d, a + 1.01 * d, a + 2.9 * d, a + 3.0 * d];
     let s = BezierSpline::from_control_points(&pts).unwrap();
     let chord = 3.0 * d.length();
@@ -410,8 +410,8 @@ fn tangent_where_first_derivative_vanishes_at_start() {
 
 #[test]
 fn tangent_where_first_derivative_vanishes_at_end() {
-    // P2 = P3: B'(1) = 0; the curve *arrives* along P3 − P1 = −B''(1)/6·…,
-    // so a sign error (+B''(1)) would point backwards.
+    // P2 = P3: B'(1) = 0 and B''(1) = 6(P1 − P3), so the curve *arrives*
+    // along −B''(1) ∝ P3 − P1; a sign error (+B''(1)) would point backwards.
     let c = CubicBez::new(v(0.0, 0.0, 0.0), v(1.0, 2.0, 0.0), v(3.0, 0.0, 1.0), v(3.0, 0.0, 1.0));
     assert_eq!(c.deriv(1.0), DVec3::ZERO);
     let s = spline_of(&c);
