@@ -14,7 +14,9 @@ use strandfit::synthetic::synthetic_splines;
 fn samples(n: usize) -> (Vec<DVec3>, Vec<DVec3>) {
     let spline = &synthetic_splines(1, (n / 2).max(4))[0];
     let (mut p, mut t) = (Vec::new(), Vec::new());
-    spline.sample_equal_arclen_into(n, &mut p, &mut t).expect("sampling");
+    spline
+        .sample_equal_arclen_into(n, &mut p, &mut t)
+        .expect("sampling");
     (p, t)
 }
 
@@ -25,7 +27,11 @@ fn sampling(c: &mut Criterion) {
         g.throughput(Throughput::Elements(n as u64));
         let (mut p, mut t) = (Vec::new(), Vec::new());
         g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, &n| {
-            b.iter(|| spline.sample_equal_arclen_into(black_box(n), &mut p, &mut t).expect("sampling"))
+            b.iter(|| {
+                spline
+                    .sample_equal_arclen_into(black_box(n), &mut p, &mut t)
+                    .expect("sampling")
+            })
         });
     }
     g.finish();
@@ -62,7 +68,8 @@ fn interpolation(c: &mut Criterion) {
         b.iter(|| {
             let mut acc = 0.0;
             for i in 0..n {
-                let h = interpolate(relaxed[i], t[i], relaxed[i + 1], t[i + 1], 1e-6).expect("co-helical");
+                let h = interpolate(relaxed[i], t[i], relaxed[i + 1], t[i + 1], 1e-6)
+                    .expect("co-helical");
                 acc += h.phi;
             }
             black_box(acc)
@@ -77,7 +84,9 @@ fn whole_fit(c: &mut Criterion) {
     for n in [20usize] {
         let opts = FitOptions::new(n);
         g.throughput(Throughput::Elements((n * splines.len()) as u64));
-        g.bench_with_input(BenchmarkId::new("rayon", n), &n, |b, _| b.iter(|| fit_splines(black_box(&splines), &opts)));
+        g.bench_with_input(BenchmarkId::new("rayon", n), &n, |b, _| {
+            b.iter(|| fit_splines(black_box(&splines), &opts))
+        });
         let mut scratch = FitScratch::default();
         g.bench_with_input(BenchmarkId::new("one_thread", n), &n, |b, _| {
             b.iter(|| {

@@ -97,10 +97,15 @@ pub fn fit_spline_with(
 }
 
 /// Fit many splines in parallel (rayon); results in input order.
-pub fn fit_splines(splines: &[BezierSpline], opts: &FitOptions) -> Vec<Result<PiecewiseHelix, FitError>> {
+pub fn fit_splines(
+    splines: &[BezierSpline],
+    opts: &FitOptions,
+) -> Vec<Result<PiecewiseHelix, FitError>> {
     splines
         .par_iter()
-        .map_init(FitScratch::default, |scratch, s| fit_spline_with(s, opts, scratch))
+        .map_init(FitScratch::default, |scratch, s| {
+            fit_spline_with(s, opts, scratch)
+        })
         .collect()
 }
 
@@ -137,8 +142,14 @@ fn fit_scratch_points(
     }
     let mut elements: Vec<HelixElement> = Vec::with_capacity(points.len() - 1);
     for i in 0..points.len() - 1 {
-        let h = ghosh::interpolate(relaxed[i], tangents[i], relaxed[i + 1], tangents[i + 1], cohelical_tol)
-            .map_err(|source| FitError::Element { index: i, source })?;
+        let h = ghosh::interpolate(
+            relaxed[i],
+            tangents[i],
+            relaxed[i + 1],
+            tangents[i + 1],
+            cohelical_tol,
+        )
+        .map_err(|source| FitError::Element { index: i, source })?;
         elements.push(h.element);
     }
     Ok(PiecewiseHelix::new(elements))

@@ -15,11 +15,11 @@
 //! torsion follows the standard Frenet–Serret sign (a right-handed helix has
 //! `τ > 0`).
 
+pub mod cli;
 pub mod fit;
 pub mod helix;
 pub mod metrics;
 pub mod spline;
 pub mod synthetic;
-pub mod cli;
 
 pub use glam::DVec3;

@@ -12,7 +12,11 @@ pub fn synthetic_splines(count: usize, segments: usize) -> Vec<BezierSpline> {
             let phase = c as f64 * 0.618_033_988_75;
             let pos = |u: f64| {
                 let r = 1.0 + 0.3 * (0.7 * u + phase).sin();
-                DVec3::new(r * (2.0 * u + phase).cos(), r * (2.0 * u + phase).sin(), 0.8 * u + 0.2 * (1.3 * u).sin())
+                DVec3::new(
+                    r * (2.0 * u + phase).cos(),
+                    r * (2.0 * u + phase).sin(),
+                    0.8 * u + 0.2 * (1.3 * u).sin(),
+                )
             };
             let vel = |u: f64| (pos(u + 1e-6) - pos(u - 1e-6)) / 2e-6;
             let h = 6.0 / segments as f64;
@@ -27,4 +31,3 @@ pub fn synthetic_splines(count: usize, segments: usize) -> Vec<BezierSpline> {
         })
         .collect()
 }
-

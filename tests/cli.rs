@@ -13,7 +13,12 @@ fn strandfit(args: &[&str], stdin: &str) -> Output {
         .stderr(Stdio::piped())
         .spawn()
         .expect("run strandfit");
-    child.stdin.take().unwrap().write_all(stdin.as_bytes()).unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
     child.wait_with_output().unwrap()
 }
 
@@ -24,15 +29,24 @@ fn json(s: &[u8]) -> serde_json::Value {
 #[test]
 fn helix_answers_every_line_in_order() {
     let input = concat!(
-        r#"{"p0":[1,0,0],"t0":[0,1,0],"p1":[0,1,0],"t1":[-1,0,0]}"#, "\n",
+        r#"{"p0":[1,0,0],"t0":[0,1,0],"p1":[0,1,0],"t1":[-1,0,0]}"#,
+        "\n",
         "not json\n",
-        r#"{"p0":[0,0,0],"t0":[1,0,0],"p1":[0,0,0],"t1":[0,1,0]}"#, "\n",
-        r#"{"p0":[0,0,0],"t0":[0,2,0],"p1":[2,2,2],"t1":[3,0,0]}"#, "\n",
-        r#"{"p0":[0,0,0],"t0":[1,0,0],"p1":[1,1,1],"t1":[1,1,0]}"#, "\n",
+        r#"{"p0":[0,0,0],"t0":[1,0,0],"p1":[0,0,0],"t1":[0,1,0]}"#,
+        "\n",
+        r#"{"p0":[0,0,0],"t0":[0,2,0],"p1":[2,2,2],"t1":[3,0,0]}"#,
+        "\n",
+        r#"{"p0":[0,0,0],"t0":[1,0,0],"p1":[1,1,1],"t1":[1,1,0]}"#,
+        "\n",
     );
     let out = strandfit(&["helix"], input);
     assert!(out.status.success());
-    let lines: Vec<serde_json::Value> = out.stdout.split(|&b| b == b'\n').filter(|l| !l.is_empty()).map(json).collect();
+    let lines: Vec<serde_json::Value> = out
+        .stdout
+        .split(|&b| b == b'\n')
+        .filter(|l| !l.is_empty())
+        .map(json)
+        .collect();
     assert_eq!(lines.len(), 5);
     // Quarter circle of radius 1.
     assert!((lines[0]["length"].as_f64().unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
@@ -43,7 +57,10 @@ fn helix_answers_every_line_in_order() {
     // Non-unit tangents are normalised; this one is right-handed.
     assert!(lines[3]["torsion"].as_f64().unwrap() > 0.0);
     assert_eq!(lines[3]["axis"].as_array().unwrap().len(), 3);
-    assert!(lines[4]["error"].as_str().unwrap().contains("not co-helical"));
+    assert!(lines[4]["error"]
+        .as_str()
+        .unwrap()
+        .contains("not co-helical"));
 }
 
 #[test]
@@ -51,9 +68,20 @@ fn helix_reads_a_file_and_writes_a_file() {
     let dir = tempfile::tempdir().unwrap();
     let inp = dir.path().join("in.jsonl");
     let outp = dir.path().join("out.jsonl");
-    std::fs::write(&inp, "{\"p0\":[0,0,0],\"t0\":[1,0,0],\"p1\":[3,0,0],\"t1\":[1,0,0]}\n").unwrap();
-    let out = strandfit(&["helix", inp.to_str().unwrap(), "-o", outp.to_str().unwrap()], "");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    std::fs::write(
+        &inp,
+        "{\"p0\":[0,0,0],\"t0\":[1,0,0],\"p1\":[3,0,0],\"t1\":[1,0,0]}\n",
+    )
+    .unwrap();
+    let out = strandfit(
+        &["helix", inp.to_str().unwrap(), "-o", outp.to_str().unwrap()],
+        "",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json(std::fs::read(&outp).unwrap().trim_ascii_end());
     assert_eq!(v["length"].as_f64().unwrap(), 3.0);
     assert_eq!(v["curvature"].as_f64().unwrap(), 0.0);
@@ -67,8 +95,15 @@ const TWO_SPLINES: &str = r#"{"splines":[
 fn fit_writes_the_documented_format() {
     let dir = tempfile::tempdir().unwrap();
     let outp = dir.path().join("out.json");
-    let out = strandfit(&["fit", "--elements", "6", "-o", outp.to_str().unwrap()], TWO_SPLINES);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = strandfit(
+        &["fit", "--elements", "6", "-o", outp.to_str().unwrap()],
+        TWO_SPLINES,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json(&std::fs::read(&outp).unwrap());
     let curves = v["curves"].as_array().unwrap();
     assert_eq!(curves.len(), 2);
@@ -82,7 +117,7 @@ fn fit_writes_the_documented_format() {
     let h = curves[0]["hausdorff"].as_f64().unwrap();
     assert!(f >= h && f > 0.0 && f < 0.05, "frechet {f}, hausdorff {h}");
     assert!(curves[1]["frechet"].as_f64().unwrap() < 1e-12); // a straight line is fitted exactly
-    // Standard output when no -o is given.
+                                                             // Standard output when no -o is given.
     let out = strandfit(&["fit", "-n", "3", "-"], TWO_SPLINES);
     assert!(out.status.success());
     assert_eq!(json(&out.stdout)["curves"].as_array().unwrap().len(), 2);
@@ -91,12 +126,22 @@ fn fit_writes_the_documented_format() {
 fn assert_fails_without_output(input: &str, needle: &str) {
     let dir = tempfile::tempdir().unwrap();
     let outp = dir.path().join("out.json");
-    let out = strandfit(&["fit", "--elements", "4", "-o", outp.to_str().unwrap()], input);
+    let out = strandfit(
+        &["fit", "--elements", "4", "-o", outp.to_str().unwrap()],
+        input,
+    );
     assert!(!out.status.success(), "should fail for {input}");
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains(needle), "stderr {err:?} should mention {needle:?}");
+    assert!(
+        err.contains(needle),
+        "stderr {err:?} should mention {needle:?}"
+    );
     assert!(!Path::new(&outp).exists(), "no output file on failure");
-    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "no temporary files left");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "no temporary files left"
+    );
 }
 
 #[test]
@@ -107,9 +152,18 @@ fn malformed_fit_input_names_the_spline_and_leaves_no_file() {
         r#"{"splines":[{"id":"ok","control_points":[[0,0,0],[1,0,0],[2,0,0],[3,1,0]]},{"id":"bad","control_points":[[0,0,0],[1,0,0]]}]}"#,
         "spline \"bad\"",
     );
-    assert_fails_without_output(r#"{"splines":[{"id":"pt","control_points":[[1,1,1],[1,1,1],[1,1,1],[1,1,1]]}]}"#, "zero length");
-    assert_fails_without_output(r#"{"splines":[{"id":"big","control_points":[[0,0,0],[1e308,0,0],[-1e308,0,0],[1e308,1,0]]}]}"#, "big");
-    assert_fails_without_output(r#"{"splines":[{"id":"x","control_points":[[0,0],[1,0],[2,0],[3,0]]}]}"#, "expected");
+    assert_fails_without_output(
+        r#"{"splines":[{"id":"pt","control_points":[[1,1,1],[1,1,1],[1,1,1],[1,1,1]]}]}"#,
+        "zero length",
+    );
+    assert_fails_without_output(
+        r#"{"splines":[{"id":"big","control_points":[[0,0,0],[1e308,0,0],[-1e308,0,0],[1e308,1,0]]}]}"#,
+        "big",
+    );
+    assert_fails_without_output(
+        r#"{"splines":[{"id":"x","control_points":[[0,0],[1,0],[2,0],[3,0]]}]}"#,
+        "expected",
+    );
     // An existing output file is not touched by a failed run.
     let dir = tempfile::tempdir().unwrap();
     let outp = dir.path().join("keep.json");
@@ -128,7 +182,11 @@ fn malformed_fit_input_names_the_spline_and_leaves_no_file() {
 fn bundled_example_runs() {
     let ex = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/curls.json");
     let out = strandfit(&["fit", "--elements", "20", ex], "");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json(&out.stdout);
     for c in v["curves"].as_array().unwrap() {
         assert!(c["frechet"].as_f64().unwrap() < 0.1, "{}", c["id"]);

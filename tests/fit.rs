@@ -35,8 +35,16 @@ fn a_densely_approximated_helix_is_recovered() {
             let chain = fit_spline(&spline, &FitOptions::new(n)).unwrap();
             assert_eq!(chain.len(), n);
             for e in chain.elements() {
-                assert!((e.curvature - kappa).abs() <= 1e-3 * kappa, "κ {} vs {kappa}", e.curvature);
-                assert!((e.torsion - tau).abs() <= 1e-3 * kappa.hypot(tau), "τ {} vs {tau}", e.torsion);
+                assert!(
+                    (e.curvature - kappa).abs() <= 1e-3 * kappa,
+                    "κ {} vs {kappa}",
+                    e.curvature
+                );
+                assert!(
+                    (e.torsion - tau).abs() <= 1e-3 * kappa.hypot(tau),
+                    "τ {} vs {tau}",
+                    e.torsion
+                );
                 assert!((e.axis().dot(DVec3::Z).abs() - 1.0).abs() < 1e-3);
             }
             assert!((chain.length() - spline.length()).abs() <= 1e-3 * spline.length());
@@ -56,7 +64,10 @@ fn fit_then_evaluate_hits_the_spline_and_improves_with_n() {
         assert!(d < last, "N={n}: Fréchet {d} did not improve on {last}");
         last = d;
         let (gap, angle) = chain.continuity_defects();
-        assert!(gap < 1e-12 * spline.length() && angle < 1e-10, "N={n}: gap {gap}, angle {angle}");
+        assert!(
+            gap < 1e-12 * spline.length() && angle < 1e-10,
+            "N={n}: gap {gap}, angle {angle}"
+        );
     }
     // Second-order convergence of the approximation (Fréchet ∝ 1/N²).
     assert!(last < 2e-3 * spline.length(), "Fréchet at N=80: {last}");
@@ -65,13 +76,23 @@ fn fit_then_evaluate_hits_the_spline_and_improves_with_n() {
 #[test]
 fn circles_and_straight_lines() {
     let r = 4.0;
-    let circle = hermite(|u: f64| DVec3::new(r * u.cos(), r * u.sin(), 0.0), 0.0, 0.9 * TAU, 200);
+    let circle = hermite(
+        |u: f64| DVec3::new(r * u.cos(), r * u.sin(), 0.0),
+        0.0,
+        0.9 * TAU,
+        200,
+    );
     let chain = fit_spline(&circle, &FitOptions::new(12)).unwrap();
     for e in chain.elements() {
         // The Hermite cubics match the circle's tangents to ≈1e-6 (h⁴ error
         // with h = 0.028 rad); the fit is exact for its input, so κ is off by
         // that much, and the planar input gives τ = 0 exactly.
-        assert!((e.curvature - 1.0 / r).abs() < 1e-5 / r, "κ {} vs {}", e.curvature, 1.0 / r);
+        assert!(
+            (e.curvature - 1.0 / r).abs() < 1e-5 / r,
+            "κ {} vs {}",
+            e.curvature,
+            1.0 / r
+        );
         assert_eq!(e.torsion, 0.0);
     }
     let line = BezierSpline::from_control_points(&[
@@ -98,7 +119,11 @@ fn circles_and_straight_lines() {
         DVec3::new(4.0, 0.0, 0.0),
         DVec3::new(6.0, 0.0, 0.0),
     ];
-    cps.extend([DVec3::new(8.0, 0.0, 0.0), DVec3::new(9.0, 1.0, 1.0), DVec3::new(9.0, 3.0, 2.0)]);
+    cps.extend([
+        DVec3::new(8.0, 0.0, 0.0),
+        DVec3::new(9.0, 1.0, 1.0),
+        DVec3::new(9.0, 3.0, 2.0),
+    ]);
     let mixed = BezierSpline::from_control_points(&cps).unwrap();
     let chain = fit_spline(&mixed, &FitOptions::new(16)).unwrap();
     assert!(chain.elements().iter().any(|e| e.curvature == 0.0));
@@ -112,7 +137,14 @@ fn dense_and_tridiagonal_fits_agree() {
     let spline = hermite(pos, 0.0, 6.0, 30);
     for n in [3usize, 17, 60] {
         let tri = fit_spline(&spline, &FitOptions::new(n)).unwrap();
-        let dense = fit_spline(&spline, &FitOptions { relaxation: Relaxation::DenseLu, ..FitOptions::new(n) }).unwrap();
+        let dense = fit_spline(
+            &spline,
+            &FitOptions {
+                relaxation: Relaxation::DenseLu,
+                ..FitOptions::new(n)
+            },
+        )
+        .unwrap();
         for (a, b) in tri.elements().iter().zip(dense.elements()) {
             assert!((a.start - b.start).length() < 1e-9 * spline.length());
             assert!((a.curvature - b.curvature).abs() < 1e-7 * a.curvature.max(1.0));
@@ -129,7 +161,10 @@ fn batch_matches_single_and_reports_errors_per_curve() {
     for r in results {
         assert_eq!(r.unwrap(), single);
     }
-    assert_eq!(fit_spline(&good, &FitOptions::new(0)), Err(FitError::NoElements));
+    assert_eq!(
+        fit_spline(&good, &FitOptions::new(0)),
+        Err(FitError::NoElements)
+    );
 }
 
 #[test]
@@ -139,8 +174,16 @@ fn scale_and_rotation_invariance_of_the_fit() {
     let base = fit_spline(&spline, &FitOptions::new(15)).unwrap();
     let q = glam::DQuat::from_axis_angle(DVec3::new(1.0, -2.0, 0.5).normalize(), 1.1);
     let s = 7.5;
-    let moved: Vec<DVec3> = spline.control_points().iter().map(|&p| q * p * s + DVec3::new(3.0, 2.0, 1.0)).collect();
-    let moved = fit_spline(&BezierSpline::from_control_points(&moved).unwrap(), &FitOptions::new(15)).unwrap();
+    let moved: Vec<DVec3> = spline
+        .control_points()
+        .iter()
+        .map(|&p| q * p * s + DVec3::new(3.0, 2.0, 1.0))
+        .collect();
+    let moved = fit_spline(
+        &BezierSpline::from_control_points(&moved).unwrap(),
+        &FitOptions::new(15),
+    )
+    .unwrap();
     for (a, b) in base.elements().iter().zip(moved.elements()) {
         assert!((a.curvature - b.curvature * s).abs() < 1e-9);
         assert!((a.torsion - b.torsion * s).abs() < 1e-9);

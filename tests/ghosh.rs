@@ -48,11 +48,36 @@ fn check_recovers(e: &HelixElement, rel: f64) -> Result<(), TestCaseError> {
     let theta = e.tangent.cross(t1).length().atan2(e.tangent.dot(t1));
     let rel_k = rel + 10.0 * eta / theta;
     let rel_t = rel + 10.0 * eta / (theta * theta);
-    prop_assert!((g.curvature - e.curvature).abs() <= rel_k * w, "κ {} vs {}", g.curvature, e.curvature);
-    prop_assert!((g.torsion - e.torsion).abs() <= rel_t * w, "τ {} vs {}", g.torsion, e.torsion);
-    prop_assert!((g.length - e.length).abs() <= rel_k * e.length, "L {} vs {}", g.length, e.length);
-    prop_assert!((got.phi - phi).abs() <= rel_k * TAU, "φ* {} vs {}", got.phi, phi);
-    prop_assert!((got.axis - e.axis()).length() <= rel_t * 10.0, "axis {} vs {}", got.axis, e.axis());
+    prop_assert!(
+        (g.curvature - e.curvature).abs() <= rel_k * w,
+        "κ {} vs {}",
+        g.curvature,
+        e.curvature
+    );
+    prop_assert!(
+        (g.torsion - e.torsion).abs() <= rel_t * w,
+        "τ {} vs {}",
+        g.torsion,
+        e.torsion
+    );
+    prop_assert!(
+        (g.length - e.length).abs() <= rel_k * e.length,
+        "L {} vs {}",
+        g.length,
+        e.length
+    );
+    prop_assert!(
+        (got.phi - phi).abs() <= rel_k * TAU,
+        "φ* {} vs {}",
+        got.phi,
+        phi
+    );
+    prop_assert!(
+        (got.axis - e.axis()).length() <= rel_t * 10.0,
+        "axis {} vs {}",
+        got.axis,
+        e.axis()
+    );
     // Whatever the conditioning of the parameters, the fitted helix hits the
     // end data.
     prop_assert!((g.end_point() - p1).length() <= (rel + 4.0 * eta) * chord.max(e.length));
@@ -221,8 +246,17 @@ fn straight_segments() {
     assert!((h.element.end_point() - (DVec3::ONE + 3.0 * t)).length() < 1e-13);
     // Chord pointing backwards, or off the tangent: no short helix.
     let back = interpolate(DVec3::ZERO, DVec3::X, -DVec3::X, DVec3::X, 1e-9);
-    assert!(matches!(back, Err(HelixError::ParallelTangentsOffChord { .. })));
-    let off = interpolate(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 0.1, 0.0), DVec3::X, 1e-9);
+    assert!(matches!(
+        back,
+        Err(HelixError::ParallelTangentsOffChord { .. })
+    ));
+    let off = interpolate(
+        DVec3::ZERO,
+        DVec3::X,
+        DVec3::new(1.0, 0.1, 0.0),
+        DVec3::X,
+        1e-9,
+    );
     match off {
         Err(HelixError::ParallelTangentsOffChord { deviation }) => {
             assert!((deviation - 0.1f64.atan()).abs() < 1e-12)
@@ -234,7 +268,14 @@ fn straight_segments() {
 #[test]
 fn half_circle_for_opposite_tangents() {
     let d = 3.0;
-    let h = interpolate(DVec3::ZERO, DVec3::X, DVec3::new(0.0, d, 0.0), -DVec3::X, 1e-9).unwrap();
+    let h = interpolate(
+        DVec3::ZERO,
+        DVec3::X,
+        DVec3::new(0.0, d, 0.0),
+        -DVec3::X,
+        1e-9,
+    )
+    .unwrap();
     assert!((h.phi - PI).abs() < 1e-15);
     assert!((h.element.curvature - 2.0 / d).abs() < 1e-15);
     assert_eq!(h.element.torsion, 0.0);
@@ -248,7 +289,13 @@ fn half_circle_for_opposite_tangents() {
     assert!((near.phi - PI).abs() < 1e-6);
     assert!((near.element.end_point() - DVec3::new(0.0, d, 0.0)).length() < 1e-12);
     // Opposite tangents with a chord not ⊥ t0 are not co-helical.
-    let bad = interpolate(DVec3::ZERO, DVec3::X, DVec3::new(0.5, d, 0.0), -DVec3::X, 1e-9);
+    let bad = interpolate(
+        DVec3::ZERO,
+        DVec3::X,
+        DVec3::new(0.5, d, 0.0),
+        -DVec3::X,
+        1e-9,
+    );
     assert!(matches!(bad, Err(HelixError::NotCoHelical { .. })));
 }
 
@@ -256,17 +303,36 @@ fn half_circle_for_opposite_tangents() {
 fn bad_inputs_are_errors_with_reasons() {
     let same = interpolate(DVec3::ONE, DVec3::X, DVec3::ONE, DVec3::Y, 1e-6);
     assert_eq!(same, Err(HelixError::CoincidentPoints));
-    assert_eq!(interpolate(DVec3::ZERO, DVec3::ZERO, DVec3::X, DVec3::X, 1e-6), Err(HelixError::ZeroTangent));
     assert_eq!(
-        interpolate(DVec3::new(f64::NAN, 0.0, 0.0), DVec3::X, DVec3::X, DVec3::X, 1e-6),
+        interpolate(DVec3::ZERO, DVec3::ZERO, DVec3::X, DVec3::X, 1e-6),
+        Err(HelixError::ZeroTangent)
+    );
+    assert_eq!(
+        interpolate(
+            DVec3::new(f64::NAN, 0.0, 0.0),
+            DVec3::X,
+            DVec3::X,
+            DVec3::X,
+            1e-6
+        ),
         Err(HelixError::NonFinite)
     );
     // Not co-helical: chord along t1 − t0. The error says by how much.
     let t0 = DVec3::X;
     let t1 = DVec3::Y;
-    let err = interpolate(DVec3::ZERO, t0, DVec3::ZERO + (t1 - t0) + DVec3::Z, t1, 1e-6).unwrap_err();
+    let err = interpolate(
+        DVec3::ZERO,
+        t0,
+        DVec3::ZERO + (t1 - t0) + DVec3::Z,
+        t1,
+        1e-6,
+    )
+    .unwrap_err();
     match err {
-        HelixError::NotCoHelical { residual, tolerance } => {
+        HelixError::NotCoHelical {
+            residual,
+            tolerance,
+        } => {
             let expect = (t1 - t0).length() / ((t1 - t0) + DVec3::Z).length();
             assert!((residual - expect).abs() < 1e-12);
             assert_eq!(tolerance, 1e-6);

@@ -8,7 +8,11 @@ use strandfit::helix::{interpolate, relax, PiecewiseHelix, Relaxation};
 
 fn random_unit(rng: &mut impl Rng) -> DVec3 {
     loop {
-        let v = DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
+        let v = DVec3::new(
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        );
         if v.length() > 0.1 && v.length() < 1.0 {
             return v.normalize();
         }
@@ -27,13 +31,21 @@ fn random_chain(rng: &mut impl Rng, n: usize, straight_run: bool) -> (PiecewiseH
             (t[i] + 0.4 * random_unit(rng)).normalize()
         };
         let step = rng.gen_range(0.5..1.5);
-        let chord = if straight_run && (3..5).contains(&i) { t[i] } else { (t[i] + nt).normalize() };
+        let chord = if straight_run && (3..5).contains(&i) {
+            t[i]
+        } else {
+            (t[i] + nt).normalize()
+        };
         p.push(p[i] + step * chord + 0.02 * random_unit(rng));
         t.push(nt);
     }
     let relaxed = relax(&p, &t, Relaxation::Tridiagonal);
     let elements = (0..n)
-        .map(|i| interpolate(relaxed[i], t[i], relaxed[i + 1], t[i + 1], 1e-6).unwrap().element)
+        .map(|i| {
+            interpolate(relaxed[i], t[i], relaxed[i + 1], t[i + 1], 1e-6)
+                .unwrap()
+                .element
+        })
         .collect();
     (PiecewiseHelix::new(elements), relaxed)
 }
@@ -47,7 +59,9 @@ fn fitted_chains_are_g1() {
         let scale = chain.length();
         assert!(gap < 1e-12 * scale, "gap {gap}");
         assert!(angle < 1e-11, "tangent jump {angle}");
-        assert!((chain.elements().last().unwrap().end_point() - relaxed[n]).length() < 1e-12 * scale);
+        assert!(
+            (chain.elements().last().unwrap().end_point() - relaxed[n]).length() < 1e-12 * scale
+        );
     }
 }
 
@@ -63,7 +77,10 @@ fn params_rebuild_the_relaxed_points() {
             let params = chain.to_params().unwrap();
             assert_eq!(params.elements.len(), n);
             let rebuilt = PiecewiseHelix::from_params(&params);
-            let scale = relaxed.iter().map(|q| (*q - relaxed[0]).length()).fold(0.0, f64::max);
+            let scale = relaxed
+                .iter()
+                .map(|q| (*q - relaxed[0]).length())
+                .fold(0.0, f64::max);
             for (i, e) in rebuilt.elements().iter().enumerate() {
                 let err = (e.start - relaxed[i]).length();
                 assert!(err <= 1e-9 * scale, "n={n} point {i}: {err}");
@@ -106,7 +123,11 @@ fn evaluation_by_arc_length() {
         assert!(f.tangent.dot(f.normal).abs() < 1e-13);
     }
     // Complexity of a chain is Σ ωL = Σ φ*.
-    let c: f64 = chain.elements().iter().map(|e| e.curvature.hypot(e.torsion) * e.length).sum();
+    let c: f64 = chain
+        .elements()
+        .iter()
+        .map(|e| e.curvature.hypot(e.torsion) * e.length)
+        .sum();
     assert!((chain.complexity() - c).abs() < 1e-12);
     assert!(PiecewiseHelix::new(vec![]).point(0.0).is_none());
 }

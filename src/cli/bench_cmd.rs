@@ -2,10 +2,10 @@
 
 use std::time::Instant;
 
-use anyhow::Result;
 use super::BenchArgs;
 use crate::fit::{fit_splines, FitOptions};
 use crate::synthetic::synthetic_splines;
+use anyhow::Result;
 
 pub fn run(args: &BenchArgs) -> Result<()> {
     if args.curves == 0 || args.elements == 0 || args.segments == 0 || args.repeat == 0 {
@@ -32,8 +32,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         args.segments,
         rayon::current_num_threads()
     );
-    println!("  best   {:.4} s  {:>12.0} elements/s", best, elements / best);
-    println!("  median {:.4} s  {:>12.0} elements/s", median, elements / median);
+    println!(
+        "  best   {:.4} s  {:>12.0} elements/s",
+        best,
+        elements / best
+    );
+    println!(
+        "  median {:.4} s  {:>12.0} elements/s",
+        median,
+        elements / median
+    );
     if failures > 0 {
         println!("  ({failures} curves failed to fit)");
     }

@@ -1,6 +1,5 @@
 //! `strandfit fit`: Bézier splines in, G1 piecewise helices out.
 
-
 use anyhow::{bail, Context, Result};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -65,8 +64,9 @@ pub fn run(args: &FitArgs) -> Result<()> {
     }
     let name = input_name(&args.input);
     let text = read_input(&args.input)?;
-    let input: Input = serde_json::from_str(&text)
-        .with_context(|| format!("{name}: expected {{\"splines\":[{{\"id\":…,\"control_points\":[[x,y,z],…]}}]}}"))?;
+    let input: Input = serde_json::from_str(&text).with_context(|| {
+        format!("{name}: expected {{\"splines\":[{{\"id\":…,\"control_points\":[[x,y,z],…]}}]}}")
+    })?;
     drop(text);
 
     // Validate everything before any work: one bad spline fails the run.
@@ -76,7 +76,8 @@ pub fn run(args: &FitArgs) -> Result<()> {
         .enumerate()
         .map(|(i, s)| {
             let pts: Vec<DVec3> = s.control_points.iter().map(|&p| DVec3::from(p)).collect();
-            BezierSpline::from_control_points(&pts).with_context(|| format!("{name}: {}", label(i, &s.id)))
+            BezierSpline::from_control_points(&pts)
+                .with_context(|| format!("{name}: {}", label(i, &s.id)))
         })
         .collect::<Result<_>>()?;
 
@@ -114,7 +115,10 @@ pub fn run(args: &FitArgs) -> Result<()> {
 fn distances(spline: &BezierSpline, chain: &PiecewiseHelix, m: usize) -> Result<(f64, f64)> {
     let a = spline.sample_points(m)?;
     let b = chain.sample(m);
-    Ok((metrics::discrete_frechet(&a, &b)?, metrics::hausdorff(&a, &b)?))
+    Ok((
+        metrics::discrete_frechet(&a, &b)?,
+        metrics::hausdorff(&a, &b)?,
+    ))
 }
 
 fn element_out(e: &crate::helix::HelixElement) -> ElementOut {

@@ -38,7 +38,10 @@ const CHUNK: usize = 1 << 16;
 
 pub fn run(args: &HelixArgs) -> Result<()> {
     if !(args.tolerance >= 0.0) {
-        anyhow::bail!("--tolerance must be a non-negative number, got {}", args.tolerance);
+        anyhow::bail!(
+            "--tolerance must be a non-negative number, got {}",
+            args.tolerance
+        );
     }
     let name = input_name(&args.input);
     let mut input = open_input(&args.input)?;
@@ -49,9 +52,9 @@ pub fn run(args: &HelixArgs) -> Result<()> {
         lines.clear();
         for _ in 0..CHUNK {
             let mut s = String::new();
-            let n = input
-                .read_line(&mut s)
-                .with_context(|| format!("{name}: cannot read line {}", line_no + lines.len() + 1))?;
+            let n = input.read_line(&mut s).with_context(|| {
+                format!("{name}: cannot read line {}", line_no + lines.len() + 1)
+            })?;
             if n == 0 {
                 break;
             }

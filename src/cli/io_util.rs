@@ -55,8 +55,12 @@ impl Output {
                     .prefix(".strandfit-")
                     .suffix(".tmp")
                     .tempfile_in(&dir)
-                    .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
-                let file = temp.reopen().context("cannot reopen the temporary output")?;
+                    .with_context(|| {
+                        format!("cannot create a temporary file in {}", dir.display())
+                    })?;
+                let file = temp
+                    .reopen()
+                    .context("cannot reopen the temporary output")?;
                 Ok(Output {
                     target: Some(p.clone()),
                     temp: Some(temp),

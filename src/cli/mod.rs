@@ -13,7 +13,11 @@ use clap::{Parser, Subcommand, ValueEnum};
 use crate::helix::Relaxation;
 
 #[derive(Parser, Debug)]
-#[command(name = "strandfit", version, about = "Fit 3D curves with G1 piecewise helices (floating tangents)")]
+#[command(
+    name = "strandfit",
+    version,
+    about = "Fit 3D curves with G1 piecewise helices (floating tangents)"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -101,7 +105,10 @@ pub struct BenchArgs {
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     if let Some(n) = cli.threads {
-        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n).build_global() {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+        {
             eprintln!("error: cannot set {n} threads: {e}");
             return ExitCode::from(2);
         }

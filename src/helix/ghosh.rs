@@ -214,13 +214,7 @@ pub(crate) fn orthonormalize(v: DVec3, u: DVec3) -> DVec3 {
 
 /// Parallel tangents: the only short helix is the straight segment, which
 /// exists when the chord runs along the tangent.
-fn straight(
-    p0: DVec3,
-    t0: DVec3,
-    d: DVec3,
-    dist: f64,
-    tol: f64,
-) -> Result<ShortHelix, HelixError> {
+fn straight(p0: DVec3, t0: DVec3, d: DVec3, dist: f64, tol: f64) -> Result<ShortHelix, HelixError> {
     let off = d.cross(t0).length() / dist;
     if off > tol || d.dot(t0) <= 0.0 {
         let deviation = d.dot(t0).clamp(-dist, dist).acos().max((off).asin());
@@ -280,7 +274,7 @@ impl GFunction {
         };
         let sin_phi = side * m.sin();
         let q = 2.0 * (self.beta - 0.5 * w).sin() * (0.5 * w).sin(); // c − cos φ ≥ 0
-        // N(φ) = (1 − c) sin φ + φ (c − cos φ)   (A.14)
+                                                                     // N(φ) = (1 − c) sin φ + φ (c − cos φ)   (A.14)
         let n = self.one_minus_c * sin_phi + phi * q;
         // D(φ) = (φ cos(φ/2) − 2 sin(φ/2)) √(c − cos φ)   (A.15)
         let d = half_angle_defect(phi) * q.max(0.0).sqrt();
@@ -391,7 +385,10 @@ mod tests {
         for &phi in &[0.99f64, 0.9, 0.5, 0.999999] {
             let x = 0.5 * phi;
             let direct = phi * x.cos() - 2.0 * x.sin();
-            assert!((half_angle_defect(phi) - direct).abs() < 1e-14 * direct.abs(), "{phi}");
+            assert!(
+                (half_angle_defect(phi) - direct).abs() < 1e-14 * direct.abs(),
+                "{phi}"
+            );
         }
         let small = half_angle_defect(1e-6);
         assert!((small + 1e-18 / 12.0).abs() < 1e-30);

@@ -124,7 +124,12 @@ pub fn relax_tridiagonal(
         for k in 0..m {
             y[k] = chord.dot(dirs[k]);
         }
-        segs.push(Seg { dirs, m, y, b: [[0.0; 2]; 2] });
+        segs.push(Seg {
+            dirs,
+            m,
+            y,
+            b: [[0.0; 2]; 2],
+        });
     }
     for i in 0..n.saturating_sub(1) {
         let (a, b) = (segs[i], segs[i + 1]);
@@ -208,7 +213,10 @@ fn inverse(a: &Block, m: usize) -> Block {
         [[1.0 / a[0][0], 0.0], [0.0, 0.0]]
     } else {
         let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-        [[a[1][1] / det, -a[0][1] / det], [-a[1][0] / det, a[0][0] / det]]
+        [
+            [a[1][1] / det, -a[0][1] / det],
+            [-a[1][0] / det, a[0][0] / det],
+        ]
     }
 }
 
@@ -331,7 +339,11 @@ mod tests {
 
     fn random_unit(rng: &mut impl Rng) -> DVec3 {
         loop {
-            let v = DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
+            let v = DVec3::new(
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+            );
             if v.length() > 0.1 && v.length() < 1.0 {
                 return v.normalize();
             }
@@ -375,10 +387,17 @@ mod tests {
                 let a = relax(&p, &t, Relaxation::DenseLu);
                 let b = relax(&p, &t, Relaxation::Tridiagonal);
                 let scale = p.iter().map(|q| (*q - p[0]).length()).fold(0.0, f64::max);
-                let diff = a.iter().zip(&b).map(|(x, y)| (*x - *y).length()).fold(0.0, f64::max);
+                let diff = a
+                    .iter()
+                    .zip(&b)
+                    .map(|(x, y)| (*x - *y).length())
+                    .fold(0.0, f64::max);
                 assert!(diff <= 1e-9 * scale, "n={n}: solvers differ by {diff}");
                 assert!(max_constraint_residual(&a, &t) < 1e-10, "dense residual");
-                assert!(max_constraint_residual(&b, &t) < 1e-10, "tridiagonal residual");
+                assert!(
+                    max_constraint_residual(&b, &t) < 1e-10,
+                    "tridiagonal residual"
+                );
             }
         }
     }
@@ -391,7 +410,12 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let (p, t) = random_data(&mut rng, 12);
         let best = relax(&p, &t, Relaxation::Tridiagonal);
-        let cost = |q: &[DVec3]| q.iter().zip(&p).map(|(a, b)| (*a - *b).length_squared()).sum::<f64>();
+        let cost = |q: &[DVec3]| {
+            q.iter()
+                .zip(&p)
+                .map(|(a, b)| (*a - *b).length_squared())
+                .sum::<f64>()
+        };
         let c0 = cost(&best);
         for _ in 0..50 {
             let pert: Vec<DVec3> = p.iter().map(|q| *q + 0.2 * random_unit(&mut rng)).collect();
@@ -446,7 +470,9 @@ mod tests {
         // All tangents equal: the points are projected onto a common line
         // along the tangent, through their centroid (least squares).
         let t_same = vec![DVec3::Z; 5];
-        let p_any: Vec<DVec3> = (0..5).map(|i| DVec3::new(i as f64, (i * i) as f64, i as f64)).collect();
+        let p_any: Vec<DVec3> = (0..5)
+            .map(|i| DVec3::new(i as f64, (i * i) as f64, i as f64))
+            .collect();
         let tri = relax(&p_any, &t_same, Relaxation::Tridiagonal);
         let dense = relax(&p_any, &t_same, Relaxation::DenseLu);
         let c = p_any.iter().copied().sum::<DVec3>() / 5.0;
@@ -469,7 +495,11 @@ mod tests {
             let a = relax(&p, &t, Relaxation::DenseLu);
             let b = relax(&p, &t, Relaxation::Tridiagonal);
             let scale = p.iter().map(|q| (*q - p[0]).length()).fold(0.0, f64::max);
-            let diff = a.iter().zip(&b).map(|(x, y)| (*x - *y).length()).fold(0.0, f64::max);
+            let diff = a
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| (*x - *y).length())
+                .fold(0.0, f64::max);
             assert!(diff <= 1e-9 * scale, "n={n}: {diff}");
             assert!(max_constraint_residual(&a, &t) < 1e-10);
             assert!(max_constraint_residual(&b, &t) < 1e-10);

@@ -101,7 +101,10 @@ const GL_W: [f64; 4] = [
 /// work stays bounded by the depth limit). See the module documentation for
 /// the degenerate cases; non-finite control points give NaN.
 pub fn complexity_cubic(seg: &CubicBez, tol: f64) -> f64 {
-    if ![seg.p0, seg.p1, seg.p2, seg.p3].iter().all(|p| p.is_finite()) {
+    if ![seg.p0, seg.p1, seg.p2, seg.p3]
+        .iter()
+        .all(|p| p.is_finite())
+    {
         return f64::NAN;
     }
     let tol = if tol > 0.0 { tol } else { 0.0 };
@@ -155,8 +158,18 @@ impl Integrand {
             .fold(0.0, f64::max);
         let triple = d0.dot(d1.cross(d2));
         let noise = PLANAR_ULPS * f64::EPSILON * s * (l1 * l2 + l0 * l2 + l0 * l1);
-        let det = if triple.abs() <= noise { 0.0 } else { 108.0 * triple };
-        Integrand { seg: *seg, a, b, e, det }
+        let det = if triple.abs() <= noise {
+            0.0
+        } else {
+            108.0 * triple
+        };
+        Integrand {
+            seg: *seg,
+            a,
+            b,
+            e,
+            det,
+        }
     }
 
     /// `c(t) = B'(t) × B''(t) = u + vt + wt²`, as `(u, v, w)`.
@@ -202,7 +215,12 @@ impl Integrand {
     fn breakpoints(&self) -> Vec<f64> {
         let (u, v, w) = self.c_coeffs();
         // g(t) = c·c' = ½ d|c|²/dt, a cubic.
-        let g = [u.dot(v), 2.0 * u.dot(w) + v.dot(v), 3.0 * v.dot(w), 2.0 * w.dot(w)];
+        let g = [
+            u.dot(v),
+            2.0 * u.dot(w) + v.dot(v),
+            3.0 * v.dot(w),
+            2.0 * w.dot(w),
+        ];
         let g_at = |t: f64| ((g[3] * t + g[2]) * t + g[1]) * t + g[0];
 
         let mut bps = vec![0.0, 1.0];

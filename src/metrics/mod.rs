@@ -14,4 +14,6 @@ mod hausdorff;
 pub use complexity::{complexity_cubic, complexity_cubics};
 pub use error::MetricsError;
 pub use frechet::{discrete_frechet, discrete_frechet_with_buf};
-pub use hausdorff::{hausdorff, hausdorff_directed, hausdorff_vertices, hausdorff_vertices_directed};
+pub use hausdorff::{
+    hausdorff, hausdorff_directed, hausdorff_vertices, hausdorff_vertices_directed,
+};

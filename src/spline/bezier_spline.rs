@@ -183,7 +183,16 @@ impl BezierSpline {
             if !c.is_point() {
                 let sp = Speed::new(c);
                 let whole = sp.integrate(0.0, 1.0);
-                refine(&sp, 0.0, 1.0, whole, tol_density, MAX_DEPTH, &mut knots, &mut len);
+                refine(
+                    &sp,
+                    0.0,
+                    1.0,
+                    whole,
+                    tol_density,
+                    MAX_DEPTH,
+                    &mut knots,
+                    &mut len,
+                );
             } else {
                 knots.push(Knot { t: 1.0, s: 0.0 });
             }
@@ -322,8 +331,15 @@ impl BezierSpline {
         if let Some(v) = self.segs[seg].unit_tangent(t) {
             return v;
         }
-        let next = self.segs[seg + 1..].iter().find_map(|c| c.unit_tangent(0.0));
-        let prev = || self.segs[..seg].iter().rev().find_map(|c| c.unit_tangent(1.0));
+        let next = self.segs[seg + 1..]
+            .iter()
+            .find_map(|c| c.unit_tangent(0.0));
+        let prev = || {
+            self.segs[..seg]
+                .iter()
+                .rev()
+                .find_map(|c| c.unit_tangent(1.0))
+        };
         // Construction guarantees a non-point segment, so one of them exists.
         next.or_else(prev).unwrap_or(DVec3::ZERO)
     }

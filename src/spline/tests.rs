@@ -35,7 +35,12 @@ fn simpson_len(c: &CubicBez, a: f64, b: f64, n: usize) -> f64 {
 
 fn quarter_circle() -> CubicBez {
     let k = 4.0 / 3.0 * (std::f64::consts::PI / 8.0).tan();
-    CubicBez::new(v(1.0, 0.0, 0.0), v(1.0, k, 0.0), v(k, 1.0, 0.0), v(0.0, 1.0, 0.0))
+    CubicBez::new(
+        v(1.0, 0.0, 0.0),
+        v(1.0, k, 0.0),
+        v(k, 1.0, 0.0),
+        v(0.0, 1.0, 0.0),
+    )
 }
 
 fn spline_of(c: &CubicBez) -> BezierSpline {
@@ -98,7 +103,12 @@ fn rejects_zero_length_and_overflow() {
     let e = BezierSpline::from_control_points(&pts).unwrap_err();
     assert_eq!(e, SplineError::ZeroLength);
     assert_eq!(e.to_string(), "spline has zero length");
-    let pts = [v(-1e308, 0.0, 0.0), v(0.0, 0.0, 0.0), v(1e308, 0.0, 0.0), v(1e308, 1e308, 0.0)];
+    let pts = [
+        v(-1e308, 0.0, 0.0),
+        v(0.0, 0.0, 0.0),
+        v(1e308, 0.0, 0.0),
+        v(1e308, 1e308, 0.0),
+    ];
     assert_eq!(
         BezierSpline::from_control_points(&pts).unwrap_err(),
         SplineError::NonFiniteLength
@@ -144,10 +154,22 @@ fn straight_line_with_uneven_handles_has_chord_length() {
     let d = v(1.0, 2.0, -0.5);
     // Uneven parameterisation: the speed varies strongly along both
     // segments (handles bunched towards one end).
-    let pts = [a, a + 0.05 * d, a + 0.9 * d, a + d, a + 1.01 * d, a + 2.9 * d, a + 3.0 * d];
+    let pts = [
+        a,
+        a + 0.05 * d,
+        a + 0.9 * d,
+        a + d,
+        a + 1.01 * d,
+        a + 2.9 * d,
+        a + 3.0 * d,
+    ];
     let s = BezierSpline::from_control_points(&pts).unwrap();
     let chord = 3.0 * d.length();
-    assert!((s.length() - chord).abs() <= 1e-13 * chord, "{} vs {chord}", s.length());
+    assert!(
+        (s.length() - chord).abs() <= 1e-13 * chord,
+        "{} vs {chord}",
+        s.length()
+    );
     // and at every parameter, arc length = distance from the start
     for i in 0..=20 {
         let t = i as f64 / 20.0;
@@ -182,7 +204,12 @@ fn quarter_circle_matches_simpson_reference() {
 /// where the Gauss rule converges only algebraically and the adaptive
 /// bisection must do the work.
 fn cusp() -> CubicBez {
-    CubicBez::new(v(0.0, 0.0, 0.0), v(1.0, 1.0, 0.0), v(0.0, 1.0, 0.0), v(1.0, 0.0, 0.0))
+    CubicBez::new(
+        v(0.0, 0.0, 0.0),
+        v(1.0, 1.0, 0.0),
+        v(0.0, 1.0, 0.0),
+        v(1.0, 0.0, 0.0),
+    )
 }
 
 /// A cubic with a cusp at the non-dyadic `t₀ = 0.3`, so the bisection
@@ -260,7 +287,11 @@ fn inverse_on_cusp_and_quarter_circle() {
             let (seg, t2) = s.param_at_arclen(s.arclen_at(0, t));
             assert_eq!(seg, 0);
             // Near the cusp t is ill-conditioned in s; compare positions.
-            let tol = if c.deriv(t).length() > 1e-3 { 1e-12 } else { 1e-6 };
+            let tol = if c.deriv(t).length() > 1e-3 {
+                1e-12
+            } else {
+                1e-6
+            };
             assert!((t2 - t).abs() <= tol, "t={t} -> {t2}");
         }
     }
@@ -341,8 +372,14 @@ fn check_samples(s: &BezierSpline, n: usize) {
         assert!((tan.length() - 1.0).abs() < 1e-14, "tangent {j} not unit");
         let target = l * j as f64 / n as f64;
         let (seg, t) = s.param_at_arclen(target);
-        assert!((s.arclen_at(seg, t) - target).abs() <= 1e-10 * l, "sample {j}");
-        assert!((s.eval(seg, t) - p).length() <= 1e-12 * l.max(1.0), "sample {j}");
+        assert!(
+            (s.arclen_at(seg, t) - target).abs() <= 1e-10 * l,
+            "sample {j}"
+        );
+        assert!(
+            (s.eval(seg, t) - p).length() <= 1e-12 * l.max(1.0),
+            "sample {j}"
+        );
         let c = s.segments()[seg];
         let d = c.deriv(t);
         if d.length() > 1e-6 * c.leg_scale() {
@@ -397,7 +434,12 @@ const FD_TOL: f64 = 1e-4;
 #[test]
 fn tangent_where_first_derivative_vanishes_at_start() {
     // P0 = P1: B'(0) = 0, the curve leaves along P2 − P0.
-    let c = CubicBez::new(v(0.0, 0.0, 0.0), v(0.0, 0.0, 0.0), v(1.0, 1.0, 0.0), v(2.0, 0.0, 1.0));
+    let c = CubicBez::new(
+        v(0.0, 0.0, 0.0),
+        v(0.0, 0.0, 0.0),
+        v(1.0, 1.0, 0.0),
+        v(2.0, 0.0, 1.0),
+    );
     assert_eq!(c.deriv(0.0), DVec3::ZERO);
     let s = spline_of(&c);
     let t0 = s.unit_tangent(0, 0.0);
@@ -412,7 +454,12 @@ fn tangent_where_first_derivative_vanishes_at_start() {
 fn tangent_where_first_derivative_vanishes_at_end() {
     // P2 = P3: B'(1) = 0 and B''(1) = 6(P1 − P3), so the curve *arrives*
     // along −B''(1) ∝ P3 − P1; a sign error (+B''(1)) would point backwards.
-    let c = CubicBez::new(v(0.0, 0.0, 0.0), v(1.0, 2.0, 0.0), v(3.0, 0.0, 1.0), v(3.0, 0.0, 1.0));
+    let c = CubicBez::new(
+        v(0.0, 0.0, 0.0),
+        v(1.0, 2.0, 0.0),
+        v(3.0, 0.0, 1.0),
+        v(3.0, 0.0, 1.0),
+    );
     assert_eq!(c.deriv(1.0), DVec3::ZERO);
     let s = spline_of(&c);
     let t1 = s.unit_tangent(0, 1.0);
@@ -422,7 +469,11 @@ fn tangent_where_first_derivative_vanishes_at_end() {
     assert_eq!(out[5].1, t1);
     // Just before the end, B'(t) is tiny but its direction is still right.
     for t in [1.0 - 1e-15, 1.0 - 1e-12, 1.0 - 1e-9] {
-        assert!(angle(s.unit_tangent(0, t), t1) < 1e-6, "t = 1 - {}", 1.0 - t);
+        assert!(
+            angle(s.unit_tangent(0, t), t1) < 1e-6,
+            "t = 1 - {}",
+            1.0 - t
+        );
     }
     check_samples(&s, 5);
 }
@@ -430,13 +481,23 @@ fn tangent_where_first_derivative_vanishes_at_end() {
 #[test]
 fn tangent_with_three_coincident_points() {
     // P0 = P1 = P2: B'(0) = B''(0) = 0, leaves along B''' ∝ P3 − P0.
-    let c = CubicBez::new(v(0.0, 0.0, 0.0), v(0.0, 0.0, 0.0), v(0.0, 0.0, 0.0), v(1.0, -2.0, 0.5));
+    let c = CubicBez::new(
+        v(0.0, 0.0, 0.0),
+        v(0.0, 0.0, 0.0),
+        v(0.0, 0.0, 0.0),
+        v(1.0, -2.0, 0.5),
+    );
     let s = spline_of(&c);
     let t0 = s.unit_tangent(0, 0.0);
     assert!(angle(t0, fd_dir(&c, 0.0, 1e-3)) < 1e-10);
     assert!(angle(t0, c.p3) < 1e-14);
     // P1 = P2 = P3: arrives along P3 − P0 (B'(1−h) ≈ h²/2 B''').
-    let c = CubicBez::new(v(1.0, -2.0, 0.5), v(0.0, 0.0, 0.0), v(0.0, 0.0, 0.0), v(0.0, 0.0, 0.0));
+    let c = CubicBez::new(
+        v(1.0, -2.0, 0.5),
+        v(0.0, 0.0, 0.0),
+        v(0.0, 0.0, 0.0),
+        v(0.0, 0.0, 0.0),
+    );
     let s = spline_of(&c);
     let t1 = s.unit_tangent(0, 1.0);
     assert!(angle(t1, fd_dir(&c, 1.0, 1e-3)) < 1e-10);
@@ -463,7 +524,7 @@ fn zero_length_middle_segment() {
         b, // join
         b,
         b,
-        b, // zero-length segment 1
+        b,                // zero-length segment 1
         v(1.0, 0.0, 1.0), // segment 2 leaves b upwards
         v(2.0, 0.0, 1.0),
         v(2.0, 0.0, 0.0),
