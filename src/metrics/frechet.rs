@@ -78,3 +78,138 @@ pub fn discrete_frechet_with_buf(
     }
     Ok(row[short.len() - 1].sqrt())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn v(x: f64, y: f64, z: f64) -> DVec3 {
+        DVec3::new(x, y, z)
+    }
+
+    /// Reference: the full `m × n` table, straight from the recurrence.
+    fn frechet_full(a: &[DVec3], b: &[DVec3]) -> f64 {
+        let (m, n) = (a.len(), b.len());
+        let mut c = vec![vec![0.0f64; n]; m];
+        for i in 0..m {
+            for j in 0..n {
+                let d = a[i].distance(b[j]);
+                c[i][j] = match (i, j) {
+                    (0, 0) => d,
+                    (0, _) => c[0][j - 1].max(d),
+                    (_, 0) => c[i - 1][0].max(d),
+                    _ => c[i - 1][j].min(c[i - 1][j - 1]).min(c[i][j - 1]).max(d),
+                };
+            }
+        }
+        c[m - 1][n - 1]
+    }
+
+    #[test]
+    fn parallel_segments() {
+        let a = [v(0., 0., 0.), v(1., 0., 0.)];
+        let b = [v(0., 1., 0.), v(1., 1., 0.)];
+        assert_eq!(discrete_frechet(&a, &b).unwrap(), 1.0);
+    }
+
+    #[test]
+    fn reverse() {
+        // Endpoints are coupled, so d ≥ |a₀ − b₀| = 2; coupling i ↔ i
+        // achieves max(2, 0, 2) = 2.
+        let a = [v(0., 0., 0.), v(1., 0., 0.), v(2., 0., 0.)];
+        let b: Vec<_> = a.iter().rev().copied().collect();
+        assert_eq!(discrete_frechet(&a, &b).unwrap(), 2.0);
+    }
+
+    #[test]
+    fn exceeds_hausdorff() {
+        // Same vertex set {0, 1, 2} on the x axis, so the vertex Hausdorff
+        // distance is 0, but b = 0, 2, 1, 2 backtracks. When b is at its
+        // second point (2), a is at 0 (distance 2), 1 (distance 1) or 2; if at
+        // 2 it must stay there while b returns to 1 (distance 1). So d ≥ 1,
+        // and a = 0,1,1,2 ↔ b = 0,2,1,2 (plus a₁↔b₁) attains 1.
+        let a = [v(0., 0., 0.), v(1., 0., 0.), v(2., 0., 0.)];
+        let b = [v(0., 0., 0.), v(2., 0., 0.), v(1., 0., 0.), v(2., 0., 0.)];
+        assert_eq!(discrete_frechet(&a, &b).unwrap(), 1.0);
+        assert_eq!(crate::metrics::hausdorff_vertices(&a, &b).unwrap(), 0.0);
+    }
+
+    #[test]
+    fn single_points() {
+        let a = [v(1., 2., 3.)];
+        let b = [v(1., 2., 7.), v(1., 2., 3.)];
+        // a₀ is coupled with every point of b.
+        assert_eq!(discrete_frechet(&a, &b).unwrap(), 4.0);
+        assert_eq!(discrete_frechet(&b, &a).unwrap(), 4.0);
+        assert_eq!(discrete_frechet(&a, &a).unwrap(), 0.0);
+    }
+
+    #[test]
+    fn bad_input() {
+        let a = [v(0., 0., 0.)];
+        assert_eq!(discrete_frechet(&[], &a), Err(MetricsError::Empty));
+        assert_eq!(discrete_frechet(&a, &[]), Err(MetricsError::Empty));
+        let n = [v(f64::NAN, 0., 0.)];
+        assert_eq!(discrete_frechet(&a, &n), Err(MetricsError::NonFinite));
+        let i = [v(0., f64::INFINITY, 0.)];
+        assert_eq!(discrete_frechet(&i, &a), Err(MetricsError::NonFinite));
+    }
+
+    #[test]
+    fn buffer_reuse() {
+        let a = [v(0., 0., 0.), v(1., 0., 0.), v(2., 1., 0.)];
+        let b = [v(0., 1., 0.), v(3., 1., 0.)];
+        let mut row = vec![99.0; 10];
+        let d1 = discrete_frechet_with_buf(&a, &b, &mut row).unwrap();
+        let d2 = discrete_frechet_with_buf(&b, &a, &mut row).unwrap();
+        assert_eq!(d1, frechet_full(&a, &b));
+        assert_eq!(d1, d2);
+    }
+
+    fn pts(max: usize) -> impl Strategy<Value = Vec<DVec3>> {
+        prop::collection::vec(
+            (-10.0..10.0f64, -10.0..10.0f64, -10.0..10.0f64).prop_map(|(x, y, z)| v(x, y, z)),
+            1..max,
+        )
+    }
+
+    proptest! {
+        #[test]
+        fn matches_full_table(a in pts(25), b in pts(25)) {
+            let d = discrete_frechet(&a, &b).unwrap();
+            let r = frechet_full(&a, &b);
+            // Same comparisons on squared vs plain distances: equal up to
+            // the rounding of one sqrt.
+            prop_assert!((d - r).abs() <= 4.0 * f64::EPSILON * r, "{d} vs {r}");
+        }
+
+        #[test]
+        fn metric_sanity(a in pts(20), b in pts(20), t in (-5.0..5.0f64, -5.0..5.0f64, -5.0..5.0f64)) {
+            let d = discrete_frechet(&a, &b).unwrap();
+            prop_assert_eq!(d, discrete_frechet(&b, &a).unwrap());
+            prop_assert_eq!(discrete_frechet(&a, &a).unwrap(), 0.0);
+            // Endpoints are always coupled.
+            let lb = a[0].distance(b[0]).max(a[a.len() - 1].distance(b[b.len() - 1]));
+            prop_assert!(d >= lb);
+            // Translating both changes each distance by rounding only.
+            let t = v(t.0, t.1, t.2);
+            let at: Vec<_> = a.iter().map(|p| *p + t).collect();
+            let bt: Vec<_> = b.iter().map(|p| *p + t).collect();
+            let dt = discrete_frechet(&at, &bt).unwrap();
+            prop_assert!((d - dt).abs() <= 1e-12 * (1.0 + d), "{d} vs {dt}");
+        }
+
+        /// Fréchet ≥ vertex Hausdorff ≥ vertex-to-polyline Hausdorff: a
+        /// coupling pairs every vertex with some vertex of the other
+        /// sequence, and a polyline contains its vertices.
+        #[test]
+        fn bounds_hausdorff(a in pts(20), b in pts(20)) {
+            let f = discrete_frechet(&a, &b).unwrap();
+            let hv = crate::metrics::hausdorff_vertices(&a, &b).unwrap();
+            let hp = crate::metrics::hausdorff(&a, &b).unwrap();
+            prop_assert!(f >= hv, "{f} < {hv}");
+            prop_assert!(hv >= hp - 1e-12 * (1.0 + hv), "{hv} < {hp}");
+        }
+    }
+}

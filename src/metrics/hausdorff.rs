@@ -133,3 +133,128 @@ pub(crate) fn point_segment2(p: DVec3, q0: DVec3, q1: DVec3) -> f64 {
     };
     (w - t * d).length_squared()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn v(x: f64, y: f64, z: f64) -> DVec3 {
+        DVec3::new(x, y, z)
+    }
+
+    #[test]
+    fn point_to_segment() {
+        let seg = [v(0., 0., 0.), v(2., 0., 0.)];
+        // Foot in the interior: distance 1 to the segment, √2 to the
+        // nearest vertex.
+        let p = [v(1., 1., 0.)];
+        assert_eq!(hausdorff_directed(&p, &seg).unwrap(), 1.0);
+        assert_eq!(hausdorff_vertices_directed(&p, &seg).unwrap(), 2f64.sqrt());
+        // Symmetric: the segment's vertices are √2 from the point.
+        assert_eq!(hausdorff(&p, &seg).unwrap(), 2f64.sqrt());
+        assert_eq!(hausdorff(&seg, &p).unwrap(), 2f64.sqrt());
+        // Foot clamped to the end (2, 0, 0): offset (1, 0, 4), length √17.
+        let q = [v(3., 0., 4.)];
+        assert_eq!(hausdorff_directed(&q, &seg).unwrap(), 17f64.sqrt());
+        // Zero-length segments are points.
+        let dup = [v(0., 0., 0.), v(0., 0., 0.), v(0., 3., 4.)];
+        assert_eq!(hausdorff_directed(&[v(0., 0., -2.)], &dup).unwrap(), 2.0);
+    }
+
+    #[test]
+    fn parallel_polylines() {
+        let a = [v(0., 0., 0.), v(1., 0., 0.), v(5., 0., 0.)];
+        let b = [v(-1., 0., 1.), v(3., 0., 1.), v(6., 0., 1.)];
+        // b overhangs a by 1 at both ends, so its end vertices are √2 from a's;
+        // everything else is 1 away.
+        assert_eq!(hausdorff(&a, &b).unwrap(), 2f64.sqrt());
+        let b = [v(0., 0., 1.), v(3., 0., 1.), v(5., 0., 1.)];
+        assert_eq!(hausdorff(&a, &b).unwrap(), 1.0);
+    }
+
+    /// The example of the module documentation: the sup is attained at an
+    /// edge midpoint, not at a vertex, and is bounded by `H + h/2`.
+    #[test]
+    fn interior_maximiser() {
+        let a = [v(-1., 1., 0.), v(0., 0., 0.), v(1., 1., 0.)];
+        let b = [v(-1., 1., 0.), v(1., 1., 0.), v(0., 0., 0.)];
+        let h = hausdorff(&a, &b).unwrap();
+        assert_eq!(h, 0.0);
+        let mid = [v(0., 1., 0.)];
+        let true_lb = hausdorff_directed(&mid, &a).unwrap();
+        assert!((true_lb - 0.5f64.sqrt()).abs() < 1e-15);
+        assert!(true_lb <= h + 2.0 / 2.0); // longest edge of b is 2
+    }
+
+    #[test]
+    fn bad_input() {
+        let a = [v(0., 0., 0.)];
+        assert_eq!(hausdorff(&[], &a), Err(MetricsError::Empty));
+        assert_eq!(hausdorff_vertices(&a, &[]), Err(MetricsError::Empty));
+        let n = [v(0., 0., f64::NAN)];
+        assert_eq!(hausdorff(&a, &n), Err(MetricsError::NonFinite));
+        assert_eq!(
+            hausdorff_vertices_directed(&n, &a),
+            Err(MetricsError::NonFinite)
+        );
+    }
+
+    /// Subdivide every segment into `k` pieces (same polyline, more vertices).
+    fn densify(p: &[DVec3], k: usize) -> Vec<DVec3> {
+        let mut out = vec![p[0]];
+        for s in p.windows(2) {
+            for i in 1..=k {
+                out.push(s[0].lerp(s[1], i as f64 / k as f64));
+            }
+        }
+        out
+    }
+
+    /// Reference for the directed vertex-to-polyline distance, without the
+    /// early exit.
+    fn directed_brute(a: &[DVec3], b: &[DVec3]) -> f64 {
+        a.iter()
+            .map(|&p| {
+                if b.len() == 1 {
+                    p.distance(b[0])
+                } else {
+                    b.windows(2)
+                        .map(|s| point_segment2(p, s[0], s[1]).sqrt())
+                        .fold(f64::INFINITY, f64::min)
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+
+    fn pts(max: usize) -> impl Strategy<Value = Vec<DVec3>> {
+        prop::collection::vec(
+            (-10.0..10.0f64, -10.0..10.0f64, -10.0..10.0f64).prop_map(|(x, y, z)| v(x, y, z)),
+            1..max,
+        )
+    }
+
+    proptest! {
+        #[test]
+        fn symmetric_and_matches_brute(a in pts(15), b in pts(15)) {
+            let h = hausdorff(&a, &b).unwrap();
+            prop_assert_eq!(h, hausdorff(&b, &a).unwrap());
+            prop_assert_eq!(h, directed_brute(&a, &b).max(directed_brute(&b, &a)));
+            let hv = hausdorff_vertices(&a, &b).unwrap();
+            prop_assert_eq!(hv, hausdorff_vertices(&b, &a).unwrap());
+            prop_assert_eq!(hausdorff(&a, &a).unwrap(), 0.0);
+        }
+
+        /// `H ≤ H_true ≤ H + h/2`, with `H_true` estimated by densifying
+        /// both polylines (densifying only adds points of the same curves).
+        #[test]
+        fn vertex_sup_bounds(a in pts(8), b in pts(8)) {
+            let h = hausdorff(&a, &b).unwrap();
+            let hd = hausdorff(&densify(&a, 64), &densify(&b, 64)).unwrap();
+            let seg_max = a.windows(2).chain(b.windows(2))
+                .map(|s| s[0].distance(s[1])).fold(0.0, f64::max);
+            prop_assert!(h <= hd + 1e-9, "{h} > {hd}");
+            prop_assert!(hd <= h + 0.5 * seg_max + 1e-9, "{hd} > {h} + {seg_max}/2");
+        }
+    }
+}
