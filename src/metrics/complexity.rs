@@ -197,9 +197,9 @@ impl Integrand {
             // underflow of a tiny segment.
             return k;
         }
-        // τ|B'| = D|B'|/|c|⁴, grouped so that neither factor under- or
-        // overflows for any reasonable scale.
-        let tau = (self.det / c2) * (s2.sqrt() / c2);
+        // τ|B'| = (D/|c|²)|B'|; `D/|c|²` scales as 1/length, so it neither
+        // under- nor overflows for any reasonable scale.
+        let tau = (self.det / c2) * s2.sqrt();
         k.hypot(tau)
     }
 
@@ -315,4 +315,209 @@ fn adapt(f: &Integrand, a: f64, b: f64, whole: f64, tol: f64, depth: u32) -> f64
         return both;
     }
     adapt(f, a, m, l, 0.5 * tol, depth + 1) + adapt(f, m, b, r, 0.5 * tol, depth + 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    fn v(x: f64, y: f64, z: f64) -> DVec3 {
+        DVec3::new(x, y, z)
+    }
+
+    fn cb(p: [DVec3; 4]) -> CubicBez {
+        CubicBez::new(p[0], p[1], p[2], p[3])
+    }
+
+    fn map(seg: &CubicBez, f: impl Fn(DVec3) -> DVec3) -> CubicBez {
+        CubicBez::new(f(seg.p0), f(seg.p1), f(seg.p2), f(seg.p3))
+    }
+
+    /// Textbook integrand, independent of the implementation's constant-`D`
+    /// and grading tricks: `√(κ² + τ²)|B'|` with `κ`, `τ` from the Frenet
+    /// formulas, evaluated by composite Simpson with `n` intervals.
+    fn reference(seg: &CubicBez, n: usize) -> f64 {
+        let f = |t: f64| {
+            let (b1, b2, b3) = (seg.deriv(t), seg.deriv2(t), seg.deriv3());
+            let c = b1.cross(b2);
+            let kappa = c.length() / b1.length().powi(3);
+            let tau = c.dot(b3) / c.length_squared();
+            (kappa * kappa + tau * tau).sqrt() * b1.length()
+        };
+        let h = 1.0 / n as f64;
+        let mut s = f(0.0) + f(1.0);
+        for i in 1..n {
+            s += if i % 2 == 1 { 4.0 } else { 2.0 } * f(i as f64 * h);
+        }
+        s * h / 3.0
+    }
+
+    /// The usual cubic approximation of a circular arc of angle `theta`,
+    /// radius `r`, in the xy plane, starting on the x axis.
+    fn arc(r: f64, theta: f64) -> CubicBez {
+        let k = 4.0 / 3.0 * (theta / 4.0).tan();
+        let (s, c) = theta.sin_cos();
+        cb([
+            v(r, 0., 0.),
+            v(r, r * k, 0.),
+            v(r * (c + k * s), r * (s - k * c), 0.),
+            v(r * c, r * s, 0.),
+        ])
+    }
+
+    /// A rotation with no special axis, as a map.
+    fn rotate(p: DVec3) -> DVec3 {
+        let q = glam::DQuat::from_axis_angle(v(0.3, -0.8, 0.52).normalize(), 1.234);
+        q * p
+    }
+
+    #[test]
+    fn straight_is_zero() {
+        let d = v(0.31, -1.7, 2.3);
+        let o = v(5.0, 1.0, -2.0);
+        // Uneven control points: a straight cubic with varying speed.
+        let seg = cb([o, o + 0.1 * d, o + 0.9 * d, o + 1.3 * d]);
+        assert!(complexity_cubic(&seg, 1e-12) < 1e-12);
+        let axis = cb([v(0., 0., 0.), v(1., 0., 0.), v(2.5, 0., 0.), v(3., 0., 0.)]);
+        assert_eq!(complexity_cubic(&axis, 1e-12), 0.0);
+    }
+
+    #[test]
+    fn circle_arc() {
+        for &(r, theta) in &[(1.0, 0.3), (2.5, FRAC_PI_2), (0.01, 2.0), (40.0, PI)] {
+            let seg = arc(r, theta);
+            let c = complexity_cubic(&seg, 1e-12);
+            // Planar, no inflection: C is the angle between the end
+            // tangents, which the construction makes exactly θ.
+            assert!((c - theta).abs() < 1e-10, "r={r} θ={theta}: {c}");
+            // Heavy fixed-step quadrature of the textbook integrand.
+            let r_ref = reference(&seg, 20_000);
+            assert!((c - r_ref).abs() < 1e-9, "{c} vs {r_ref}");
+            // A generic rotation makes the control points coplanar only up
+            // to rounding; that must not create torsion.
+            let rot = map(&seg, rotate);
+            let cr = complexity_cubic(&rot, 1e-12);
+            assert!((cr - theta).abs() < 1e-10, "rotated: {cr}");
+        }
+    }
+
+    /// Hermite cubics through samples of a helix `(a cos φ, a sin φ, bφ)`,
+    /// `φ = s/c`, `c = √(a² + b²)`: `κ = a/c²`, `τ = b/c²`, so over arc
+    /// length `L` the complexity is `√(κ² + τ²) L = L/c`.
+    #[test]
+    fn helix_spline() {
+        let (a, b) = (1.3f64, 0.7f64);
+        let c = (a * a + b * b).sqrt();
+        let r = |s: f64| v(a * (s / c).cos(), a * (s / c).sin(), b * s / c);
+        let dr = |s: f64| v(-a / c * (s / c).sin(), a / c * (s / c).cos(), b / c);
+        let len = 12.0;
+        let n = 64;
+        let h = len / n as f64;
+        let segs: Vec<CubicBez> = (0..n)
+            .map(|i| {
+                let (s0, s1) = (i as f64 * h, (i + 1) as f64 * h);
+                cb([
+                    r(s0),
+                    r(s0) + h / 3.0 * dr(s0),
+                    r(s1) - h / 3.0 * dr(s1),
+                    r(s1),
+                ])
+            })
+            .collect();
+        let cx = complexity_cubics(&segs, 1e-10);
+        let exact = len / c;
+        // 64 Hermite cubics (0.13 rad each) carry their own, slightly varying
+        // torsion: the closed form holds to the approximation error (≈2.4e-4).
+        // The exact check of the quadrature is the brute-force one below.
+        assert!((cx - exact).abs() < 1e-3 * exact, "{cx} vs {exact}");
+        // The adaptive result matches brute-force quadrature per segment.
+        let r_ref: f64 = segs.iter().map(|s| reference(s, 2_000)).sum();
+        assert!((cx - r_ref).abs() < 1e-9, "{cx} vs {r_ref}");
+        // A loose tolerance is honoured.
+        let loose = complexity_cubics(&segs, 1e-4);
+        assert!((loose - cx).abs() < 1e-4, "{loose} vs {cx}");
+    }
+
+    /// Planar S-curve: C is the total variation of the tangent angle.
+    fn s_curve() -> CubicBez {
+        cb([v(0., 0., 0.), v(1., 1., 0.), v(2., -1., 0.), v(3., 0., 0.)])
+    }
+
+    fn tangent_angle_variation(seg: &CubicBez, n: usize) -> f64 {
+        let ang = |t: f64| {
+            let d = seg.deriv(t);
+            d.y.atan2(d.x)
+        };
+        (0..n)
+            .map(|i| (ang((i + 1) as f64 / n as f64) - ang(i as f64 / n as f64)).abs())
+            .sum()
+    }
+
+    #[test]
+    fn planar_inflection() {
+        let seg = s_curve();
+        let c = complexity_cubic(&seg, 1e-12);
+        let tv = tangent_angle_variation(&seg, 200_000);
+        assert!((c - tv).abs() < 1e-8, "{c} vs {tv}");
+        // Rotated: still planar, no spurious π from a torsion spike.
+        let cr = complexity_cubic(&map(&seg, rotate), 1e-12);
+        assert!((cr - c).abs() < 1e-9, "{cr} vs {c}");
+        // Far from the origin too (differences lose digits).
+        let far = map(&seg, |p| rotate(p) + v(1e4, -3e4, 2e4));
+        let cf = complexity_cubic(&far, 1e-12);
+        assert!((cf - c).abs() < 1e-6, "{cf} vs {c}");
+    }
+
+    #[test]
+    fn cusp() {
+        // B'(t) = 3((2t − 1)², 1 − 2t, 0): a cusp at t = ½. The tangent
+        // direction turns from 45° to 90° before it and from −90° to −45°
+        // after it; the π flip at the cusp itself is not counted.
+        let seg = cb([v(0., 0., 0.), v(1., 1., 0.), v(0., 1., 0.), v(1., 0., 0.)]);
+        let c = complexity_cubic(&seg, 1e-12);
+        assert!((c - FRAC_PI_2).abs() < 1e-9, "{c}");
+    }
+
+    #[test]
+    fn degenerate_inputs() {
+        let p = v(1., 2., 3.);
+        assert_eq!(complexity_cubic(&cb([p; 4]), 1e-10), 0.0);
+        let mut bad = s_curve();
+        bad.p2.y = f64::NAN;
+        assert!(complexity_cubic(&bad, 1e-10).is_nan());
+        bad.p2.y = f64::INFINITY;
+        assert!(complexity_cubic(&bad, 1e-10).is_nan());
+        assert_eq!(complexity_cubics(&[], 1e-10), 0.0);
+        // Nonsense tolerances still terminate with a sensible value.
+        let arc = arc(1.0, 1.0);
+        for tol in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let c = complexity_cubic(&arc, tol);
+            assert!((c - 1.0).abs() < 1e-6, "tol={tol}: {c}");
+        }
+    }
+
+    fn cubic_strategy() -> impl Strategy<Value = CubicBez> {
+        let p = || (-5.0..5.0f64, -5.0..5.0f64, -5.0..5.0f64).prop_map(|(x, y, z)| v(x, y, z));
+        (p(), p(), p(), p()).prop_map(|(a, b, c, d)| cb([a, b, c, d]))
+    }
+
+    proptest! {
+        /// C is dimensionless.
+        #[test]
+        fn scale_invariant(seg in cubic_strategy(), s in 0.01..100.0f64) {
+            let c = complexity_cubic(&seg, 1e-12);
+            let cs = complexity_cubic(&map(&seg, |p| s * p), 1e-12);
+            prop_assert!((c - cs).abs() <= 1e-10 * c.max(1.0), "{c} vs {cs}");
+        }
+
+        /// Rigid motions leave C unchanged.
+        #[test]
+        fn rigid_invariant(seg in cubic_strategy()) {
+            let c = complexity_cubic(&seg, 1e-12);
+            let cr = complexity_cubic(&map(&seg, |p| rotate(p) + v(0.5, -2.0, 1.0)), 1e-12);
+            prop_assert!((c - cr).abs() <= 1e-8 * c.max(1.0), "{c} vs {cr}");
+        }
+    }
 }
