@@ -2,7 +2,28 @@
 
 use glam::DVec3;
 
-use crate::spline::BezierSpline;
+use crate::spline::{BezierSpline, SplineError};
+
+/// Cubic Hermite spline through `segments + 1` samples of `pos` on
+/// `[u0, u1]`, with derivatives from central differences of `pos` (step 1e-6):
+/// a smooth `G1` spline that approximates `pos` to `O(h⁴)`.
+pub fn hermite_spline(
+    pos: impl Fn(f64) -> DVec3,
+    u0: f64,
+    u1: f64,
+    segments: usize,
+) -> Result<BezierSpline, SplineError> {
+    let vel = |u: f64| (pos(u + 1e-6) - pos(u - 1e-6)) / 2e-6;
+    let h = (u1 - u0) / segments.max(1) as f64;
+    let mut cps = vec![pos(u0)];
+    for k in 0..segments {
+        let (a, b) = (u0 + k as f64 * h, u0 + (k + 1) as f64 * h);
+        cps.push(pos(a) + vel(a) * h / 3.0);
+        cps.push(pos(b) - vel(b) * h / 3.0);
+        cps.push(pos(b));
+    }
+    BezierSpline::from_control_points(&cps)
+}
 
 /// Deterministic smooth test splines: Hermite cubics of a wandering helix
 /// (curvature and torsion varying slowly), about the shape of a hair strand.
@@ -18,16 +39,7 @@ pub fn synthetic_splines(count: usize, segments: usize) -> Vec<BezierSpline> {
                     0.8 * u + 0.2 * (1.3 * u).sin(),
                 )
             };
-            let vel = |u: f64| (pos(u + 1e-6) - pos(u - 1e-6)) / 2e-6;
-            let h = 6.0 / segments as f64;
-            let mut cps = vec![pos(0.0)];
-            for k in 0..segments {
-                let (u0, u1) = (k as f64 * h, (k + 1) as f64 * h);
-                cps.push(pos(u0) + vel(u0) * h / 3.0);
-                cps.push(pos(u1) - vel(u1) * h / 3.0);
-                cps.push(pos(u1));
-            }
-            BezierSpline::from_control_points(&cps).ok()
+            hermite_spline(pos, 0.0, 6.0, segments).ok()
         })
         .collect()
 }

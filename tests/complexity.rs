@@ -6,18 +6,8 @@ use glam::DVec3;
 use strandfit::fit::{fit_spline, FitOptions};
 use strandfit::metrics::complexity_cubics;
 use strandfit::spline::{BezierSpline, CubicBez};
-
 fn hermite(pos: impl Fn(f64) -> DVec3, u0: f64, u1: f64, segments: usize) -> BezierSpline {
-    let vel = |u: f64| (pos(u + 1e-6) - pos(u - 1e-6)) / 2e-6;
-    let h = (u1 - u0) / segments as f64;
-    let mut cps = vec![pos(u0)];
-    for k in 0..segments {
-        let (a, b) = (u0 + k as f64 * h, u0 + (k + 1) as f64 * h);
-        cps.push(pos(a) + vel(a) * h / 3.0);
-        cps.push(pos(b) - vel(b) * h / 3.0);
-        cps.push(pos(b));
-    }
-    BezierSpline::from_control_points(&cps).unwrap()
+    strandfit::synthetic::hermite_spline(pos, u0, u1, segments).unwrap()
 }
 
 #[test]

@@ -10,7 +10,7 @@
 //! segments, not only its vertices). The true (continuous) Hausdorff distance
 //! between the polylines takes the sup over *all* points of `A` and `B`, and
 //! that sup can be attained in the interior of a segment: for the "V"
-//! `A = (−1,1), (0,0), (1,1)` and the closed triangle
+//! `A = (−1,1), (0,0), (1,1)` and the "lid and diagonal"
 //! `B = (−1,1), (1,1), (0,0)`, every vertex of each lies on the other, so
 //! `H = 0`, while the midpoint `(0,1)` of `B`'s top edge is `1/√2` from `A`.
 //!
