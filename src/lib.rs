@@ -17,9 +17,11 @@
 
 pub mod cli;
 pub mod fit;
+pub mod gpu;
 pub mod helix;
 pub mod metrics;
 pub mod spline;
 pub mod synthetic;
+pub mod twin;
 
 pub use glam::DVec3;

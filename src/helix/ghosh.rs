@@ -47,6 +47,23 @@ pub const PARALLEL_EPS: f64 = 1e-12;
 /// miss `p₁`.
 pub const DEFAULT_COHELICAL_TOL: f64 = 1e-6;
 
+/// Two points with tangents: the data of one interpolation (tangents need
+/// not be unit).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HermitePair {
+    pub p0: DVec3,
+    pub t0: DVec3,
+    pub p1: DVec3,
+    pub t1: DVec3,
+}
+
+impl HermitePair {
+    /// [`interpolate`] on this pair.
+    pub fn interpolate(&self, tol: f64) -> Result<ShortHelix, HelixError> {
+        interpolate(self.p0, self.t0, self.p1, self.t1, tol)
+    }
+}
+
 /// The short helix of Algorithm 2 with its characterising quantities.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShortHelix {
@@ -193,7 +210,7 @@ pub fn interpolate(
 
 /// Ghosh's `e₁ ∝ t₁ + t₀`, `e₂ ∝ t₁ × t₀`, made exactly orthonormal starting
 /// from whichever of `t₁ ± t₀` is longer (the more accurate one).
-fn ghosh_basis(t0: DVec3, t1: DVec3, diff: DVec3, sum: DVec3, nd: f64, ns: f64) -> (DVec3, DVec3) {
+pub(crate) fn ghosh_basis(t0: DVec3, t1: DVec3, diff: DVec3, sum: DVec3, nd: f64, ns: f64) -> (DVec3, DVec3) {
     let cross = t1.cross(t0);
     if ns >= nd {
         let e1 = sum / ns;

@@ -7,7 +7,7 @@ mod piecewise;
 pub mod relax;
 
 pub use element::{sinc, sinc_defect3, versinc2, Frame, HelixElement};
-pub use ghosh::{interpolate, ShortHelix, DEFAULT_COHELICAL_TOL, PARALLEL_EPS};
+pub use ghosh::{interpolate, HermitePair, ShortHelix, DEFAULT_COHELICAL_TOL, PARALLEL_EPS};
 pub use piecewise::{ChainParams, ElementParams, PiecewiseHelix};
 pub use relax::{relax, relax_dense, relax_tridiagonal, RelaxScratch, Relaxation};
 

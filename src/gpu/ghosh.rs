@@ -1,0 +1,202 @@
+//! Driver of `shaders/ghosh_bisect.wgsl` (twin: [`crate::twin::ghosh_bisect`]):
+//! Ghosh short helices for a batch of Hermite pairs on the GPU.
+//!
+//! The host does in `f64` what is cheap and precision-critical (see the
+//! twin's docs): it reduces each pair to six scalars, and turns the kernel's
+//! answer back into an element with start point, tangent, axis and normal
+//! in `f64` and κ, τ, L, φ* from the kernel. Records the kernel rejects are re-run
+//! through the `f64` reference [`crate::helix::ghosh::interpolate`], which
+//! decides borderline cases (a co-helicity residual at the tolerance, say)
+//! and words the error.
+
+use glam::DVec3;
+
+use super::dispatch::{MapKernel, Timings};
+use super::{GpuContext, GpuError, Precision};
+use crate::helix::ghosh::ghosh_basis;
+use crate::helix::{HelixElement, HelixError, HermitePair, ShortHelix};
+use crate::twin::ghosh_bisect::{self as twin, status, IN_STRIDE, OUT_STRIDE};
+use crate::twin::Real;
+
+/// `shaders/ghosh_bisect.wgsl`.
+pub const GHOSH_BISECT_WGSL: &str = include_str!("../../shaders/ghosh_bisect.wgsl");
+
+/// The compiled kernel in one precision.
+pub struct GhoshGpu {
+    kernel: MapKernel,
+    precision: Precision,
+}
+
+impl GhoshGpu {
+    pub fn new(ctx: &GpuContext, precision: Precision) -> Result<Self, GpuError> {
+        let kernel = match precision {
+            Precision::F32 => {
+                MapKernel::new::<f32>(ctx, "ghosh_bisect", GHOSH_BISECT_WGSL, IN_STRIDE, OUT_STRIDE)?
+            }
+            Precision::F64 => {
+                if !ctx.supports_f64() {
+                    return Err(GpuError::NoF64 {
+                        adapter: ctx.adapter_info().name.clone(),
+                    });
+                }
+                MapKernel::new::<f64>(ctx, "ghosh_bisect", GHOSH_BISECT_WGSL, IN_STRIDE, OUT_STRIDE)?
+            }
+        };
+        Ok(GhoshGpu { kernel, precision })
+    }
+
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    /// Run the kernel on raw records (layout of [`crate::twin::ghosh_bisect`]).
+    /// `R` must match the precision the kernel was compiled with.
+    pub fn run_raw<R: Real>(
+        &self,
+        ctx: &GpuContext,
+        input: &[R],
+        tol: f32,
+        out: &mut [R],
+        timings: &mut Timings,
+    ) -> Result<(), GpuError> {
+        assert_eq!(R::WGSL, self.precision.name(), "record precision");
+        self.kernel.run(ctx, input, tol, out, timings)
+    }
+
+    /// Short helices for `pairs`, with the reference's semantics (errors and
+    /// all). `tol` is the relative co-helicity tolerance.
+    pub fn interpolate(
+        &self,
+        ctx: &GpuContext,
+        pairs: &[HermitePair],
+        tol: f64,
+        timings: &mut Timings,
+    ) -> Result<Vec<Result<ShortHelix, HelixError>>, GpuError> {
+        match self.precision {
+            Precision::F32 => self.interpolate_in::<f32>(ctx, pairs, tol, timings),
+            Precision::F64 => self.interpolate_in::<f64>(ctx, pairs, tol, timings),
+        }
+    }
+
+    fn interpolate_in<R: Real>(
+        &self,
+        ctx: &GpuContext,
+        pairs: &[HermitePair],
+        tol: f64,
+        timings: &mut Timings,
+    ) -> Result<Vec<Result<ShortHelix, HelixError>>, GpuError> {
+        use rayon::prelude::*;
+        let t = std::time::Instant::now();
+        let mut input = vec![R::zero(); pairs.len() * IN_STRIDE];
+        input
+            .par_chunks_mut(IN_STRIDE)
+            .zip(pairs.par_iter())
+            .for_each(|(rec, pr)| pack(pr, rec));
+        let mut out = vec![R::zero(); pairs.len() * OUT_STRIDE];
+        timings.prepare += t.elapsed();
+        self.kernel.run(ctx, &input, tol as f32, &mut out, timings)?;
+        let t = std::time::Instant::now();
+        let result = out
+            .par_chunks(OUT_STRIDE)
+            .zip(pairs.par_iter())
+            .map(|(rec, pr)| unpack(rec, pr, tol))
+            .collect();
+        timings.readback += t.elapsed();
+        Ok(result)
+    }
+}
+
+/// The same computation as [`GhoshGpu::interpolate`] with the kernel replaced
+/// by its CPU twin in precision `R` — what the GPU path should return, for
+/// parity tests, and an `f32` emulation of it on machines without a GPU.
+pub fn interpolate_twin<R: Real>(pairs: &[HermitePair], tol: f64) -> Vec<Result<ShortHelix, HelixError>> {
+    use rayon::prelude::*;
+    pairs
+        .par_iter()
+        .map(|pr| {
+            let mut rec = [R::zero(); IN_STRIDE];
+            pack(pr, &mut rec);
+            let out = twin::ghosh_bisect(&rec, R::from_f64(tol as f32 as f64));
+            unpack(&out, pr, tol)
+        })
+        .collect()
+}
+
+/// What the host keeps of a pair between pack and unpack: unit tangents and
+/// Ghosh's basis, in `f64`.
+struct HostSide {
+    t0: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+}
+
+/// The host's `f64` part: unit tangents, Ghosh's basis (zero where
+/// undefined), and the kernel's record. `None` when the data is not usable
+/// (non-finite, zero tangent), so that the reference produces the error.
+fn host_side(pr: &HermitePair) -> Option<(HostSide, [f64; IN_STRIDE])> {
+    let d = pr.p1 - pr.p0;
+    let (l0, l1) = (pr.t0.length(), pr.t1.length());
+    let ok = pr.p0.is_finite() && pr.p1.is_finite() && d.is_finite() && l0.is_normal() && l1.is_normal();
+    if !ok {
+        return None;
+    }
+    let (t0, t1) = (pr.t0 / l0, pr.t1 / l1);
+    let (diff, sum) = (t1 - t0, t1 + t0);
+    let (nd, ns) = (diff.length(), sum.length());
+    let (mut e1, mut e2, mut de3) = (DVec3::ZERO, DVec3::ZERO, 0.0);
+    if nd > twin::PARALLEL_EPS {
+        de3 = d.dot(diff / nd);
+        if ns > twin::PARALLEL_EPS {
+            (e1, e2) = ghosh_basis(t0, t1, diff, sum, nd, ns);
+        }
+    }
+    let rec = [d.length(), nd, ns, d.dot(e1), d.dot(e2), de3];
+    Some((HostSide { t0, e1, e2 }, rec))
+}
+
+/// Pack one record in the kernel's precision (all zeros, which the kernel
+/// reports as coincident points, when the host rejected the data).
+fn pack<R: Real>(pr: &HermitePair, rec: &mut [R]) {
+    match host_side(pr) {
+        Some((_, r64)) if r64.iter().all(|x| R::from_f64(*x).is_finite()) => {
+            for (o, x) in rec.iter_mut().zip(r64) {
+                *o = R::from_f64(x);
+            }
+        }
+        _ => rec.iter_mut().for_each(|x| *x = R::zero()),
+    }
+}
+
+/// A kernel record back to the reference's types.
+fn unpack<R: Real>(rec: &[R], pr: &HermitePair, tol: f64) -> Result<ShortHelix, HelixError> {
+    let code = rec[twin::OUT_STATUS].to_f64() as u32;
+    if code != status::OK {
+        // Degenerate branches (straight, half circle) and rejections: the
+        // reference takes them in O(1), decides borderline cases and words
+        // the error.
+        return pr.interpolate(tol);
+    }
+    let Some((host, _)) = host_side(pr) else {
+        return pr.interpolate(tol);
+    };
+    let get = |i: usize| rec[i].to_f64();
+    let axis = (get(twin::OUT_AXIS_E1) * host.e1 + get(twin::OUT_AXIS_E2) * host.e2).normalize();
+    // κ̄ n₀ = Ω̄ × t₀ (paper, proof of (A.9)).
+    let n = axis.cross(host.t0);
+    let normal = (n - n.dot(host.t0) * host.t0).normalize();
+    Ok(ShortHelix {
+        element: HelixElement {
+            start: pr.p0,
+            tangent: host.t0,
+            normal,
+            curvature: get(twin::OUT_CURVATURE),
+            torsion: get(twin::OUT_TORSION),
+            length: get(twin::OUT_LENGTH),
+        },
+        phi: get(twin::OUT_PHI),
+        axis,
+        omega: get(twin::OUT_OMEGA),
+        tau_bar: get(twin::OUT_TAU_BAR),
+        chi: get(twin::OUT_CHI),
+    })
+}
