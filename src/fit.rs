@@ -7,8 +7,8 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use crate::helix::{
-    ghosh, relax_dense, relax_tridiagonal, HelixElement, HelixError, PiecewiseHelix, RelaxScratch,
-    Relaxation,
+    ghosh, relax_dense, relax_tridiagonal, HelixElement, HelixError, HermitePair, PiecewiseHelix,
+    RelaxScratch, Relaxation,
 };
 use crate::spline::{BezierSpline, SplineError};
 
@@ -114,6 +114,28 @@ fn fit_scratch_points(
     relaxation: Relaxation,
     cohelical_tol: f64,
 ) -> Result<PiecewiseHelix, FitError> {
+    relax_scratch(scratch, relaxation)?;
+    let FitScratch {
+        tangents, relaxed, ..
+    } = scratch;
+    let mut elements: Vec<HelixElement> = Vec::with_capacity(relaxed.len() - 1);
+    for i in 0..relaxed.len() - 1 {
+        let h = ghosh::interpolate(
+            relaxed[i],
+            tangents[i],
+            relaxed[i + 1],
+            tangents[i + 1],
+            cohelical_tol,
+        )
+        .map_err(|source| FitError::Element { index: i, source })?;
+        elements.push(h.element);
+    }
+    Ok(PiecewiseHelix::new(elements))
+}
+
+/// Validate the sampled points and tangents (normalising the tangents) and
+/// relax the points into `scratch.relaxed`.
+fn relax_scratch(scratch: &mut FitScratch, relaxation: Relaxation) -> Result<(), FitError> {
     let FitScratch {
         points,
         tangents,
@@ -140,17 +162,28 @@ fn fit_scratch_points(
         Relaxation::Tridiagonal => relax_tridiagonal(points, tangents, relaxed, relax),
         Relaxation::DenseLu => *relaxed = relax_dense(points, tangents),
     }
-    let mut elements: Vec<HelixElement> = Vec::with_capacity(points.len() - 1);
-    for i in 0..points.len() - 1 {
-        let h = ghosh::interpolate(
-            relaxed[i],
-            tangents[i],
-            relaxed[i + 1],
-            tangents[i + 1],
-            cohelical_tol,
-        )
-        .map_err(|source| FitError::Element { index: i, source })?;
-        elements.push(h.element);
+    Ok(())
+}
+
+/// Steps 1–2 for one spline: the `N` Hermite pairs of the relaxed points
+/// (appended to `out`), ready for Ghosh interpolation on any backend.
+pub fn relaxed_pairs(
+    spline: &BezierSpline,
+    opts: &FitOptions,
+    scratch: &mut FitScratch,
+    out: &mut Vec<HermitePair>,
+) -> Result<(), FitError> {
+    if opts.elements == 0 {
+        return Err(FitError::NoElements);
     }
-    Ok(PiecewiseHelix::new(elements))
+    spline.sample_equal_arclen_into(opts.elements, &mut scratch.points, &mut scratch.tangents)?;
+    relax_scratch(scratch, opts.relaxation)?;
+    let (p, t) = (&scratch.relaxed, &scratch.tangents);
+    out.extend((0..p.len() - 1).map(|i| HermitePair {
+        p0: p[i],
+        t0: t[i],
+        p1: p[i + 1],
+        t1: t[i + 1],
+    }));
+    Ok(())
 }

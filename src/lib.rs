@@ -15,6 +15,7 @@
 //! torsion follows the standard Frenet–Serret sign (a right-handed helix has
 //! `τ > 0`).
 
+pub mod backend;
 pub mod cli;
 pub mod fit;
 pub mod gpu;

@@ -1,47 +1,82 @@
-//! `strandfit bench`: whole-fit throughput on synthetic splines.
+//! `strandfit bench`: throughput on synthetic splines, on the chosen backend —
+//! Ghosh interpolation alone and the whole fit — in elements per second,
+//! with the GPU time split into prepare / upload / wait / readback.
 
 use std::time::Instant;
 
 use super::BenchArgs;
-use crate::fit::{fit_splines, FitOptions};
+use crate::backend::Backend;
+use crate::fit::{relaxed_pairs, FitOptions, FitScratch};
+use crate::gpu::Timings;
+use crate::helix::HermitePair;
 use crate::synthetic::synthetic_splines;
 use anyhow::Result;
 
-pub fn run(args: &BenchArgs) -> Result<()> {
+fn report(label: &str, items: f64, times: &mut [(f64, Timings)]) {
+    times.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (best, bt) = times[0];
+    let (median, _) = times[times.len() / 2];
+    println!(
+        "{label}: best {best:.4} s {:>13.0} elements/s | median {median:.4} s {:>13.0} elements/s",
+        items / best,
+        items / median
+    );
+    if bt.chunks > 0 {
+        println!(
+            "    gpu split (best run): prepare {:.4} s, upload {:.4} s, wait {:.4} s, readback {:.4} s, {} chunks",
+            bt.prepare.as_secs_f64(),
+            bt.upload.as_secs_f64(),
+            bt.wait.as_secs_f64(),
+            bt.readback.as_secs_f64(),
+            bt.chunks
+        );
+    }
+}
+
+pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     if args.curves == 0 || args.elements == 0 || args.segments == 0 || args.repeat == 0 {
         anyhow::bail!("--curves, --elements, --segments and --repeat must be at least 1");
     }
     let splines = synthetic_splines(args.curves, args.segments);
     let opts = FitOptions::new(args.elements);
-    let mut times = Vec::with_capacity(args.repeat);
-    let mut failures = 0;
-    for _ in 0..args.repeat {
-        let t = Instant::now();
-        let results = fit_splines(&splines, &opts);
-        times.push(t.elapsed().as_secs_f64());
-        failures = results.iter().filter(|r| r.is_err()).count();
-    }
-    times.sort_by(f64::total_cmp);
     let elements = (splines.len() * args.elements) as f64;
-    let best = times[0];
-    let median = times[times.len() / 2];
     println!(
-        "whole fit: {} curves x {} elements ({} cubic segments each), {} threads",
+        "{} curves x {} elements ({} cubic segments each); backend {}; {} threads",
         splines.len(),
         args.elements,
         args.segments,
+        backend.describe(),
         rayon::current_num_threads()
     );
-    println!(
-        "  best   {:.4} s  {:>12.0} elements/s",
-        best,
-        elements / best
-    );
-    println!(
-        "  median {:.4} s  {:>12.0} elements/s",
-        median,
-        elements / median
-    );
+
+    // Interpolation alone, on the relaxed pairs of the synthetic fit.
+    let mut pairs: Vec<HermitePair> = Vec::with_capacity(splines.len() * args.elements);
+    let mut scratch = FitScratch::default();
+    for s in &splines {
+        relaxed_pairs(s, &opts, &mut scratch, &mut pairs)?;
+    }
+    let _ = backend.interpolate(&pairs[..pairs.len().min(1024)], opts.cohelical_tol)?; // warm-up, compile
+    let mut times = Vec::with_capacity(args.repeat);
+    for _ in 0..args.repeat {
+        let mut t = Timings::default();
+        let start = Instant::now();
+        let r = backend.interpolate_timed(&pairs, opts.cohelical_tol, &mut t)?;
+        times.push((start.elapsed().as_secs_f64(), t));
+        std::hint::black_box(r);
+    }
+    report("ghosh interpolation", pairs.len() as f64, &mut times);
+    drop(pairs);
+
+    let mut times = Vec::with_capacity(args.repeat);
+    let mut failures = 0;
+    for _ in 0..args.repeat {
+        let mut t = Timings::default();
+        let start = Instant::now();
+        let results = backend.fit_timed(&splines, &opts, &mut t)?;
+        times.push((start.elapsed().as_secs_f64(), t));
+        failures = results.iter().filter(|r| r.is_err()).count();
+    }
+    report("whole fit          ", elements, &mut times);
     if failures > 0 {
         println!("  ({failures} curves failed to fit)");
     }

@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use super::io_util::{input_name, read_input, Output};
 use super::FitArgs;
-use crate::fit::{fit_spline_with, FitOptions, FitScratch};
+use crate::backend::Backend;
+use crate::fit::FitOptions;
 use crate::helix::PiecewiseHelix;
 use crate::metrics;
 use crate::spline::BezierSpline;
@@ -55,7 +56,7 @@ fn label(index: usize, id: &Option<serde_json::Value>) -> String {
     }
 }
 
-pub fn run(args: &FitArgs) -> Result<()> {
+pub fn run(args: &FitArgs, backend: &Backend) -> Result<()> {
     if args.elements == 0 {
         bail!("--elements must be at least 1");
     }
@@ -86,13 +87,15 @@ pub fn run(args: &FitArgs) -> Result<()> {
         ..FitOptions::new(args.elements)
     };
     let samples = args.samples_per_element * args.elements + 1;
+    let chains = backend.fit(&splines, &opts)?;
     let curves: Vec<CurveOut> = splines
         .par_iter()
         .zip(input.splines.par_iter())
+        .zip(chains.into_par_iter())
         .enumerate()
-        .map_init(FitScratch::default, |scratch, (i, (spline, src))| {
+        .map(|(i, ((spline, src), chain))| {
             let what = || format!("{name}: {}", label(i, &src.id));
-            let chain = fit_spline_with(spline, &opts, scratch).with_context(what)?;
+            let chain = chain.with_context(what)?;
             let (frechet, hausdorff) = distances(spline, &chain, samples).with_context(what)?;
             Ok(CurveOut {
                 id: src.id.clone().unwrap_or(serde_json::Value::from(i)),

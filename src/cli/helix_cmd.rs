@@ -9,7 +9,8 @@ use serde::{Deserialize, Serialize};
 
 use super::io_util::{input_name, open_input, Output};
 use super::HelixArgs;
-use crate::helix::interpolate;
+use crate::backend::Backend;
+use crate::helix::{HermitePair, ShortHelix};
 
 #[derive(Deserialize)]
 struct Record {
@@ -36,7 +37,7 @@ struct Failure {
 /// Lines processed per parallel batch: bounds memory for any input size.
 const CHUNK: usize = 1 << 16;
 
-pub fn run(args: &HelixArgs) -> Result<()> {
+pub fn run(args: &HelixArgs, backend: &Backend) -> Result<()> {
     if !(args.tolerance >= 0.0) {
         anyhow::bail!(
             "--tolerance must be a non-negative number, got {}",
@@ -64,10 +65,26 @@ pub fn run(args: &HelixArgs) -> Result<()> {
             break;
         }
         let first = line_no + 1;
-        let answers: Vec<String> = lines
+        let parsed: Vec<Result<HermitePair, String>> = lines
             .par_iter()
+            .map(|line| parse_line(line.trim_end_matches(['\n', '\r'])))
+            .collect();
+        let pairs: Vec<HermitePair> = parsed.iter().filter_map(|p| p.as_ref().ok()).copied().collect();
+        let mut helices = backend.interpolate(&pairs, args.tolerance)?.into_iter();
+        let solved: Vec<Result<Answer, String>> = parsed
+            .into_iter()
+            .map(|p| {
+                p.and_then(|_| match helices.next() {
+                    Some(Ok(h)) => Ok(answer(&h)),
+                    Some(Err(e)) => Err(e.to_string()),
+                    None => Err("internal error: missing result".into()),
+                })
+            })
+            .collect();
+        let answers: Vec<String> = solved
+            .into_par_iter()
             .enumerate()
-            .map(|(k, line)| answer_line(line, first + k, args.tolerance))
+            .map(|(k, r)| to_json(r, first + k))
             .collect();
         let w = out.writer();
         for a in &answers {
@@ -79,10 +96,7 @@ pub fn run(args: &HelixArgs) -> Result<()> {
     out.commit()
 }
 
-/// The JSON answer for one input line (never fails: errors become
-/// `{"error": ...}` so one bad line never stops the others).
-pub fn answer_line(line: &str, line_no: usize, tol: f64) -> String {
-    let result = solve_line(line.trim_end_matches(['\n', '\r']), tol);
+fn to_json(result: Result<Answer, String>, line_no: usize) -> String {
     let json = match result {
         Ok(a) => serde_json::to_string(&a),
         Err(reason) => serde_json::to_string(&Failure {
@@ -92,18 +106,26 @@ pub fn answer_line(line: &str, line_no: usize, tol: f64) -> String {
     json.unwrap_or_else(|e| format!("{{\"error\":\"line {line_no}: cannot serialise: {e}\"}}"))
 }
 
-fn solve_line(line: &str, tol: f64) -> Result<Answer, String> {
+fn parse_line(line: &str) -> Result<HermitePair, String> {
     if line.trim().is_empty() {
         return Err("empty line".into());
     }
     let r: Record = serde_json::from_str(line).map_err(|e| format!("bad JSON record: {e}"))?;
     let v = |a: [f64; 3]| DVec3::from(a);
-    let h = interpolate(v(r.p0), v(r.t0), v(r.p1), v(r.t1), tol).map_err(|e| e.to_string())?;
-    Ok(Answer {
+    Ok(HermitePair {
+        p0: v(r.p0),
+        t0: v(r.t0),
+        p1: v(r.p1),
+        t1: v(r.t1),
+    })
+}
+
+fn answer(h: &ShortHelix) -> Answer {
+    Answer {
         length: h.element.length,
         curvature: h.element.curvature,
         torsion: h.element.torsion,
         phi: h.phi,
         axis: h.axis.to_array(),
-    })
+    }
 }

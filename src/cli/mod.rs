@@ -10,6 +10,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
+use crate::backend::{Backend, BackendChoice, PrecisionChoice};
 use crate::helix::Relaxation;
 
 #[derive(Parser, Debug)]
@@ -24,6 +25,46 @@ pub struct Cli {
     /// Worker threads (default: all cores).
     #[arg(long, global = true)]
     pub threads: Option<usize>,
+    /// Engine for batch work: the f64 CPU reference, the GPU (wgpu/Vulkan),
+    /// or auto (a hardware GPU if one exists, else the CPU; software
+    /// adapters such as lavapipe only when asked for with --backend gpu or
+    /// STRANDFIT_ADAPTER). The choice is reported on stderr.
+    #[arg(long, global = true, value_enum, default_value_t = BackendArg::Auto)]
+    pub backend: BackendArg,
+    /// GPU kernel precision (auto: f64 where the adapter has SHADER_F64).
+    #[arg(long, global = true, value_enum, default_value_t = PrecisionArg::Auto)]
+    pub precision: PrecisionArg,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum BackendArg {
+    Cpu,
+    Gpu,
+    Auto,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum PrecisionArg {
+    Auto,
+    F32,
+    F64,
+}
+
+impl Cli {
+    /// Open the chosen backend.
+    pub fn backend(&self) -> anyhow::Result<Backend> {
+        let choice = match self.backend {
+            BackendArg::Cpu => BackendChoice::Cpu,
+            BackendArg::Gpu => BackendChoice::Gpu,
+            BackendArg::Auto => BackendChoice::Auto,
+        };
+        let precision = match self.precision {
+            PrecisionArg::Auto => PrecisionChoice::Auto,
+            PrecisionArg::F32 => PrecisionChoice::F32,
+            PrecisionArg::F64 => PrecisionChoice::F64,
+        };
+        Ok(Backend::open(choice, precision)?)
+    }
 }
 
 #[derive(Subcommand, Debug)]
@@ -114,9 +155,9 @@ pub fn main() -> ExitCode {
         }
     }
     let result = match &cli.command {
-        Command::Helix(a) => helix_cmd::run(a),
-        Command::Fit(a) => fit_cmd::run(a),
-        Command::Bench(a) => bench_cmd::run(a),
+        Command::Helix(a) => cli.backend().and_then(|b| helix_cmd::run(a, &b)),
+        Command::Fit(a) => cli.backend().and_then(|b| fit_cmd::run(a, &b)),
+        Command::Bench(a) => cli.backend().and_then(|b| bench_cmd::run(a, &b)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,226 @@
+//! The `Backend` seam: every batch operation goes through one choice of
+//! engine — the `f64` CPU reference (rayon) or the GPU (wgpu kernels with
+//! their CPU twins; [`crate::gpu`]).
+//!
+//! `auto` opens the GPU when an adapter exists and falls back to the CPU
+//! otherwise, saying which on stderr. What runs where on the GPU backend:
+//!
+//! | operation     | GPU backend                                   |
+//! |---------------|-----------------------------------------------|
+//! | `interpolate` | `ghosh_bisect.wgsl`                            |
+//! | `fit`         | sampling and relaxation on the CPU (rayon; the dense 2N+3 LU stays there by design), all Ghosh interpolations of a batch of curves in one `ghosh_bisect` run |
+
+use std::sync::OnceLock;
+
+use rayon::prelude::*;
+
+use crate::fit::{fit_splines, relaxed_pairs, FitError, FitOptions, FitScratch};
+use crate::gpu::ghosh::GhoshGpu;
+use crate::gpu::{GpuContext, GpuError, Precision, Timings};
+use crate::helix::{HelixError, HermitePair, PiecewiseHelix, ShortHelix};
+use crate::spline::BezierSpline;
+
+/// What the user asked for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BackendChoice {
+    /// The `f64` reference on all cores.
+    Cpu,
+    /// The GPU; an error if none can be opened.
+    Gpu,
+    /// The GPU if an adapter exists, else the CPU (reported on stderr).
+    #[default]
+    Auto,
+}
+
+/// Kernel precision on the GPU backend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum PrecisionChoice {
+    /// `f64` where the adapter offers `SHADER_F64`, else `f32`.
+    #[default]
+    Auto,
+    F32,
+    F64,
+}
+
+/// An opened GPU with its kernels, compiled on first use.
+pub struct GpuEngine {
+    pub ctx: GpuContext,
+    pub precision: Precision,
+    ghosh: OnceLock<GhoshGpu>,
+}
+
+impl GpuEngine {
+    pub fn new(ctx: GpuContext, precision: PrecisionChoice) -> Result<Self, GpuError> {
+        let precision = match precision {
+            PrecisionChoice::Auto => Precision::best(&ctx),
+            PrecisionChoice::F32 => Precision::F32,
+            PrecisionChoice::F64 if ctx.supports_f64() => Precision::F64,
+            PrecisionChoice::F64 => {
+                return Err(GpuError::NoF64 {
+                    adapter: ctx.adapter_info().name.clone(),
+                })
+            }
+        };
+        Ok(GpuEngine {
+            ctx,
+            precision,
+            ghosh: OnceLock::new(),
+        })
+    }
+
+    /// The Ghosh kernel (compiled once).
+    pub fn ghosh(&self) -> Result<&GhoshGpu, GpuError> {
+        if let Some(k) = self.ghosh.get() {
+            return Ok(k);
+        }
+        let k = GhoshGpu::new(&self.ctx, self.precision)?;
+        Ok(self.ghosh.get_or_init(|| k))
+    }
+}
+
+/// A resolved backend.
+pub enum Backend {
+    Cpu,
+    Gpu(Box<GpuEngine>),
+}
+
+/// Curves per GPU batch in [`Backend::fit`]: bounds host memory (pairs and
+/// results of one batch) for any number of curves.
+const FIT_BATCH_CURVES: usize = 1 << 15;
+
+impl Backend {
+    /// Open the backend the user chose. `auto` never fails: without an
+    /// adapter it reports the reason on stderr and uses the CPU.
+    pub fn open(choice: BackendChoice, precision: PrecisionChoice) -> Result<Backend, GpuError> {
+        match choice {
+            BackendChoice::Cpu => Ok(Backend::Cpu),
+            BackendChoice::Gpu => {
+                let engine = GpuEngine::new(GpuContext::new()?, precision)?;
+                Ok(Backend::Gpu(Box::new(engine)))
+            }
+            BackendChoice::Auto => match GpuContext::new()
+                .and_then(|ctx| GpuEngine::new(ctx, precision))
+            {
+                // A software rasteriser (lavapipe) runs on the same cores as
+                // the CPU path, and slower: auto takes it only when named.
+                Ok(engine)
+                    if engine.ctx.adapter_info().device_type == wgpu::DeviceType::Cpu
+                        && std::env::var_os(crate::gpu::ADAPTER_ENV).is_none() =>
+                {
+                    eprintln!(
+                        "strandfit: backend cpu (the only GPU adapter, {}, is software; \
+                         --backend gpu uses it)",
+                        engine.ctx.adapter_info().name
+                    );
+                    Ok(Backend::Cpu)
+                }
+                Ok(engine) => {
+                    eprintln!(
+                        "strandfit: backend gpu: {} ({})",
+                        engine.ctx.describe(),
+                        engine.precision.name()
+                    );
+                    Ok(Backend::Gpu(Box::new(engine)))
+                }
+                Err(e) => {
+                    eprintln!("strandfit: backend cpu (no usable GPU: {e})");
+                    Ok(Backend::Cpu)
+                }
+            },
+        }
+    }
+
+    /// `cpu`, or `gpu <adapter> (<precision>)`.
+    pub fn describe(&self) -> String {
+        match self {
+            Backend::Cpu => format!("cpu (f64, {} threads)", rayon::current_num_threads()),
+            Backend::Gpu(g) => format!("gpu {} ({})", g.ctx.describe(), g.precision.name()),
+        }
+    }
+
+    /// Ghosh short helices for a batch of pairs (order kept; one bad pair
+    /// never stops the others).
+    pub fn interpolate(
+        &self,
+        pairs: &[HermitePair],
+        tol: f64,
+    ) -> Result<Vec<Result<ShortHelix, HelixError>>, GpuError> {
+        self.interpolate_timed(pairs, tol, &mut Timings::default())
+    }
+
+    /// [`Backend::interpolate`] reporting where the GPU time went.
+    pub fn interpolate_timed(
+        &self,
+        pairs: &[HermitePair],
+        tol: f64,
+        timings: &mut Timings,
+    ) -> Result<Vec<Result<ShortHelix, HelixError>>, GpuError> {
+        match self {
+            Backend::Cpu => Ok(pairs.par_iter().map(|p| p.interpolate(tol)).collect()),
+            Backend::Gpu(g) => g.ghosh()?.interpolate(&g.ctx, pairs, tol, timings),
+        }
+    }
+
+    /// Fit every spline with `opts.elements` helices (order kept).
+    pub fn fit(
+        &self,
+        splines: &[BezierSpline],
+        opts: &FitOptions,
+    ) -> Result<Vec<Result<PiecewiseHelix, FitError>>, GpuError> {
+        self.fit_timed(splines, opts, &mut Timings::default())
+    }
+
+    /// [`Backend::fit`] reporting where the GPU time went.
+    pub fn fit_timed(
+        &self,
+        splines: &[BezierSpline],
+        opts: &FitOptions,
+        timings: &mut Timings,
+    ) -> Result<Vec<Result<PiecewiseHelix, FitError>>, GpuError> {
+        let g = match self {
+            Backend::Cpu => return Ok(fit_splines(splines, opts)),
+            Backend::Gpu(g) => g,
+        };
+        let kernel = g.ghosh()?;
+        let mut results = Vec::with_capacity(splines.len());
+        for batch in splines.chunks(FIT_BATCH_CURVES) {
+            // Steps 1–2 on the CPU, per curve in parallel.
+            let prepared: Vec<Result<Vec<HermitePair>, FitError>> = batch
+                .par_iter()
+                .map_init(FitScratch::default, |scratch, s| {
+                    let mut pairs = Vec::with_capacity(opts.elements);
+                    relaxed_pairs(s, opts, scratch, &mut pairs).map(|()| pairs)
+                })
+                .collect();
+            // Step 3 for the whole batch in one kernel run.
+            let flat: Vec<HermitePair> = prepared
+                .iter()
+                .filter_map(|r| r.as_ref().ok())
+                .flatten()
+                .copied()
+                .collect();
+            let helices = kernel.interpolate(&g.ctx, &flat, opts.cohelical_tol, timings)?;
+            let mut next = 0;
+            for r in prepared {
+                results.push(r.and_then(|pairs| {
+                    let these = &helices[next..next + pairs.len()];
+                    next += pairs.len();
+                    let elements = these
+                        .iter()
+                        .enumerate()
+                        .map(|(index, h)| {
+                            h.as_ref()
+                                .map(|h| h.element)
+                                .map_err(|e| FitError::Element {
+                                    index,
+                                    source: e.clone(),
+                                })
+                        })
+                        .collect::<Result<Vec<_>, _>>()?;
+                    Ok(PiecewiseHelix::new(elements))
+                }));
+            }
+        }
+        Ok(results)
+    }
+}
