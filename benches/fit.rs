@@ -99,5 +99,40 @@ fn whole_fit(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, sampling, relaxation, interpolation, whole_fit);
+/// The same batch of relaxed pairs through each backend: CPU reference
+/// (rayon), GPU f64 and f32 (including host packing, transfers, readback).
+/// Skipped, with a note, when no GPU adapter exists.
+fn backends(c: &mut Criterion) {
+    use strandfit::backend::{Backend, BackendChoice, PrecisionChoice};
+    use strandfit::fit::relaxed_pairs;
+    let splines = synthetic_splines(5000, 8);
+    let opts = FitOptions::new(20);
+    let mut pairs = Vec::new();
+    let mut scratch = FitScratch::default();
+    for s in &splines {
+        relaxed_pairs(s, &opts, &mut scratch, &mut pairs).expect("synthetic splines fit");
+    }
+    let mut g = c.benchmark_group("backend");
+    g.sample_size(10);
+    let mut engines = vec![("cpu", Backend::Cpu)];
+    for (name, p) in [("gpu_f64", PrecisionChoice::F64), ("gpu_f32", PrecisionChoice::F32)] {
+        match Backend::open(BackendChoice::Gpu, p) {
+            Ok(b) => engines.push((name, b)),
+            Err(e) => eprintln!("backend bench: {name} skipped: {e}"),
+        }
+    }
+    for (name, backend) in &engines {
+        g.throughput(Throughput::Elements(pairs.len() as u64));
+        g.bench_function(BenchmarkId::new("interpolate", name), |b| {
+            b.iter(|| black_box(backend.interpolate(&pairs, 1e-6).expect("backend")))
+        });
+        g.throughput(Throughput::Elements((splines.len() * opts.elements) as u64));
+        g.bench_function(BenchmarkId::new("whole_fit_20", name), |b| {
+            b.iter(|| black_box(backend.fit(&splines, &opts).expect("backend")))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, sampling, relaxation, interpolation, whole_fit, backends);
 criterion_main!(benches);
