@@ -10,6 +10,7 @@
 mod context;
 mod dispatch;
 pub mod ghosh;
+pub mod helix_eval;
 
 pub use context::{list_adapters, GpuContext, GpuError, ADAPTER_ENV};
 pub use dispatch::Timings;

@@ -14,8 +14,10 @@
 //! | `shaders/real_f32.wgsl`, `shaders/real_f64.wgsl` | [`Real`] (this file) |
 //! | `shaders/math.wgsl`         | [`math`]                |
 //! | `shaders/ghosh_bisect.wgsl` | [`ghosh_bisect`]        |
+//! | `shaders/helix_eval.wgsl`   | [`helix_eval`]          |
 
 pub mod ghosh_bisect;
+pub mod helix_eval;
 pub mod math;
 
 use std::fmt::Debug;
