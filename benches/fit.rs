@@ -115,7 +115,10 @@ fn backends(c: &mut Criterion) {
     let mut g = c.benchmark_group("backend");
     g.sample_size(10);
     let mut engines = vec![("cpu", Backend::Cpu)];
-    for (name, p) in [("gpu_f64", PrecisionChoice::F64), ("gpu_f32", PrecisionChoice::F32)] {
+    for (name, p) in [
+        ("gpu_f64", PrecisionChoice::F64),
+        ("gpu_f32", PrecisionChoice::F32),
+    ] {
         match Backend::open(BackendChoice::Gpu, p) {
             Ok(b) => engines.push((name, b)),
             Err(e) => eprintln!("backend bench: {name} skipped: {e}"),
@@ -134,5 +137,12 @@ fn backends(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, sampling, relaxation, interpolation, whole_fit, backends);
+criterion_group!(
+    benches,
+    sampling,
+    relaxation,
+    interpolation,
+    whole_fit,
+    backends
+);
 criterion_main!(benches);

@@ -98,35 +98,35 @@ impl Backend {
                 let engine = GpuEngine::new(GpuContext::new()?, precision)?;
                 Ok(Backend::Gpu(Box::new(engine)))
             }
-            BackendChoice::Auto => match GpuContext::new()
-                .and_then(|ctx| GpuEngine::new(ctx, precision))
-            {
-                // A software rasteriser (lavapipe) runs on the same cores as
-                // the CPU path, and slower: auto takes it only when named.
-                Ok(engine)
-                    if engine.ctx.adapter_info().device_type == wgpu::DeviceType::Cpu
-                        && std::env::var_os(crate::gpu::ADAPTER_ENV).is_none() =>
-                {
-                    eprintln!(
-                        "strandfit: backend cpu (the only GPU adapter, {}, is software; \
+            BackendChoice::Auto => {
+                match GpuContext::new().and_then(|ctx| GpuEngine::new(ctx, precision)) {
+                    // A software rasteriser (lavapipe) runs on the same cores as
+                    // the CPU path, and slower: auto takes it only when named.
+                    Ok(engine)
+                        if engine.ctx.adapter_info().device_type == wgpu::DeviceType::Cpu
+                            && std::env::var_os(crate::gpu::ADAPTER_ENV).is_none() =>
+                    {
+                        eprintln!(
+                            "strandfit: backend cpu (the only GPU adapter, {}, is software; \
                          --backend gpu uses it)",
-                        engine.ctx.adapter_info().name
-                    );
-                    Ok(Backend::Cpu)
+                            engine.ctx.adapter_info().name
+                        );
+                        Ok(Backend::Cpu)
+                    }
+                    Ok(engine) => {
+                        eprintln!(
+                            "strandfit: backend gpu: {} ({})",
+                            engine.ctx.describe(),
+                            engine.precision.name()
+                        );
+                        Ok(Backend::Gpu(Box::new(engine)))
+                    }
+                    Err(e) => {
+                        eprintln!("strandfit: backend cpu (no usable GPU: {e})");
+                        Ok(Backend::Cpu)
+                    }
                 }
-                Ok(engine) => {
-                    eprintln!(
-                        "strandfit: backend gpu: {} ({})",
-                        engine.ctx.describe(),
-                        engine.precision.name()
-                    );
-                    Ok(Backend::Gpu(Box::new(engine)))
-                }
-                Err(e) => {
-                    eprintln!("strandfit: backend cpu (no usable GPU: {e})");
-                    Ok(Backend::Cpu)
-                }
-            },
+            }
         }
     }
 

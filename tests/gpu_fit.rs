@@ -9,9 +9,20 @@ use serde_json::Value;
 
 fn run_fit(backend: &str, precision: &str) -> Value {
     let out = Command::new(env!("CARGO_BIN_EXE_strandfit"))
-        .args(["--backend", backend, "--precision", precision, "fit", "-n", "20"])
+        .args([
+            "--backend",
+            backend,
+            "--precision",
+            precision,
+            "fit",
+            "-n",
+            "20",
+        ])
         .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/curls.json"))
-        .env("XDG_RUNTIME_DIR", std::env::var("XDG_RUNTIME_DIR").unwrap_or("/tmp".into()))
+        .env(
+            "XDG_RUNTIME_DIR",
+            std::env::var("XDG_RUNTIME_DIR").unwrap_or("/tmp".into()),
+        )
         .output()
         .expect("run strandfit");
     assert!(
@@ -26,12 +37,18 @@ fn run_fit(backend: &str, precision: &str) -> Value {
 /// to the element's ω (κ, τ) or length (L, start point), unit vectors
 /// absolute, the Fréchet distance relative to the curve's length.
 fn max_diff(a: &Value, b: &Value) -> f64 {
-    let (ca, cb) = (a["curves"].as_array().unwrap(), b["curves"].as_array().unwrap());
+    let (ca, cb) = (
+        a["curves"].as_array().unwrap(),
+        b["curves"].as_array().unwrap(),
+    );
     assert_eq!(ca.len(), cb.len());
     let mut worst = 0.0f64;
     for (x, y) in ca.iter().zip(cb) {
         assert_eq!(x["id"], y["id"]);
-        let (ex, ey) = (x["elements"].as_array().unwrap(), y["elements"].as_array().unwrap());
+        let (ex, ey) = (
+            x["elements"].as_array().unwrap(),
+            y["elements"].as_array().unwrap(),
+        );
         assert_eq!(ex.len(), ey.len());
         for (p, q) in ex.iter().zip(ey) {
             let f = |v: &Value, k: &str| v[k].as_f64().unwrap();

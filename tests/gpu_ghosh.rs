@@ -15,7 +15,11 @@ use strandfit::helix::{HelixElement, HelixError, HermitePair, ShortHelix, DEFAUL
 
 fn unit(rng: &mut ChaCha8Rng) -> DVec3 {
     loop {
-        let v = DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
+        let v = DVec3::new(
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        );
         if v.length() > 0.2 && v.length() < 1.0 {
             return v.normalize();
         }
@@ -27,7 +31,11 @@ fn element(rng: &mut ChaCha8Rng, kappa: f64, tau: f64, phi: f64) -> HelixElement
     let n = unit(rng);
     let n0 = (n - n.dot(t0) * t0).normalize();
     let scale = 10f64.powf(rng.gen_range(-2.0..2.0));
-    let start = DVec3::new(rng.gen_range(-100.0..100.0), rng.gen_range(-100.0..100.0), rng.gen_range(-100.0..100.0));
+    let start = DVec3::new(
+        rng.gen_range(-100.0..100.0),
+        rng.gen_range(-100.0..100.0),
+        rng.gen_range(-100.0..100.0),
+    );
     let omega = kappa.hypot(tau);
     HelixElement {
         start,
@@ -96,20 +104,39 @@ fn case(rng: &mut ChaCha8Rng, i: usize) -> (Family, HermitePair) {
         10 => {
             let phi = PI + sgn * 10f64.powf(rng.gen_range(-8.0..-3.0));
             let t = rng.gen_range(-1e-3..1e-3);
-            (Family::NearHalfTurn, pair_of(&element(rng, 1.0, t, phi), rng))
+            (
+                Family::NearHalfTurn,
+                pair_of(&element(rng, 1.0, t, phi), rng),
+            )
         }
         11 => {
             let t0 = unit(rng);
             let p0 = DVec3::new(rng.gen_range(-50.0..50.0), 0.0, 1.0);
             let p1 = p0 + rng.gen_range(0.01..10.0) * t0;
-            (Family::Straight, HermitePair { p0, t0, p1, t1: 2.0 * t0 })
+            (
+                Family::Straight,
+                HermitePair {
+                    p0,
+                    t0,
+                    p1,
+                    t1: 2.0 * t0,
+                },
+            )
         }
         12 => {
             let t0 = unit(rng);
             let n = unit(rng);
             let d = (n - n.dot(t0) * t0).normalize() * rng.gen_range(0.01..10.0);
             let p0 = DVec3::new(1.0, rng.gen_range(-50.0..50.0), 0.0);
-            (Family::HalfCircle, HermitePair { p0, t0, p1: p0 + d, t1: -t0 })
+            (
+                Family::HalfCircle,
+                HermitePair {
+                    p0,
+                    t0,
+                    p1: p0 + d,
+                    t1: -t0,
+                },
+            )
         }
         13 => {
             let e = element(rng, 1.0, 0.5, 2.0);
@@ -190,7 +217,8 @@ fn check(
             (Ok(g), Ok(w)) => {
                 let chord = (pair.p1 - pair.p0).length();
                 let size = chord.max(w.element.length);
-                let eta = tol.eps + 4.0 * f64::EPSILON * (pair.p0.length() + pair.p1.length()) / size;
+                let eta =
+                    tol.eps + 4.0 * f64::EPSILON * (pair.p0.length() + pair.p1.length()) / size;
                 let (ep, et) = hits(g, pair, size);
                 let om = w.element.omega().max(1e-300);
                 let t0 = pair.t0.normalize();
@@ -209,7 +237,10 @@ fn check(
                     dt / (tol.params * eta * (1.0 + 1.0 / (theta * theta))),
                 ];
                 let r = ratios.iter().cloned().fold(0.0, f64::max);
-                if r > slot.ratio && std::env::var("PARITY_REPORT").is_ok() && label.contains("reference") {
+                if r > slot.ratio
+                    && std::env::var("PARITY_REPORT").is_ok()
+                    && label.contains("reference")
+                {
                     eprintln!("{label} {fam:?} new worst {ratios:?}\n  got {g:?}\n  want {w:?}\n  data {pair:?}");
                 }
                 slot.ratio = slot.ratio.max(r);
@@ -234,12 +265,32 @@ const E32: f64 = f32::EPSILON as f64;
 const E64: f64 = f64::EPSILON;
 // Kernel vs its twin: the same operations; drivers may still contract
 // a·b + c into fma or reorder, so allow a few ulps (lavapipe: bit-identical).
-const TWIN_F64: Tol = Tol { eps: E64, point: 64.0, tangent: 64.0, params: 64.0 };
-const TWIN_F32: Tol = Tol { eps: E32, point: 64.0, tangent: 64.0, params: 64.0 };
+const TWIN_F64: Tol = Tol {
+    eps: E64,
+    point: 64.0,
+    tangent: 64.0,
+    params: 64.0,
+};
+const TWIN_F32: Tol = Tol {
+    eps: E32,
+    point: 64.0,
+    tangent: 64.0,
+    params: 64.0,
+};
 // Kernel vs the f64 reference: bisection vs Brent, polynomial vs libm
 // transcendentals, and (f32) the rounding of d and the tangents.
-const REF_F64: Tol = Tol { eps: E64, point: 100.0, tangent: 100.0, params: 100.0 };
-const REF_F32: Tol = Tol { eps: E32, point: 100.0, tangent: 100.0, params: 100.0 };
+const REF_F64: Tol = Tol {
+    eps: E64,
+    point: 100.0,
+    tangent: 100.0,
+    params: 100.0,
+};
+const REF_F32: Tol = Tol {
+    eps: E32,
+    point: 100.0,
+    tangent: 100.0,
+    params: 100.0,
+};
 
 fn cases() -> Vec<(Family, HermitePair)> {
     let mut rng = ChaCha8Rng::seed_from_u64(0x6805);
@@ -248,7 +299,9 @@ fn cases() -> Vec<(Family, HermitePair)> {
 
 #[test]
 fn ghosh_bisect_parity_f64() {
-    let Some(ctx) = common::gpu_or_skip("ghosh_bisect_parity_f64") else { return };
+    let Some(ctx) = common::gpu_or_skip("ghosh_bisect_parity_f64") else {
+        return;
+    };
     if !ctx.supports_f64() {
         eprintln!("adapter has no SHADER_F64; f64 parity not applicable");
         return;
@@ -267,7 +320,9 @@ fn ghosh_bisect_parity_f64() {
 
 #[test]
 fn ghosh_bisect_parity_f32() {
-    let Some(ctx) = common::gpu_or_skip("ghosh_bisect_parity_f32") else { return };
+    let Some(ctx) = common::gpu_or_skip("ghosh_bisect_parity_f32") else {
+        return;
+    };
     let cases = cases();
     let pairs: Vec<HermitePair> = cases.iter().map(|c| c.1).collect();
     let tol = DEFAULT_COHELICAL_TOL;

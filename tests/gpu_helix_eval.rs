@@ -10,11 +10,15 @@ use std::f64::consts::PI;
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use strandfit::gpu::helix_eval::{sample_chains_twin, sample_chains_twin_full, ChainSamples, HelixEvalGpu};
+use strandfit::gpu::helix_eval::{
+    sample_chains_twin, sample_chains_twin_full, ChainSamples, HelixEvalGpu,
+};
 use strandfit::gpu::{GpuContext, Precision, Timings};
-use strandfit::twin::helix_eval::PHI_MAX;
 use strandfit::helix::{ChainParams, ElementParams, HelixElement, PiecewiseHelix};
-use strandfit::twin::helix_eval::{IN_KAPPA, IN_N0, IN_PHI, IN_S, IN_STRIDE, IN_T0, IN_TAU, OUT_OFFSET, OUT_STRIDE, OUT_TANGENT};
+use strandfit::twin::helix_eval::PHI_MAX;
+use strandfit::twin::helix_eval::{
+    IN_KAPPA, IN_N0, IN_PHI, IN_S, IN_STRIDE, IN_T0, IN_TAU, OUT_OFFSET, OUT_STRIDE, OUT_TANGENT,
+};
 use strandfit::twin::Real;
 
 /// Which family an element belongs to (for the report).
@@ -38,7 +42,11 @@ const FAMILIES: [Family; 6] = [
 
 fn unit(rng: &mut ChaCha8Rng) -> DVec3 {
     loop {
-        let v = DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
+        let v = DVec3::new(
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        );
         if v.length() > 0.2 && v.length() < 1.0 {
             return v.normalize();
         }
@@ -59,7 +67,11 @@ fn shape(rng: &mut ChaCha8Rng, fam: Family) -> (f64, f64, f64) {
         Family::Circle => by_phi(rng.gen_range(0.1..5.0), 0.0, rng.gen_range(0.01..6.0)),
         Family::NearlyStraight => {
             let k = 10f64.powf(rng.gen_range(-10.0..-8.0));
-            (rng.gen_range(0.1..3.0), k, sgn * k * rng.gen_range(0.0..2.0))
+            (
+                rng.gen_range(0.1..3.0),
+                k,
+                sgn * k * rng.gen_range(0.0..2.0),
+            )
         }
         Family::Steep => {
             let k = rng.gen_range(0.001..0.05);
@@ -74,18 +86,33 @@ fn shape(rng: &mut ChaCha8Rng, fam: Family) -> (f64, f64, f64) {
 
 /// A G1 chain of `n` elements starting ~100 from the origin.
 fn chain(rng: &mut ChaCha8Rng, n: usize) -> (PiecewiseHelix, Vec<Family>) {
-    let fams: Vec<Family> = (0..n).map(|_| FAMILIES[rng.gen_range(0..FAMILIES.len())]).collect();
+    let fams: Vec<Family> = (0..n)
+        .map(|_| FAMILIES[rng.gen_range(0..FAMILIES.len())])
+        .collect();
     let elements = fams
         .iter()
         .map(|&f| {
             let (length, curvature, torsion) = shape(rng, f);
-            ElementParams { length, curvature, torsion, twist: rng.gen_range(-PI..PI) }
+            ElementParams {
+                length,
+                curvature,
+                torsion,
+                twist: rng.gen_range(-PI..PI),
+            }
         })
         .collect();
-    let start = DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0))
-        + 100.0 * unit(rng);
+    let start = DVec3::new(
+        rng.gen_range(-1.0..1.0),
+        rng.gen_range(-1.0..1.0),
+        rng.gen_range(-1.0..1.0),
+    ) + 100.0 * unit(rng);
     let tangent = unit(rng);
-    let params = ChainParams { start, tangent, normal: unit(rng), elements };
+    let params = ChainParams {
+        start,
+        tangent,
+        normal: unit(rng),
+        elements,
+    };
     (PiecewiseHelix::from_params(&params), fams)
 }
 
@@ -141,7 +168,11 @@ fn check(
     let report = std::env::var("PARITY_REPORT").is_ok();
     for (c, chain) in chains.iter().enumerate() {
         let (g, w) = (&got[c], &want[c]);
-        assert_eq!(g.points.len(), w.points.len(), "{label}: chain {c} sample count");
+        assert_eq!(
+            g.points.len(),
+            w.points.len(),
+            "{label}: chain {c} sample count"
+        );
         let total = chain.length();
         for k in 0..g.points.len() {
             let s = total * k as f64 / (g.points.len() - 1) as f64;
@@ -154,8 +185,12 @@ fn check(
             slot.point_el = slot.point_el.max(ep / (tol.eps * e.length));
             slot.point_chain = slot.point_chain.max(ep / (tol.eps * total));
             let abs = tol.ref_abs * f64::EPSILON * (e.start.length() + e.length);
-            slot.point_excess = slot.point_excess.max((ep - abs).max(0.0) / (tol.eps * e.length));
-            slot.point_abs = slot.point_abs.max(ep / (f64::EPSILON * (e.start.length() + e.length)));
+            slot.point_excess = slot
+                .point_excess
+                .max((ep - abs).max(0.0) / (tol.eps * e.length));
+            slot.point_abs = slot
+                .point_abs
+                .max(ep / (f64::EPSILON * (e.start.length() + e.length)));
             slot.tangent = slot.tangent.max(et / tol.eps);
             let allowed = tol.point * tol.eps * e.length + abs;
             let ratios = [ep / allowed, et / (tol.tangent * tol.eps)];
@@ -222,23 +257,51 @@ const E64: f64 = f64::EPSILON;
 // that changes the roundings of the same formula, so the difference is
 // bounded by the formula's own rounding error, which the reference
 // comparison measures at ≤ 3 εL and ≤ 7 ε: 16 (≈ 2× that; 0 here).
-const TWIN_F64: Tol = Tol { eps: E64, point: 16.0, ref_abs: 0.0, tangent: 16.0 };
-const TWIN_F32: Tol = Tol { eps: E32, point: 16.0, ref_abs: 0.0, tangent: 16.0 };
+const TWIN_F64: Tol = Tol {
+    eps: E64,
+    point: 16.0,
+    ref_abs: 0.0,
+    tangent: 16.0,
+};
+const TWIN_F32: Tol = Tol {
+    eps: E32,
+    point: 16.0,
+    ref_abs: 0.0,
+    tangent: 16.0,
+};
 // Kernel vs the f64 reference: 10× the measured 3.7 εL and 7.6 ε.
-const REF_F64: Tol = Tol { eps: E64, point: 40.0, ref_abs: 4.0, tangent: 80.0 };
-const REF_F32: Tol = Tol { eps: E32, point: 40.0, ref_abs: 4.0, tangent: 80.0 };
+const REF_F64: Tol = Tol {
+    eps: E64,
+    point: 40.0,
+    ref_abs: 4.0,
+    tangent: 80.0,
+};
+const REF_F32: Tol = Tol {
+    eps: E32,
+    point: 40.0,
+    ref_abs: 4.0,
+    tangent: 80.0,
+};
 
 /// The kernel alone (`run_raw`) against the reference with the element
 /// moved to the origin, so that the `f64` result carries no rounding of
 /// `|p₀|`: offset error / (ε L) and tangent error / ε, worst per family.
-fn raw_offsets<R: Real>(ctx: &GpuContext, k: &HelixEvalGpu, chains: &[PiecewiseHelix], fams: &[Vec<Family>]) -> Vec<(Family, f64, f64)> {
+fn raw_offsets<R: Real>(
+    ctx: &GpuContext,
+    k: &HelixEvalGpu,
+    chains: &[PiecewiseHelix],
+    fams: &[Vec<Family>],
+) -> Vec<(Family, f64, f64)> {
     let mut input = Vec::new();
     let mut want = Vec::new();
     for (c, chain) in chains.iter().enumerate() {
         let total = chain.length();
         for j in 0..M {
             let (i, u) = chain.locate(total * j as f64 / (M - 1) as f64).unwrap();
-            let e = HelixElement { start: DVec3::ZERO, ..chain.elements()[i] };
+            let e = HelixElement {
+                start: DVec3::ZERO,
+                ..chain.elements()[i]
+            };
             let (t, n) = (e.tangent, e.normal);
             let mut rec = [0.0; IN_STRIDE];
             rec[IN_S] = u;
@@ -252,7 +315,8 @@ fn raw_offsets<R: Real>(ctx: &GpuContext, k: &HelixEvalGpu, chains: &[PiecewiseH
         }
     }
     let mut out = vec![R::zero(); want.len() * OUT_STRIDE];
-    k.run_raw(ctx, &input, &mut out, &mut Timings::default()).unwrap();
+    k.run_raw(ctx, &input, &mut out, &mut Timings::default())
+        .unwrap();
     let eps = R::EPSILON.to_f64();
     let mut worst: Vec<(Family, f64, f64)> = FAMILIES.iter().map(|&f| (f, 0.0, 0.0)).collect();
     for (o, (fam, len, p, t)) in out.chunks(OUT_STRIDE).zip(want) {
@@ -262,7 +326,13 @@ fn raw_offsets<R: Real>(ctx: &GpuContext, k: &HelixEvalGpu, chains: &[PiecewiseH
         w.2 = w.2.max((get(OUT_TANGENT) - t).length() / eps);
     }
     for w in &worst {
-        eprintln!("{} raw kernel vs reference at the origin {:?}: offset/(εL) {:.3}, tangent/ε {:.3}", R::WGSL, w.0, w.1, w.2);
+        eprintln!(
+            "{} raw kernel vs reference at the origin {:?}: offset/(εL) {:.3}, tangent/ε {:.3}",
+            R::WGSL,
+            w.0,
+            w.1,
+            w.2
+        );
     }
     worst
 }
@@ -278,14 +348,31 @@ fn parity(ctx: &GpuContext, precision: Precision, twin_tol: Tol, ref_tol: Tol) {
     let mut t = Timings::default();
     let gpu = k.sample_chains_full(ctx, &chains, M, &mut t).unwrap();
     let name = precision.name();
-    check(&format!("{name} gpu vs twin"), twin_tol, &chains, &fams, &gpu, &twin);
-    check(&format!("{name} gpu vs reference"), ref_tol, &chains, &fams, &gpu, &want);
+    check(
+        &format!("{name} gpu vs twin"),
+        twin_tol,
+        &chains,
+        &fams,
+        &gpu,
+        &twin,
+    );
+    check(
+        &format!("{name} gpu vs reference"),
+        ref_tol,
+        &chains,
+        &fams,
+        &gpu,
+        &want,
+    );
     let raw = match precision {
         Precision::F32 => raw_offsets::<f32>(ctx, &k, &chains, &fams),
         Precision::F64 => raw_offsets::<f64>(ctx, &k, &chains, &fams),
     };
     for (fam, p, t) in raw {
-        assert!(p <= ref_tol.point && t <= ref_tol.tangent, "{name} raw {fam:?}: offset {p}, tangent {t} vs {ref_tol:?}");
+        assert!(
+            p <= ref_tol.point && t <= ref_tol.tangent,
+            "{name} raw {fam:?}: offset {p}, tangent {t} vs {ref_tol:?}"
+        );
     }
     // The points-only entry points return the same points.
     let points = k.sample_chains(ctx, &chains, M, &mut t).unwrap();
@@ -294,7 +381,9 @@ fn parity(ctx: &GpuContext, precision: Precision, twin_tol: Tol, ref_tol: Tol) {
 
 #[test]
 fn helix_eval_parity_f64() {
-    let Some(ctx) = common::gpu_or_skip("helix_eval_parity_f64") else { return };
+    let Some(ctx) = common::gpu_or_skip("helix_eval_parity_f64") else {
+        return;
+    };
     if !ctx.supports_f64() {
         eprintln!("adapter has no SHADER_F64; f64 parity not applicable");
         return;
@@ -304,7 +393,9 @@ fn helix_eval_parity_f64() {
 
 #[test]
 fn helix_eval_parity_f32() {
-    let Some(ctx) = common::gpu_or_skip("helix_eval_parity_f32") else { return };
+    let Some(ctx) = common::gpu_or_skip("helix_eval_parity_f32") else {
+        return;
+    };
     parity(&ctx, Precision::F32, TWIN_F32, REF_F32);
 }
 
@@ -312,14 +403,20 @@ fn helix_eval_parity_f32() {
 /// kernel does not take (`φ > PHI_MAX`: evaluated by the reference, exactly).
 #[test]
 fn helix_eval_edge_cases() {
-    let Some(ctx) = common::gpu_or_skip("helix_eval_edge_cases") else { return };
+    let Some(ctx) = common::gpu_or_skip("helix_eval_edge_cases") else {
+        return;
+    };
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let (mut long, _) = chain(&mut rng, 3);
     let mut els = long.elements().to_vec();
     (els[1].curvature, els[1].torsion) = (1.0, 0.5);
     els[1].length = 300.0 / els[1].omega();
     long = PiecewiseHelix::new(els);
-    let chains = vec![chain(&mut rng, 4).0, PiecewiseHelix::new(Vec::new()), long.clone()];
+    let chains = vec![
+        chain(&mut rng, 4).0,
+        PiecewiseHelix::new(Vec::new()),
+        long.clone(),
+    ];
     let k = HelixEvalGpu::new(&ctx, Precision::F32).unwrap();
     let mut t = Timings::default();
     for m in [0, 1, 2, 7] {
@@ -331,7 +428,10 @@ fn helix_eval_edge_cases() {
             assert_eq!(g.len(), want.len(), "m = {m}");
             assert_eq!(tw.len(), want.len(), "m = {m}");
             for (a, b) in g.iter().zip(&want) {
-                assert!((*a - *b).length() < 1e-5 * c.length().max(1.0), "m = {m}: {a} vs {b}");
+                assert!(
+                    (*a - *b).length() < 1e-5 * c.length().max(1.0),
+                    "m = {m}: {a} vs {b}"
+                );
             }
             if m == 1 {
                 assert_eq!(g, &want);

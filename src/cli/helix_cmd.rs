@@ -69,7 +69,11 @@ pub fn run(args: &HelixArgs, backend: &Backend) -> Result<()> {
             .par_iter()
             .map(|line| parse_line(line.trim_end_matches(['\n', '\r'])))
             .collect();
-        let pairs: Vec<HermitePair> = parsed.iter().filter_map(|p| p.as_ref().ok()).copied().collect();
+        let pairs: Vec<HermitePair> = parsed
+            .iter()
+            .filter_map(|p| p.as_ref().ok())
+            .copied()
+            .collect();
         let mut helices = backend.interpolate(&pairs, args.tolerance)?.into_iter();
         let solved: Vec<Result<Answer, String>> = parsed
             .into_iter()

@@ -145,6 +145,27 @@ impl MapKernel {
         })
     }
 
+    /// Compile in `precision`, refusing `f64` on adapters without
+    /// `SHADER_F64`.
+    pub(crate) fn for_precision(
+        ctx: &GpuContext,
+        precision: super::Precision,
+        name: &'static str,
+        body: &str,
+        in_stride: usize,
+        out_stride: usize,
+    ) -> Result<Self, GpuError> {
+        match precision {
+            super::Precision::F32 => Self::new::<f32>(ctx, name, body, in_stride, out_stride),
+            super::Precision::F64 if ctx.supports_f64() => {
+                Self::new::<f64>(ctx, name, body, in_stride, out_stride)
+            }
+            super::Precision::F64 => Err(GpuError::NoF64 {
+                adapter: ctx.adapter_info().name.clone(),
+            }),
+        }
+    }
+
     /// Records per chunk: the default, lowered to fit the binding limits.
     pub(crate) fn chunk_records(&self, ctx: &GpuContext) -> usize {
         let per = (self.in_stride.max(self.out_stride) * self.real_size) as u64;
@@ -252,12 +273,16 @@ impl MapKernel {
             ctx.queue.write_buffer(
                 &slot.input,
                 0,
-                bytemuck::cast_slice(&input[first * self.in_stride..(first + count) * self.in_stride]),
+                bytemuck::cast_slice(
+                    &input[first * self.in_stride..(first + count) * self.in_stride],
+                ),
             );
             let out_bytes = (count * self.out_stride * self.real_size) as u64;
             let mut enc = ctx
                 .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(self.name) });
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some(self.name),
+                });
             {
                 let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some(self.name),
@@ -314,7 +339,12 @@ impl MapKernel {
         match p.mapped.recv() {
             Ok(Ok(())) => {}
             Ok(Err(e)) => return Err(GpuError::Execution(format!("{}: map: {e}", self.name))),
-            Err(_) => return Err(GpuError::Execution(format!("{}: map callback lost", self.name))),
+            Err(_) => {
+                return Err(GpuError::Execution(format!(
+                    "{}: map callback lost",
+                    self.name
+                )))
+            }
         }
         timings.wait += t.elapsed();
         let t = Instant::now();

@@ -29,19 +29,14 @@ pub struct GhoshGpu {
 
 impl GhoshGpu {
     pub fn new(ctx: &GpuContext, precision: Precision) -> Result<Self, GpuError> {
-        let kernel = match precision {
-            Precision::F32 => {
-                MapKernel::new::<f32>(ctx, "ghosh_bisect", GHOSH_BISECT_WGSL, IN_STRIDE, OUT_STRIDE)?
-            }
-            Precision::F64 => {
-                if !ctx.supports_f64() {
-                    return Err(GpuError::NoF64 {
-                        adapter: ctx.adapter_info().name.clone(),
-                    });
-                }
-                MapKernel::new::<f64>(ctx, "ghosh_bisect", GHOSH_BISECT_WGSL, IN_STRIDE, OUT_STRIDE)?
-            }
-        };
+        let kernel = MapKernel::for_precision(
+            ctx,
+            precision,
+            "ghosh_bisect",
+            GHOSH_BISECT_WGSL,
+            IN_STRIDE,
+            OUT_STRIDE,
+        )?;
         Ok(GhoshGpu { kernel, precision })
     }
 
@@ -94,7 +89,8 @@ impl GhoshGpu {
             .for_each(|(rec, pr)| pack(pr, rec));
         let mut out = vec![R::zero(); pairs.len() * OUT_STRIDE];
         timings.prepare += t.elapsed();
-        self.kernel.run(ctx, &input, tol as f32, &mut out, timings)?;
+        self.kernel
+            .run(ctx, &input, tol as f32, &mut out, timings)?;
         let t = std::time::Instant::now();
         let result = out
             .par_chunks(OUT_STRIDE)
@@ -109,7 +105,10 @@ impl GhoshGpu {
 /// The same computation as [`GhoshGpu::interpolate`] with the kernel replaced
 /// by its CPU twin in precision `R` — what the GPU path should return, for
 /// parity tests, and an `f32` emulation of it on machines without a GPU.
-pub fn interpolate_twin<R: Real>(pairs: &[HermitePair], tol: f64) -> Vec<Result<ShortHelix, HelixError>> {
+pub fn interpolate_twin<R: Real>(
+    pairs: &[HermitePair],
+    tol: f64,
+) -> Vec<Result<ShortHelix, HelixError>> {
     use rayon::prelude::*;
     pairs
         .par_iter()
@@ -136,7 +135,8 @@ struct HostSide {
 fn host_side(pr: &HermitePair) -> Option<(HostSide, [f64; IN_STRIDE])> {
     let d = pr.p1 - pr.p0;
     let (l0, l1) = (pr.t0.length(), pr.t1.length());
-    let ok = pr.p0.is_finite() && pr.p1.is_finite() && d.is_finite() && l0.is_normal() && l1.is_normal();
+    let ok =
+        pr.p0.is_finite() && pr.p1.is_finite() && d.is_finite() && l0.is_normal() && l1.is_normal();
     if !ok {
         return None;
     }

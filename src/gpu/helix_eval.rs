@@ -35,19 +35,14 @@ pub struct HelixEvalGpu {
 
 impl HelixEvalGpu {
     pub fn new(ctx: &GpuContext, precision: Precision) -> Result<Self, GpuError> {
-        let kernel = match precision {
-            Precision::F32 => {
-                MapKernel::new::<f32>(ctx, "helix_eval", HELIX_EVAL_WGSL, IN_STRIDE, OUT_STRIDE)?
-            }
-            Precision::F64 => {
-                if !ctx.supports_f64() {
-                    return Err(GpuError::NoF64 {
-                        adapter: ctx.adapter_info().name.clone(),
-                    });
-                }
-                MapKernel::new::<f64>(ctx, "helix_eval", HELIX_EVAL_WGSL, IN_STRIDE, OUT_STRIDE)?
-            }
-        };
+        let kernel = MapKernel::for_precision(
+            ctx,
+            precision,
+            "helix_eval",
+            HELIX_EVAL_WGSL,
+            IN_STRIDE,
+            OUT_STRIDE,
+        )?;
         Ok(HelixEvalGpu { kernel, precision })
     }
 
@@ -177,7 +172,10 @@ fn place_all(chains: &[PiecewiseHelix], m: usize) -> Vec<Place<'_>> {
             continue;
         }
         if m == 1 {
-            places.push(Place { element: &elements[0], u: 0.0 });
+            places.push(Place {
+                element: &elements[0],
+                u: 0.0,
+            });
             continue;
         }
         cum.clear();
@@ -194,7 +192,10 @@ fn place_all(chains: &[PiecewiseHelix], m: usize) -> Vec<Place<'_>> {
             while i + 1 < elements.len() && cum[i + 1] <= s {
                 i += 1;
             }
-            places.push(Place { element: &elements[i], u: s - cum[i] });
+            places.push(Place {
+                element: &elements[i],
+                u: s - cum[i],
+            });
         }
     }
     places
@@ -206,7 +207,18 @@ fn record(pl: &Place) -> Option<[f64; IN_STRIDE]> {
     let e = pl.element;
     let phi = e.omega() * pl.u;
     let (t, n) = (e.tangent, e.normal);
-    let rec = [pl.u, e.curvature, e.torsion, phi, t.x, t.y, t.z, n.x, n.y, n.z];
+    let rec = [
+        pl.u,
+        e.curvature,
+        e.torsion,
+        phi,
+        t.x,
+        t.y,
+        t.z,
+        n.x,
+        n.y,
+        n.z,
+    ];
     (phi.abs() <= twin::PHI_MAX).then_some(rec)
 }
 
@@ -235,7 +247,8 @@ fn unpack<R: Real>(rec: &[R], pl: &Place) -> (DVec3, DVec3) {
     let e = pl.element;
     match record(pl) {
         Some(r64) if fits::<R>(&r64) => {
-            let get = |j: usize| DVec3::new(rec[j].to_f64(), rec[j + 1].to_f64(), rec[j + 2].to_f64());
+            let get =
+                |j: usize| DVec3::new(rec[j].to_f64(), rec[j + 1].to_f64(), rec[j + 2].to_f64());
             (e.start + get(twin::OUT_OFFSET), get(twin::OUT_TANGENT))
         }
         _ => (e.point(pl.u), e.tangent_at(pl.u)),

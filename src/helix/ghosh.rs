@@ -210,7 +210,14 @@ pub fn interpolate(
 
 /// Ghosh's `e₁ ∝ t₁ + t₀`, `e₂ ∝ t₁ × t₀`, made exactly orthonormal starting
 /// from whichever of `t₁ ± t₀` is longer (the more accurate one).
-pub(crate) fn ghosh_basis(t0: DVec3, t1: DVec3, diff: DVec3, sum: DVec3, nd: f64, ns: f64) -> (DVec3, DVec3) {
+pub(crate) fn ghosh_basis(
+    t0: DVec3,
+    t1: DVec3,
+    diff: DVec3,
+    sum: DVec3,
+    nd: f64,
+    ns: f64,
+) -> (DVec3, DVec3) {
     let cross = t1.cross(t0);
     if ns >= nd {
         let e1 = sum / ns;

@@ -199,9 +199,9 @@ pub fn ghosh_bisect<R: Real>(input: &[R; IN_STRIDE], tol: R) -> [R; OUT_STRIDE] 
     let cos_half = half * ns;
     let theta = r::<R>(2.0) * atan2_pos(nd, ns);
     let beta = r::<R>(2.0) * atan2_pos(ns, nd); // π − θ
-    // sin β = sin θ, cos β = −cos θ from the half angles: β itself, near π
-    // for short arcs, holds θ only to ulp(π) absolute (in f32, 4% of
-    // θ = 6e-6 — measured as a 7e-3 relative length error).
+                                                // sin β = sin θ, cos β = −cos θ from the half angles: β itself, near π
+                                                // for short arcs, holds θ only to ulp(π) absolute (in f32, 4% of
+                                                // θ = 6e-6 — measured as a 7e-3 relative length error).
     let sin_beta = r::<R>(2.0) * sin_half * cos_half;
     let cos_beta = (sin_half - cos_half) * (sin_half + cos_half);
     let a = r::<R>(std::f64::consts::SQRT_2) * de2.abs();
@@ -219,7 +219,11 @@ pub fn ghosh_bisect<R: Real>(input: &[R; IN_STRIDE], tol: R) -> [R; OUT_STRIDE] 
     };
     // G(θ) > 0 > G(2π − θ); the sign of G(π) says which half holds the root.
     let g_mid = seg.at(R::one(), beta).g;
-    let side = if g_mid > R::zero() { -R::one() } else { R::one() };
+    let side = if g_mid > R::zero() {
+        -R::one()
+    } else {
+        R::one()
+    };
     let mut w = beta;
     let mut steps = 0u32;
     if g_mid != R::zero() && seg.at(side, R::zero()).g != R::zero() {
@@ -249,7 +253,9 @@ pub fn ghosh_bisect<R: Real>(input: &[R; IN_STRIDE], tol: R) -> [R; OUT_STRIDE] 
     let at = seg.at(side, w);
     let phi = at.phi;
     let one_minus_cos_phi = r::<R>(2.0) * at.sin_half_phi * at.sin_half_phi;
-    let tau_abs = (at.q.max(R::zero()) / one_minus_cos_phi).sqrt().min(R::one());
+    let tau_abs = (at.q.max(R::zero()) / one_minus_cos_phi)
+        .sqrt()
+        .min(R::one());
     let tau_bar = if de2 < R::zero() { -tau_abs } else { tau_abs };
     let kappa_bar = (sin_half / at.sin_half_phi).min(R::one());
     let tp = tau_bar * phi;

@@ -88,7 +88,11 @@ pub fn helix_coefficients<R: Real>(phi: R) -> (R, R, R) {
         let p2 = phi * phi;
         let mut acc = R::zero();
         for (k, &c) in G_SERIES.iter().enumerate().rev() {
-            acc = if k % 2 == 0 { acc * p2 + r(c) } else { acc * p2 - r(c) };
+            acc = if k % 2 == 0 {
+                acc * p2 + r(c)
+            } else {
+                acc * p2 - r(c)
+            };
         }
         acc
     } else {
@@ -140,7 +144,18 @@ mod tests {
 
     fn record(e: &HelixElement, s: f64) -> [f64; IN_STRIDE] {
         let (t, n) = (e.tangent, e.normal);
-        [s, e.curvature, e.torsion, e.omega() * s, t.x, t.y, t.z, n.x, n.y, n.z]
+        [
+            s,
+            e.curvature,
+            e.torsion,
+            e.omega() * s,
+            t.x,
+            t.y,
+            t.z,
+            n.x,
+            n.y,
+            n.z,
+        ]
     }
 
     fn element(kappa: f64, tau: f64, length: f64) -> HelixElement {
@@ -186,7 +201,10 @@ mod tests {
             // f64: the same formula with polynomial sincos; the offset stays
             // within a few ε of L, `p₀ + offset` adds ε|p₀| ≈ 2e-14 here.
             let (p, t) = worst::<f64>(e);
-            assert!(p < 1e-15 + 3e-16 * 200.0 / e.length, "f64 {e:?}: point {p:e}");
+            assert!(
+                p < 1e-15 + 3e-16 * 200.0 / e.length,
+                "f64 {e:?}: point {p:e}"
+            );
             assert!(t < 1e-15, "f64 {e:?}: tangent {t:e}");
             // f32: inputs rounded to f32 and f32 arithmetic, relative to L.
             let (p, t) = worst::<f32>(e);

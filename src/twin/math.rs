@@ -154,7 +154,11 @@ mod tests {
             let a = std::f64::consts::FRAC_PI_2 * i as f64 / 20_000.0;
             let (y, x) = (a.sin(), a.cos());
             let got = atan2_pos(y, x);
-            assert!((got - y.atan2(x)).abs() <= 4.5e-16, "{a}: {got} vs {}", y.atan2(x));
+            assert!(
+                (got - y.atan2(x)).abs() <= 4.5e-16,
+                "{a}: {got} vs {}",
+                y.atan2(x)
+            );
             let got32 = atan2_pos(y as f32, x as f32) as f64;
             assert!((got32 - (y as f32 as f64).atan2(x as f32 as f64)).abs() <= 2.4e-7);
         }
