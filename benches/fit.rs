@@ -81,7 +81,8 @@ fn interpolation(c: &mut Criterion) {
 fn whole_fit(c: &mut Criterion) {
     let mut g = c.benchmark_group("whole_fit");
     let splines = synthetic_splines(2000, 8);
-    for n in [20usize] {
+    {
+        let n = 20usize;
         let opts = FitOptions::new(n);
         g.throughput(Throughput::Elements((n * splines.len()) as u64));
         g.bench_with_input(BenchmarkId::new("rayon", n), &n, |b, _| {

@@ -9,6 +9,7 @@
 //! |---------------|-----------------------------------------------|
 //! | `interpolate` | `ghosh_bisect.wgsl`                            |
 //! | `fit`         | sampling and relaxation on the CPU (rayon; the dense 2N+3 LU stays there by design), all Ghosh interpolations of a batch of curves in one `ghosh_bisect` run |
+//! | `evaluate`    | `helix_eval.wgsl` (piecewise helices → points and tangents) |
 
 use std::sync::OnceLock;
 
@@ -16,6 +17,7 @@ use rayon::prelude::*;
 
 use crate::fit::{fit_splines, relaxed_pairs, FitError, FitOptions, FitScratch};
 use crate::gpu::ghosh::GhoshGpu;
+use crate::gpu::helix_eval::{ChainSamples, HelixEvalGpu};
 use crate::gpu::{GpuContext, GpuError, Precision, Timings};
 use crate::helix::{HelixError, HermitePair, PiecewiseHelix, ShortHelix};
 use crate::spline::BezierSpline;
@@ -47,6 +49,7 @@ pub struct GpuEngine {
     pub ctx: GpuContext,
     pub precision: Precision,
     ghosh: OnceLock<GhoshGpu>,
+    helix_eval: OnceLock<HelixEvalGpu>,
 }
 
 impl GpuEngine {
@@ -65,6 +68,7 @@ impl GpuEngine {
             ctx,
             precision,
             ghosh: OnceLock::new(),
+            helix_eval: OnceLock::new(),
         })
     }
 
@@ -75,6 +79,15 @@ impl GpuEngine {
         }
         let k = GhoshGpu::new(&self.ctx, self.precision)?;
         Ok(self.ghosh.get_or_init(|| k))
+    }
+
+    /// The helix evaluation kernel (compiled once).
+    pub fn helix_eval(&self) -> Result<&HelixEvalGpu, GpuError> {
+        if let Some(k) = self.helix_eval.get() {
+            return Ok(k);
+        }
+        let k = HelixEvalGpu::new(&self.ctx, self.precision)?;
+        Ok(self.helix_eval.get_or_init(|| k))
     }
 }
 
@@ -87,6 +100,10 @@ pub enum Backend {
 /// Curves per GPU batch in [`Backend::fit`]: bounds host memory (pairs and
 /// results of one batch) for any number of curves.
 const FIT_BATCH_CURVES: usize = 1 << 15;
+
+/// Samples per GPU batch in [`Backend::evaluate`] (whole chains; a chain
+/// with more samples than this is a batch of its own).
+const EVAL_BATCH_SAMPLES: usize = 1 << 22;
 
 impl Backend {
     /// Open the backend the user chose. `auto` never fails: without an
@@ -211,10 +228,7 @@ impl Backend {
                         .map(|(index, h)| {
                             h.as_ref()
                                 .map(|h| h.element)
-                                .map_err(|e| FitError::Element {
-                                    index,
-                                    source: e.clone(),
-                                })
+                                .map_err(|e| FitError::Element { index, source: *e })
                         })
                         .collect::<Result<Vec<_>, _>>()?;
                     Ok(PiecewiseHelix::new(elements))
@@ -222,5 +236,44 @@ impl Backend {
             }
         }
         Ok(results)
+    }
+
+    /// `m` points (and unit tangents) of every chain equally spaced in arc
+    /// length, ends included — [`PiecewiseHelix::sample`] — order kept.
+    /// Empty chains give no samples.
+    pub fn evaluate(
+        &self,
+        chains: &[PiecewiseHelix],
+        m: usize,
+    ) -> Result<Vec<ChainSamples>, GpuError> {
+        self.evaluate_timed(chains, m, &mut Timings::default())
+    }
+
+    /// [`Backend::evaluate`] reporting where the GPU time went.
+    pub fn evaluate_timed(
+        &self,
+        chains: &[PiecewiseHelix],
+        m: usize,
+        timings: &mut Timings,
+    ) -> Result<Vec<ChainSamples>, GpuError> {
+        let g = match self {
+            Backend::Cpu => {
+                return Ok(chains
+                    .par_iter()
+                    .map(|c| {
+                        let (points, tangents) = c.sample_with_tangents(m);
+                        ChainSamples { points, tangents }
+                    })
+                    .collect())
+            }
+            Backend::Gpu(g) => g,
+        };
+        let kernel = g.helix_eval()?;
+        let per_batch = (EVAL_BATCH_SAMPLES / m.max(1)).max(1);
+        let mut out = Vec::with_capacity(chains.len());
+        for batch in chains.chunks(per_batch) {
+            out.extend(kernel.sample_chains_full(&g.ctx, batch, m, timings)?);
+        }
+        Ok(out)
     }
 }

@@ -15,6 +15,15 @@
 //! torsion follows the standard Frenet–Serret sign (a right-handed helix has
 //! `τ > 0`).
 
+// Deliberate numerics idioms: constants written with all the digits their
+// source publishes; `!(x > 0.0)` comparisons that also reject NaN; index
+// loops over several arrays in lockstep, as the equations are written.
+#![allow(
+    clippy::excessive_precision,
+    clippy::neg_cmp_op_on_partial_ord,
+    clippy::needless_range_loop
+)]
+
 pub mod backend;
 pub mod cli;
 pub mod fit;

@@ -188,3 +188,137 @@ fn bundled_example_runs() {
         assert!(c["frechet"].as_f64().unwrap() < 0.1, "{}", c["id"]);
     }
 }
+
+/// `evaluate` reads what `fit` writes and samples the chains exactly as `fit`
+/// does for its Fréchet distance: the distance recomputed from `evaluate`'s
+/// points equals the reported one.
+#[test]
+fn evaluate_decompresses_fit_output() {
+    use strandfit::metrics::discrete_frechet;
+    use strandfit::spline::BezierSpline;
+    let dir = tempfile::tempdir().unwrap();
+    let fitted = dir.path().join("fit.json");
+    let polys = dir.path().join("polys.json");
+    let n = 6;
+    let out = strandfit(
+        &[
+            "--backend",
+            "cpu",
+            "fit",
+            "-n",
+            "6",
+            "-o",
+            fitted.to_str().unwrap(),
+        ],
+        TWO_SPLINES,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m = 32 * n + 1; // fit's default --samples-per-element 32
+    let out = strandfit(
+        &[
+            "--backend",
+            "cpu",
+            "evaluate",
+            fitted.to_str().unwrap(),
+            "-m",
+            &m.to_string(),
+            "--tangents",
+            "-o",
+            polys.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let fit = json(&std::fs::read(&fitted).unwrap());
+    let ev = json(&std::fs::read(&polys).unwrap());
+    let input = json(TWO_SPLINES.as_bytes());
+    let v3 = |v: &serde_json::Value| {
+        strandfit::DVec3::new(
+            v[0].as_f64().unwrap(),
+            v[1].as_f64().unwrap(),
+            v[2].as_f64().unwrap(),
+        )
+    };
+    for (k, curve) in ev["curves"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(curve["id"], input["splines"][k]["id"]);
+        let pts: Vec<_> = curve["points"].as_array().unwrap().iter().map(v3).collect();
+        let tans: Vec<_> = curve["tangents"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(v3)
+            .collect();
+        assert_eq!((pts.len(), tans.len()), (m, m));
+        let cps: Vec<_> = input["splines"][k]["control_points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(v3)
+            .collect();
+        let spline = BezierSpline::from_control_points(&cps).unwrap();
+        let scale = spline.length();
+        // Relaxation moves the end points too; the discrete Fréchet distance
+        // bounds how far (it couples first with first, last with last).
+        let want = fit["curves"][k]["frechet"].as_f64().unwrap();
+        assert!((pts[0] - cps[0]).length() <= want + 1e-14 * scale);
+        assert!((pts[m - 1] - *cps.last().unwrap()).length() <= want + 1e-14 * scale);
+        for t in &tans {
+            assert!((t.length() - 1.0).abs() < 1e-12);
+        }
+        let got = discrete_frechet(&spline.sample_points(m).unwrap(), &pts).unwrap();
+        assert!((got - want).abs() <= 1e-14 * scale, "{got} vs {want}");
+    }
+}
+
+#[test]
+fn evaluate_rejects_bad_elements_by_name() {
+    let el = |normal: &str, k: &str| {
+        format!(
+            r#"{{"start":[0,0,0],"tangent":[1,0,0],"normal":{normal},"curvature":{k},"torsion":0,"length":1}}"#
+        )
+    };
+    let cases = [
+        (el("[0,1,0]", "-1"), "negative curvature"),
+        (el("[1,0,0]", "1"), "not orthogonal"),
+        (el("[0,2,0]", "1"), "unit"),
+        (el("[0,1,0]", "1e999"), "expected"),
+    ];
+    for (e, needle) in cases {
+        let doc = format!(
+            r#"{{"curves":[{{"id":"ok","elements":[{}]}},{{"id":"bad","elements":[{},{e}]}}]}}"#,
+            el("[0,1,0]", "1"),
+            el("[0,1,0]", "1")
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let outp = dir.path().join("out.json");
+        let out = strandfit(
+            &["--backend", "cpu", "evaluate", "-o", outp.to_str().unwrap()],
+            &doc,
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success());
+        assert!(err.contains(needle), "{err}");
+        if needle != "expected" {
+            assert!(
+                err.contains("curve \"bad\" (curves[1]): elements[1]"),
+                "{err}"
+            );
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+    let out = strandfit(&["evaluate", "-m", "1"], "{\"curves\":[]}");
+    assert!(!out.status.success());
+    let out = strandfit(
+        &["--backend", "cpu", "evaluate"],
+        r#"{"curves":[{"id":1,"elements":[]}]}"#,
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no elements"));
+}

@@ -96,3 +96,100 @@ fn fit_gpu_matches_cpu_on_the_bundled_example() {
     eprintln!("f32 kernel vs cpu: {d:e}");
     assert!(d <= 1e3 * f32::EPSILON as f64, "f32: {d:e}");
 }
+
+fn run_evaluate(fitted: &std::path::Path, backend: &str, precision: &str) -> Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_strandfit"))
+        .args([
+            "--backend",
+            backend,
+            "--precision",
+            precision,
+            "evaluate",
+            "-m",
+            "1001",
+            "--tangents",
+        ])
+        .arg(fitted)
+        .env(
+            "XDG_RUNTIME_DIR",
+            std::env::var("XDG_RUNTIME_DIR").unwrap_or("/tmp".into()),
+        )
+        .output()
+        .expect("run strandfit");
+    assert!(
+        out.status.success(),
+        "strandfit --backend {backend} evaluate failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("JSON output")
+}
+
+/// Largest point difference relative to the curve's length, and largest
+/// tangent difference, between two `evaluate` outputs.
+fn max_sample_diff(a: &Value, b: &Value, lengths: &[f64]) -> (f64, f64) {
+    let (mut p, mut t) = (0.0f64, 0.0f64);
+    for ((x, y), len) in a["curves"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(b["curves"].as_array().unwrap())
+        .zip(lengths)
+    {
+        assert_eq!(x["id"], y["id"]);
+        for (key, worst, scale) in [("points", &mut p, *len), ("tangents", &mut t, 1.0)] {
+            let (u, v) = (x[key].as_array().unwrap(), y[key].as_array().unwrap());
+            assert_eq!(u.len(), v.len());
+            for (q, r) in u.iter().zip(v) {
+                for i in 0..3 {
+                    let d = (q[i].as_f64().unwrap() - r[i].as_f64().unwrap()).abs();
+                    *worst = worst.max(d / scale);
+                }
+            }
+        }
+    }
+    (p, t)
+}
+
+/// `evaluate --backend gpu` (helix_eval.wgsl) against `--backend cpu` on the
+/// bundled example's fitted chains. Tolerances from `tests/gpu_helix_eval.rs`
+/// (≤ 40 ε·L for points, ≤ 80 ε for tangents against the reference), plus the
+/// `f64` rounding of `p₀ + offset` (≤ 4 ε₆₄ (|p₀| + L), which relative to
+/// the whole curve's length is below 40 ε₆₄ for this example).
+#[test]
+fn evaluate_gpu_matches_cpu_on_the_bundled_example() {
+    let Some(ctx) = common::gpu_or_skip("evaluate_gpu_matches_cpu_on_the_bundled_example") else {
+        return;
+    };
+    let fitted = run_fit("cpu", "auto");
+    let lengths: Vec<f64> = fitted["curves"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            c["elements"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|e| e["length"].as_f64().unwrap())
+                .sum()
+        })
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fit.json");
+    std::fs::write(&path, serde_json::to_vec(&fitted).unwrap()).unwrap();
+    let cpu = run_evaluate(&path, "cpu", "auto");
+    let mut runs = vec![("f32", f32::EPSILON as f64)];
+    if ctx.supports_f64() {
+        runs.push(("f64", f64::EPSILON));
+    }
+    for (precision, eps) in runs {
+        let (p, t) = max_sample_diff(&run_evaluate(&path, "gpu", precision), &cpu, &lengths);
+        eprintln!(
+            "evaluate {precision} kernel vs cpu: points {:.2} ε·L, tangents {:.2} ε",
+            p / eps,
+            t / eps
+        );
+        assert!(p <= 80.0 * eps, "{precision}: points {p:e}");
+        assert!(t <= 80.0 * eps, "{precision}: tangents {t:e}");
+    }
+}

@@ -41,6 +41,7 @@ struct CurveOut {
 struct ElementOut {
     start: [f64; 3],
     tangent: [f64; 3],
+    normal: [f64; 3],
     axis: [f64; 3],
     curvature: f64,
     torsion: f64,
@@ -128,6 +129,7 @@ fn element_out(e: &crate::helix::HelixElement) -> ElementOut {
     ElementOut {
         start: e.start.to_array(),
         tangent: e.tangent.to_array(),
+        normal: e.normal.to_array(),
         axis: e.axis().to_array(),
         curvature: e.curvature,
         torsion: e.torsion,

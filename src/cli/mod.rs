@@ -1,6 +1,7 @@
-//! The `strandfit` command line: `helix`, `fit`, `bench`.
+//! The `strandfit` command line: `helix`, `fit`, `evaluate`, `bench`.
 
 mod bench_cmd;
+mod evaluate_cmd;
 mod fit_cmd;
 mod helix_cmd;
 mod io_util;
@@ -73,6 +74,9 @@ pub enum Command {
     Helix(HelixArgs),
     /// Fit Bézier splines ({"splines":[{"id","control_points"}]}) with N helices each.
     Fit(FitArgs),
+    /// Sample fitted piecewise helices (the output of `fit`) back to
+    /// polylines: M points per curve equally spaced in arc length.
+    Evaluate(EvaluateArgs),
     /// Measure whole-fit throughput on synthetic splines (elements per second).
     Bench(BenchArgs),
 }
@@ -127,6 +131,21 @@ pub struct FitArgs {
 }
 
 #[derive(clap::Args, Debug)]
+pub struct EvaluateArgs {
+    /// Input JSON file, as written by `fit` ("-" or absent: standard input).
+    pub input: Option<PathBuf>,
+    /// Points per curve, both ends included.
+    #[arg(short = 'm', long, default_value_t = 100)]
+    pub points: usize,
+    /// Also write the unit tangent at every point.
+    #[arg(long)]
+    pub tangents: bool,
+    /// Output JSON file (absent: standard output). Written atomically.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+}
+
+#[derive(clap::Args, Debug)]
 pub struct BenchArgs {
     /// Number of synthetic splines.
     #[arg(long, default_value_t = 20_000)]
@@ -157,6 +176,7 @@ pub fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Helix(a) => cli.backend().and_then(|b| helix_cmd::run(a, &b)),
         Command::Fit(a) => cli.backend().and_then(|b| fit_cmd::run(a, &b)),
+        Command::Evaluate(a) => cli.backend().and_then(|b| evaluate_cmd::run(a, &b)),
         Command::Bench(a) => cli.backend().and_then(|b| bench_cmd::run(a, &b)),
     };
     match result {

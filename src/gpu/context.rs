@@ -170,7 +170,9 @@ impl GpuContext {
 
     /// Largest storage buffer binding, bytes.
     pub fn max_binding_bytes(&self) -> u64 {
-        (self.limits.max_storage_buffer_binding_size as u64).min(self.limits.max_buffer_size)
+        self.limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
     }
 
     /// Largest workgroup count per dispatch dimension.

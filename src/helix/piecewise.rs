@@ -131,6 +131,30 @@ impl PiecewiseHelix {
         }
     }
 
+    /// The points of [`sample`](Self::sample) with their unit tangents
+    /// (same arc lengths, same element choice).
+    pub fn sample_with_tangents(&self, m: usize) -> (Vec<DVec3>, Vec<DVec3>) {
+        if self.elements.is_empty() || m == 0 {
+            return (Vec::new(), Vec::new());
+        }
+        if m == 1 {
+            let e = &self.elements[0];
+            return (vec![e.start], vec![e.tangent]);
+        }
+        let total = self.length();
+        let mut i = 0;
+        (0..m)
+            .map(|k| {
+                let s = total * k as f64 / (m - 1) as f64;
+                while i + 1 < self.elements.len() && self.cum[i + 1] <= s {
+                    i += 1;
+                }
+                let (e, u) = (&self.elements[i], s - self.cum[i]);
+                (e.point(u), e.tangent_at(u))
+            })
+            .unzip()
+    }
+
     /// Points every `step` of arc length (plus the end point).
     pub fn sample_step(&self, step: f64) -> Vec<DVec3> {
         if !(step > 0.0) || self.elements.is_empty() {

@@ -1,8 +1,5 @@
 //! A piecewise cubic Bézier spline with a precomputed arc-length table.
 
-// `!(x > 0.0)` is deliberate throughout: it is also true for NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use glam::DVec3;
 
 use super::cubic::CubicBez;
