@@ -12,12 +12,15 @@ use crate::helix::HermitePair;
 use crate::synthetic::synthetic_splines;
 use anyhow::Result;
 
-fn report(label: &str, items: f64, times: &mut [(f64, Timings)]) {
+/// Points per element in the decompression benchmark.
+const EVAL_POINTS_PER_ELEMENT: usize = 8;
+
+fn report(label: &str, items: f64, unit: &str, times: &mut [(f64, Timings)]) {
     times.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (best, bt) = times[0];
     let (median, _) = times[times.len() / 2];
     println!(
-        "{label}: best {best:.4} s {:>13.0} elements/s | median {median:.4} s {:>13.0} elements/s",
+        "{label}: best {best:.4} s {:>13.0} {unit}/s | median {median:.4} s {:>13.0} {unit}/s",
         items / best,
         items / median
     );
@@ -64,7 +67,12 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         times.push((start.elapsed().as_secs_f64(), t));
         std::hint::black_box(r);
     }
-    report("ghosh interpolation", pairs.len() as f64, &mut times);
+    report(
+        "ghosh interpolation",
+        pairs.len() as f64,
+        "elements",
+        &mut times,
+    );
     drop(pairs);
 
     let mut times = Vec::with_capacity(args.repeat);
@@ -76,9 +84,32 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         times.push((start.elapsed().as_secs_f64(), t));
         failures = results.iter().filter(|r| r.is_err()).count();
     }
-    report("whole fit          ", elements, &mut times);
+    report("whole fit          ", elements, "elements", &mut times);
     if failures > 0 {
         println!("  ({failures} curves failed to fit)");
     }
+
+    // Decompression: the fitted chains back to points (helix_eval), at
+    // `EVAL_POINTS_PER_ELEMENT` points per element.
+    let chains: Vec<_> = crate::fit::fit_splines(&splines, &opts)
+        .into_iter()
+        .filter_map(|r| r.ok())
+        .collect();
+    let m = EVAL_POINTS_PER_ELEMENT * args.elements + 1;
+    let _ = backend.evaluate(&chains[..chains.len().min(16)], m)?; // warm-up, compile
+    let mut times = Vec::with_capacity(args.repeat);
+    for _ in 0..args.repeat {
+        let mut t = Timings::default();
+        let start = Instant::now();
+        let r = backend.evaluate_timed(&chains, m, &mut t)?;
+        times.push((start.elapsed().as_secs_f64(), t));
+        std::hint::black_box(r);
+    }
+    report(
+        &format!("helix evaluation ({m} points/curve)"),
+        (chains.len() * m) as f64,
+        "points",
+        &mut times,
+    );
     Ok(())
 }
