@@ -10,6 +10,7 @@
 //! | `interpolate` | `ghosh_bisect.wgsl`                            |
 //! | `fit`         | sampling and relaxation on the CPU (rayon; the dense 2N+3 LU stays there by design), all Ghosh interpolations of a batch of curves in one `ghosh_bisect` run |
 //! | `evaluate`    | `helix_eval.wgsl` (piecewise helices → points and tangents) |
+//! | `sample`      | CPU for now (`spline_sample.wgsl` lands next) |
 
 use std::sync::OnceLock;
 
@@ -21,6 +22,10 @@ use crate::gpu::helix_eval::{ChainSamples, HelixEvalGpu};
 use crate::gpu::{GpuContext, GpuError, Precision, Timings};
 use crate::helix::{HelixError, HermitePair, PiecewiseHelix, ShortHelix};
 use crate::spline::BezierSpline;
+
+/// Points with their unit tangents along one curve (what `sample` and
+/// `evaluate` return per curve).
+pub type Samples = ChainSamples;
 
 /// What the user asked for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -238,14 +243,36 @@ impl Backend {
         Ok(results)
     }
 
+    /// `n + 1` points with unit tangents equally spaced in arc length on
+    /// every spline — [`BezierSpline::sample_equal_arclen`] — order kept.
+    /// `n ≥ 1` (the CLI checks; `n = 0` gives the two ends).
+    pub fn sample(&self, splines: &[BezierSpline], n: usize) -> Result<Vec<Samples>, GpuError> {
+        self.sample_timed(splines, n, &mut Timings::default())
+    }
+
+    /// [`Backend::sample`] reporting where the GPU time went.
+    pub fn sample_timed(
+        &self,
+        splines: &[BezierSpline],
+        n: usize,
+        _timings: &mut Timings,
+    ) -> Result<Vec<Samples>, GpuError> {
+        let n = n.max(1);
+        Ok(splines
+            .par_iter()
+            .map(|s| {
+                let mut out = Samples::default();
+                // Cannot fail for n ≥ 1.
+                let _ = s.sample_equal_arclen_into(n, &mut out.points, &mut out.tangents);
+                out
+            })
+            .collect())
+    }
+
     /// `m` points (and unit tangents) of every chain equally spaced in arc
     /// length, ends included — [`PiecewiseHelix::sample`] — order kept.
     /// Empty chains give no samples.
-    pub fn evaluate(
-        &self,
-        chains: &[PiecewiseHelix],
-        m: usize,
-    ) -> Result<Vec<ChainSamples>, GpuError> {
+    pub fn evaluate(&self, chains: &[PiecewiseHelix], m: usize) -> Result<Vec<Samples>, GpuError> {
         self.evaluate_timed(chains, m, &mut Timings::default())
     }
 
@@ -255,14 +282,14 @@ impl Backend {
         chains: &[PiecewiseHelix],
         m: usize,
         timings: &mut Timings,
-    ) -> Result<Vec<ChainSamples>, GpuError> {
+    ) -> Result<Vec<Samples>, GpuError> {
         let g = match self {
             Backend::Cpu => {
                 return Ok(chains
                     .par_iter()
                     .map(|c| {
                         let (points, tangents) = c.sample_with_tangents(m);
-                        ChainSamples { points, tangents }
+                        Samples { points, tangents }
                     })
                     .collect())
             }

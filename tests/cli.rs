@@ -322,3 +322,52 @@ fn evaluate_rejects_bad_elements_by_name() {
     );
     assert!(String::from_utf8_lossy(&out.stderr).contains("no elements"));
 }
+
+/// `sample` writes N + 1 points and unit tangents per spline, equally spaced
+/// in arc length: on the CPU exactly the library's `sample_equal_arclen`.
+#[test]
+fn sample_writes_equal_arclength_points() {
+    use strandfit::spline::BezierSpline;
+    let out = strandfit(&["--backend", "cpu", "sample", "-n", "5"], TWO_SPLINES);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json(&out.stdout);
+    let input = json(TWO_SPLINES.as_bytes());
+    let v3 = |v: &serde_json::Value| {
+        strandfit::DVec3::new(
+            v[0].as_f64().unwrap(),
+            v[1].as_f64().unwrap(),
+            v[2].as_f64().unwrap(),
+        )
+    };
+    for (k, s) in v["splines"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(s["id"], input["splines"][k]["id"]);
+        let cps: Vec<_> = input["splines"][k]["control_points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(v3)
+            .collect();
+        let want = BezierSpline::from_control_points(&cps)
+            .unwrap()
+            .sample_equal_arclen(5)
+            .unwrap();
+        let pts = s["points"].as_array().unwrap();
+        let tans = s["tangents"].as_array().unwrap();
+        assert_eq!((pts.len(), tans.len()), (6, 6));
+        for (j, (p, t)) in want.iter().enumerate() {
+            assert_eq!(v3(&pts[j]), *p);
+            assert_eq!(v3(&tans[j]), *t);
+        }
+    }
+    let bad = strandfit(&["sample", "-n", "0"], TWO_SPLINES);
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--intervals"));
+    let bad = strandfit(
+        &["--backend", "cpu", "sample", "-n", "2"],
+        r#"{"splines":[{"id":"nan","control_points":[[0,0,0],[1,0,0],[2,0,0],[3,0,null]]}]}"#,
+    );
+    assert!(!bad.status.success());
+}

@@ -49,12 +49,45 @@ struct ElementOut {
 }
 
 /// How a spline is named in messages: its id, else its index.
-fn label(index: usize, id: &Option<serde_json::Value>) -> String {
+fn label(index: usize, id: &serde_json::Value) -> String {
     match id {
-        Some(serde_json::Value::String(s)) => format!("spline \"{s}\" (splines[{index}])"),
-        Some(v) => format!("spline {v} (splines[{index}])"),
-        None => format!("splines[{index}]"),
+        serde_json::Value::String(s) => format!("spline \"{s}\" (splines[{index}])"),
+        serde_json::Value::Null => format!("splines[{index}]"),
+        v if v.as_u64() == Some(index as u64) => format!("splines[{index}]"),
+        v => format!("spline {v} (splines[{index}])"),
     }
+}
+
+/// Read and validate a splines document (`{"splines":[{"id","control_points"}]}`):
+/// the ids (absent ids become the index) and the splines. One bad spline
+/// fails the whole read, with a message naming the input and the spline.
+pub(super) fn read_splines(
+    input: &Option<std::path::PathBuf>,
+) -> Result<(Vec<serde_json::Value>, Vec<BezierSpline>)> {
+    let name = input_name(input);
+    let text = read_input(input)?;
+    let doc: Input = serde_json::from_str(&text).with_context(|| {
+        format!("{name}: expected {{\"splines\":[{{\"id\":…,\"control_points\":[[x,y,z],…]}}]}}")
+    })?;
+    drop(text);
+    let splines = doc
+        .splines
+        .par_iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let pts: Vec<DVec3> = s.control_points.iter().map(|&p| DVec3::from(p)).collect();
+            let id = s.id.clone().unwrap_or(serde_json::Value::Null);
+            BezierSpline::from_control_points(&pts)
+                .with_context(|| format!("{name}: {}", label(i, &id)))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let ids = doc
+        .splines
+        .into_iter()
+        .enumerate()
+        .map(|(i, s)| s.id.unwrap_or(serde_json::Value::from(i)))
+        .collect();
+    Ok((ids, splines))
 }
 
 pub fn run(args: &FitArgs, backend: &Backend) -> Result<()> {
@@ -64,42 +97,25 @@ pub fn run(args: &FitArgs, backend: &Backend) -> Result<()> {
     if args.samples_per_element == 0 {
         bail!("--samples-per-element must be at least 1");
     }
-    let name = input_name(&args.input);
-    let text = read_input(&args.input)?;
-    let input: Input = serde_json::from_str(&text).with_context(|| {
-        format!("{name}: expected {{\"splines\":[{{\"id\":…,\"control_points\":[[x,y,z],…]}}]}}")
-    })?;
-    drop(text);
-
-    // Validate everything before any work: one bad spline fails the run.
-    let splines: Vec<BezierSpline> = input
-        .splines
-        .iter()
-        .enumerate()
-        .map(|(i, s)| {
-            let pts: Vec<DVec3> = s.control_points.iter().map(|&p| DVec3::from(p)).collect();
-            BezierSpline::from_control_points(&pts)
-                .with_context(|| format!("{name}: {}", label(i, &s.id)))
-        })
-        .collect::<Result<_>>()?;
-
+    let (ids, splines) = read_splines(&args.input)?;
     let opts = FitOptions {
         relaxation: args.relaxation.into(),
         ..FitOptions::new(args.elements)
     };
     let samples = args.samples_per_element * args.elements + 1;
     let chains = backend.fit(&splines, &opts)?;
+    let name = input_name(&args.input);
     let curves: Vec<CurveOut> = splines
         .par_iter()
-        .zip(input.splines.par_iter())
+        .zip(ids.par_iter())
         .zip(chains.into_par_iter())
         .enumerate()
-        .map(|(i, ((spline, src), chain))| {
-            let what = || format!("{name}: {}", label(i, &src.id));
+        .map(|(i, ((spline, id), chain))| {
+            let what = || format!("{name}: {}", label(i, id));
             let chain = chain.with_context(what)?;
             let (frechet, hausdorff) = distances(spline, &chain, samples).with_context(what)?;
             Ok(CurveOut {
-                id: src.id.clone().unwrap_or(serde_json::Value::from(i)),
+                id: id.clone(),
                 elements: chain.elements().iter().map(element_out).collect(),
                 frechet,
                 hausdorff,

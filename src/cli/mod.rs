@@ -1,10 +1,11 @@
-//! The `strandfit` command line: `helix`, `fit`, `evaluate`, `bench`.
+//! The `strandfit` command line: `helix`, `fit`, `sample`, `evaluate`, `bench`.
 
 mod bench_cmd;
 mod evaluate_cmd;
 mod fit_cmd;
 mod helix_cmd;
 mod io_util;
+mod sample_cmd;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -74,6 +75,9 @@ pub enum Command {
     Helix(HelixArgs),
     /// Fit Bézier splines ({"splines":[{"id","control_points"}]}) with N helices each.
     Fit(FitArgs),
+    /// N + 1 points with unit tangents equally spaced in arc length on each
+    /// Bézier spline (the fit's first step).
+    Sample(SampleArgs),
     /// Sample fitted piecewise helices (the output of `fit`) back to
     /// polylines: M points per curve equally spaced in arc length.
     Evaluate(EvaluateArgs),
@@ -131,6 +135,18 @@ pub struct FitArgs {
 }
 
 #[derive(clap::Args, Debug)]
+pub struct SampleArgs {
+    /// Input JSON file, as for `fit` ("-" or absent: standard input).
+    pub input: Option<PathBuf>,
+    /// Number of equal arc-length intervals N (N + 1 points per spline).
+    #[arg(short = 'n', long)]
+    pub intervals: usize,
+    /// Output JSON file (absent: standard output). Written atomically.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+}
+
+#[derive(clap::Args, Debug)]
 pub struct EvaluateArgs {
     /// Input JSON file, as written by `fit` ("-" or absent: standard input).
     pub input: Option<PathBuf>,
@@ -176,6 +192,7 @@ pub fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Helix(a) => cli.backend().and_then(|b| helix_cmd::run(a, &b)),
         Command::Fit(a) => cli.backend().and_then(|b| fit_cmd::run(a, &b)),
+        Command::Sample(a) => cli.backend().and_then(|b| sample_cmd::run(a, &b)),
         Command::Evaluate(a) => cli.backend().and_then(|b| evaluate_cmd::run(a, &b)),
         Command::Bench(a) => cli.backend().and_then(|b| bench_cmd::run(a, &b)),
     };
