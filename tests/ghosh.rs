@@ -365,3 +365,52 @@ fn uniqueness_the_root_is_the_only_sign_change() {
         assert!((h.element.end_frame().tangent - t1).length() < 1e-12);
     }
 }
+
+/// The reference (Brent) and the GPU kernel's `f64` twin (bisection) solve the
+/// same equation from the same half-angle data, so on short arcs — where κ is
+/// determined by the data only to `~ε/θ` — they must still agree to a few ε:
+/// neither may form `sin(β − x)` from the rounded `β = π − θ` (which costs
+/// `ε/θ` relative; 4e-10 at θ = 1e-6).
+#[test]
+fn reference_and_twin_agree_on_short_arcs() {
+    use strandfit::gpu::ghosh::interpolate_twin;
+    use strandfit::helix::HermitePair;
+    let mut pairs = Vec::new();
+    let mut k = 0u64;
+    for i in 0..400 {
+        // Deterministic spread: θ from 1e-7 to 1e-2, τ/κ from −3 to 3.
+        k = k
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let u = (k >> 11) as f64 / (1u64 << 53) as f64;
+        let phi = 10f64.powf(-7.0 + 5.0 * (i as f64 / 400.0));
+        let tau = -3.0 + 6.0 * u;
+        let t0 = DVec3::new(0.3, -0.5, 0.8).normalize();
+        let e = helix(
+            DVec3::new(1.0, 2.0, -3.0),
+            t0,
+            DVec3::new(1.0, u, 0.2),
+            1.0,
+            tau,
+            phi,
+        );
+        pairs.push(HermitePair {
+            p0: e.start,
+            t0: e.tangent,
+            p1: e.end_point(),
+            t1: e.end_frame().tangent,
+        });
+    }
+    let twin = interpolate_twin::<f64>(&pairs, DEFAULT_COHELICAL_TOL);
+    let mut worst = 0.0f64;
+    for (p, t) in pairs.iter().zip(&twin) {
+        let r = p.interpolate(DEFAULT_COHELICAL_TOL).unwrap().element;
+        let t = t.as_ref().unwrap().element;
+        let w = r.omega();
+        worst = worst
+            .max((r.curvature - t.curvature).abs() / (w * f64::EPSILON))
+            .max((r.torsion - t.torsion).abs() / (w * f64::EPSILON));
+    }
+    eprintln!("short arcs: reference vs twin, worst |Δκ|, |Δτ| = {worst:.1} ε·ω");
+    assert!(worst <= 64.0, "{worst} ε·ω");
+}

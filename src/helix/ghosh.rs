@@ -149,7 +149,8 @@ pub fn interpolate(
         a,
         b,
         theta,
-        beta,
+        sin_half,
+        cos_half,
         one_minus_c: 2.0 * sin_half * sin_half,
     };
     // Which half of I₀ holds the root: G(π) > 0 ⇒ (π, 2π − θ].
@@ -172,10 +173,8 @@ pub fn interpolate(
     } else {
         2.0 * std::f64::consts::PI - theta - w
     };
-    let m = beta - w; // |π − φ*|
-    let sin_half_phi = (0.5 * m).cos(); // sin(φ*/2) ∈ (0, 1]
-    let cos_half_phi = side * (0.5 * m).sin(); // cos(φ*/2)
-    let q = 2.0 * (beta - 0.5 * w).sin() * (0.5 * w).sin(); // t₀·t₁ − cos φ*
+    let hw = g.half_angles(side, w);
+    let (sin_half_phi, cos_half_phi, q) = (hw.sin_half_phi, hw.cos_half_phi, hw.q);
     let one_minus_cos_phi = 2.0 * sin_half_phi * sin_half_phi;
     let tau_abs = (q.max(0.0) / one_minus_cos_phi).sqrt().min(1.0);
     let tau_bar = if de2 < 0.0 { -tau_abs } else { tau_abs };
@@ -282,23 +281,59 @@ struct GFunction {
     a: f64,
     b: f64,
     theta: f64,
-    beta: f64,
+    /// `sin(θ/2)`, `cos(θ/2)` straight from the data (`|t₁ ∓ t₀|/2`).
+    sin_half: f64,
+    cos_half: f64,
     one_minus_c: f64,
 }
 
+/// The trigonometric quantities at `φ = θ + w` (side +1) or `2π − θ − w`
+/// (side −1), all from the data's half angles and `w`, never from the
+/// rounded `β = π − θ`: `sin(β − x) = sin(θ + x)` is `O(θ)` for a short arc
+/// while `β` carries an absolute rounding of `ulp(π)`, which would cost
+/// `ε/θ` relative (the reference's κ and τ were only good to ~1e-10 on
+/// elements turning by 1e-6 rad before this).
+struct HalfAngles {
+    /// `sin(φ/2) ∈ (0, 1]`.
+    sin_half_phi: f64,
+    /// `cos(φ/2)`.
+    cos_half_phi: f64,
+    /// `sin φ`.
+    sin_phi: f64,
+    /// `c − cos φ = 2 sin(θ + w/2) sin(w/2) ≥ 0` (`c = t₀·t₁`).
+    q: f64,
+}
+
 impl GFunction {
+    #[inline]
+    fn half_angles(&self, side: f64, w: f64) -> HalfAngles {
+        let (sh, ch) = (0.5 * w).sin_cos();
+        let (sw, cw) = w.sin_cos();
+        let (s, c) = (self.sin_half, self.cos_half);
+        let sin_theta = 2.0 * s * c;
+        let cos_theta = (c - s) * (c + s);
+        // sin(θ + w/2) and sin(θ + w) = sin|π − φ|.
+        let sin_tpw2 = sin_theta * ch + cos_theta * sh;
+        let sin_tpw = sin_theta * cw + cos_theta * sw;
+        HalfAngles {
+            // φ/2 = π/2 ∓ (β − w)/2 and (β − w)/2 = π/2 − (θ + w)/2.
+            sin_half_phi: s * ch + c * sh,
+            cos_half_phi: side * (c * ch - s * sh),
+            sin_phi: side * sin_tpw,
+            q: 2.0 * sin_tpw2 * sh,
+        }
+    }
+
     /// `side = +1`: `φ = θ + w`; `side = −1`: `φ = 2π − θ − w`; `w ∈ [0, β]`.
     #[inline]
     fn eval(&self, side: f64, w: f64) -> f64 {
-        let m = self.beta - w; // φ = π − side·m
         let phi = if side > 0.0 {
             self.theta + w
         } else {
             2.0 * std::f64::consts::PI - self.theta - w
         };
-        let sin_phi = side * m.sin();
-        let q = 2.0 * (self.beta - 0.5 * w).sin() * (0.5 * w).sin(); // c − cos φ ≥ 0
-                                                                     // N(φ) = (1 − c) sin φ + φ (c − cos φ)   (A.14)
+        let HalfAngles { sin_phi, q, .. } = self.half_angles(side, w);
+        // N(φ) = (1 − c) sin φ + φ (c − cos φ)   (A.14)
         let n = self.one_minus_c * sin_phi + phi * q;
         // D(φ) = (φ cos(φ/2) − 2 sin(φ/2)) √(c − cos φ)   (A.15)
         let d = half_angle_defect(phi) * q.max(0.0).sqrt();
