@@ -22,6 +22,19 @@ fn json(s: &[u8]) -> serde_json::Value {
     serde_json::from_slice(s).expect("valid JSON")
 }
 
+fn v3(v: &serde_json::Value) -> strandfit::DVec3 {
+    strandfit::DVec3::new(
+        v[0].as_f64().unwrap(),
+        v[1].as_f64().unwrap(),
+        v[2].as_f64().unwrap(),
+    )
+}
+
+/// A JSON array of `[x,y,z]`.
+fn points(v: &serde_json::Value) -> Vec<strandfit::DVec3> {
+    v.as_array().unwrap().iter().map(v3).collect()
+}
+
 #[test]
 fn helix_answers_every_line_in_order() {
     let input = concat!(
@@ -240,29 +253,11 @@ fn evaluate_decompresses_fit_output() {
     let fit = json(&std::fs::read(&fitted).unwrap());
     let ev = json(&std::fs::read(&polys).unwrap());
     let input = json(TWO_SPLINES.as_bytes());
-    let v3 = |v: &serde_json::Value| {
-        strandfit::DVec3::new(
-            v[0].as_f64().unwrap(),
-            v[1].as_f64().unwrap(),
-            v[2].as_f64().unwrap(),
-        )
-    };
     for (k, curve) in ev["curves"].as_array().unwrap().iter().enumerate() {
         assert_eq!(curve["id"], input["splines"][k]["id"]);
-        let pts: Vec<_> = curve["points"].as_array().unwrap().iter().map(v3).collect();
-        let tans: Vec<_> = curve["tangents"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(v3)
-            .collect();
+        let (pts, tans) = (points(&curve["points"]), points(&curve["tangents"]));
         assert_eq!((pts.len(), tans.len()), (m, m));
-        let cps: Vec<_> = input["splines"][k]["control_points"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(v3)
-            .collect();
+        let cps = points(&input["splines"][k]["control_points"]);
         let spline = BezierSpline::from_control_points(&cps).unwrap();
         let scale = spline.length();
         // Relaxation moves the end points too; the discrete Fréchet distance
@@ -336,21 +331,9 @@ fn sample_writes_equal_arclength_points() {
     );
     let v = json(&out.stdout);
     let input = json(TWO_SPLINES.as_bytes());
-    let v3 = |v: &serde_json::Value| {
-        strandfit::DVec3::new(
-            v[0].as_f64().unwrap(),
-            v[1].as_f64().unwrap(),
-            v[2].as_f64().unwrap(),
-        )
-    };
     for (k, s) in v["splines"].as_array().unwrap().iter().enumerate() {
         assert_eq!(s["id"], input["splines"][k]["id"]);
-        let cps: Vec<_> = input["splines"][k]["control_points"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(v3)
-            .collect();
+        let cps = points(&input["splines"][k]["control_points"]);
         let want = BezierSpline::from_control_points(&cps)
             .unwrap()
             .sample_equal_arclen(5)

@@ -7,18 +7,11 @@ use std::process::Command;
 
 use serde_json::Value;
 
-fn run_fit(backend: &str, precision: &str) -> Value {
+/// Run strandfit with `args` and parse its JSON output.
+fn strandfit_json(args: &[&str], file: &std::path::Path) -> Value {
     let out = Command::new(env!("CARGO_BIN_EXE_strandfit"))
-        .args([
-            "--backend",
-            backend,
-            "--precision",
-            precision,
-            "fit",
-            "-n",
-            "20",
-        ])
-        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/curls.json"))
+        .args(args)
+        .arg(file)
         .env(
             "XDG_RUNTIME_DIR",
             std::env::var("XDG_RUNTIME_DIR").unwrap_or("/tmp".into()),
@@ -27,10 +20,26 @@ fn run_fit(backend: &str, precision: &str) -> Value {
         .expect("run strandfit");
     assert!(
         out.status.success(),
-        "strandfit --backend {backend} failed: {}",
+        "strandfit {args:?} failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).expect("JSON output")
+}
+
+fn run_fit(backend: &str, precision: &str) -> Value {
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/curls.json");
+    strandfit_json(
+        &[
+            "--backend",
+            backend,
+            "--precision",
+            precision,
+            "fit",
+            "-n",
+            "20",
+        ],
+        example.as_ref(),
+    )
 }
 
 /// Largest differences between two fit outputs: element parameters relative
@@ -98,30 +107,17 @@ fn fit_gpu_matches_cpu_on_the_bundled_example() {
 }
 
 fn run_evaluate(fitted: &std::path::Path, backend: &str, precision: &str) -> Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_strandfit"))
-        .args([
-            "--backend",
-            backend,
-            "--precision",
-            precision,
-            "evaluate",
-            "-m",
-            "1001",
-            "--tangents",
-        ])
-        .arg(fitted)
-        .env(
-            "XDG_RUNTIME_DIR",
-            std::env::var("XDG_RUNTIME_DIR").unwrap_or("/tmp".into()),
-        )
-        .output()
-        .expect("run strandfit");
-    assert!(
-        out.status.success(),
-        "strandfit --backend {backend} evaluate failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("JSON output")
+    let args = [
+        "--backend",
+        backend,
+        "--precision",
+        precision,
+        "evaluate",
+        "-m",
+        "1001",
+        "--tangents",
+    ];
+    strandfit_json(&args, fitted)
 }
 
 /// Largest point difference relative to the curve's length, and largest

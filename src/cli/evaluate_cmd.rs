@@ -6,7 +6,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::io_util::{input_name, read_input, Output};
+use super::io_util::{self, input_name, read_input, Output};
 use super::EvaluateArgs;
 use crate::backend::Backend;
 use crate::helix::{HelixElement, PiecewiseHelix};
@@ -52,11 +52,12 @@ struct CurveOut {
 const FRAME_TOL: f64 = 1e-6;
 
 fn label(index: usize, id: &Option<serde_json::Value>) -> String {
-    match id {
-        Some(serde_json::Value::String(s)) => format!("curve \"{s}\" (curves[{index}])"),
-        Some(v) => format!("curve {v} (curves[{index}])"),
-        None => format!("curves[{index}]"),
-    }
+    io_util::label(
+        "curve",
+        "curves",
+        index,
+        id.as_ref().unwrap_or(&serde_json::Value::Null),
+    )
 }
 
 /// A validated element; the reason names what is wrong.

@@ -5,7 +5,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::io_util::{input_name, read_input, Output};
+use super::io_util::{self, input_name, read_input, Output};
 use super::FitArgs;
 use crate::backend::Backend;
 use crate::fit::FitOptions;
@@ -48,14 +48,8 @@ struct ElementOut {
     length: f64,
 }
 
-/// How a spline is named in messages: its id, else its index.
 fn label(index: usize, id: &serde_json::Value) -> String {
-    match id {
-        serde_json::Value::String(s) => format!("spline \"{s}\" (splines[{index}])"),
-        serde_json::Value::Null => format!("splines[{index}]"),
-        v if v.as_u64() == Some(index as u64) => format!("splines[{index}]"),
-        v => format!("spline {v} (splines[{index}])"),
-    }
+    io_util::label("spline", "splines", index, id)
 }
 
 /// Read and validate a splines document (`{"splines":[{"id","control_points"}]}`):

@@ -97,3 +97,15 @@ fn persist(temp: tempfile::NamedTempFile, target: &Path) -> Result<()> {
         .with_context(|| format!("cannot move output into place at {}", target.display()))?;
     Ok(())
 }
+
+/// How an item of a JSON document is named in messages: `spline "a"
+/// (splines[3])` by its id, or `splines[3]` when it has none (or its id is
+/// its index, as absent ids become).
+pub fn label(kind: &str, array: &str, index: usize, id: &serde_json::Value) -> String {
+    match id {
+        serde_json::Value::String(s) => format!("{kind} \"{s}\" ({array}[{index}])"),
+        serde_json::Value::Null => format!("{array}[{index}]"),
+        v if v.as_u64() == Some(index as u64) => format!("{array}[{index}]"),
+        v => format!("{kind} {v} ({array}[{index}])"),
+    }
+}
