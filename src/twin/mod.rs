@@ -15,7 +15,9 @@
 //! | `shaders/math.wgsl`         | [`math`]                |
 //! | `shaders/ghosh_bisect.wgsl` | [`ghosh_bisect`]        |
 //! | `shaders/helix_eval.wgsl`   | [`helix_eval`]          |
+//! | `shaders/frenet_integrate.wgsl` | [`frenet_integrate`] |
 
+pub mod frenet_integrate;
 pub mod ghosh_bisect;
 pub mod helix_eval;
 pub mod math;
