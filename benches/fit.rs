@@ -138,12 +138,73 @@ fn backends(c: &mut Criterion) {
     g.finish();
 }
 
+/// 3D Euler spirals integrated at 64 steps: the `f64` reference on all
+/// cores (rayon) against the GPU kernel in `f64` and `f32` (including host
+/// packing, transfers and readback), in problems per second. The GPU
+/// variants are skipped, with a note, when no adapter exists.
+fn frenet(c: &mut Criterion) {
+    use rayon::prelude::*;
+    use strandfit::euler::FrenetProblem;
+    use strandfit::gpu::frenet::FrenetGpu;
+    use strandfit::gpu::{GpuContext, Precision, Timings};
+    let problems: Vec<FrenetProblem> = (0..20_000)
+        .map(|i| {
+            let x = i as f64 / 20_000.0;
+            let t = DVec3::new(1.0, x, -0.5).normalize();
+            FrenetProblem::new(
+                DVec3::new(x, 2.0 * x, 10.0),
+                t,
+                t.any_orthonormal_vector(),
+                1.0 + x,
+                -2.0 * x,
+                0.5 - x,
+                x,
+                2.0 + x,
+            )
+        })
+        .collect();
+    let steps = 64;
+    let mut g = c.benchmark_group("frenet");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(problems.len() as u64));
+    g.bench_function(BenchmarkId::new("integrate_64", "cpu"), |b| {
+        b.iter(|| {
+            black_box(
+                problems
+                    .par_iter()
+                    .map(|p| p.integrate(steps))
+                    .collect::<Vec<_>>(),
+            )
+        })
+    });
+    match GpuContext::new() {
+        Ok(ctx) => {
+            for (name, p) in [("gpu_f64", Precision::F64), ("gpu_f32", Precision::F32)] {
+                match FrenetGpu::new(&ctx, p) {
+                    Ok(k) => {
+                        g.bench_function(BenchmarkId::new("integrate_64", name), |b| {
+                            b.iter(|| {
+                                let mut t = Timings::default();
+                                black_box(k.integrate(&ctx, &problems, steps, &mut t).expect("gpu"))
+                            })
+                        });
+                    }
+                    Err(e) => eprintln!("frenet bench: {name} skipped: {e}"),
+                }
+            }
+        }
+        Err(e) => eprintln!("frenet bench: gpu skipped: {e}"),
+    }
+    g.finish();
+}
+
 criterion_group!(
     benches,
     sampling,
     relaxation,
     interpolation,
     whole_fit,
-    backends
+    backends,
+    frenet
 );
 criterion_main!(benches);

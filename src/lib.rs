@@ -26,6 +26,7 @@
 
 pub mod backend;
 pub mod cli;
+pub mod euler;
 pub mod fit;
 pub mod gpu;
 pub mod helix;

@@ -9,6 +9,7 @@
 
 mod context;
 mod dispatch;
+pub mod frenet;
 pub mod ghosh;
 pub mod helix_eval;
 

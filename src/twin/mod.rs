@@ -4,7 +4,7 @@
 //! A twin computes exactly what its shader computes — same algorithm, same
 //! precision, same order of operations where it matters — so that a parity
 //! test can tell a kernel bug (GPU ≠ twin) from a precision limit of the
-//! formulation (twin ≠ the `f64` reference in [`crate::helix`] /
+//! formulation (twin ≠ the `f64` reference in [`crate::helix`] / [`crate::euler`] /
 //! [`crate::spline`]). Twins are generic over [`Real`], the scalar the
 //! kernel is compiled with (`f32` everywhere, `f64` where the adapter offers
 //! `SHADER_F64`).
@@ -15,7 +15,9 @@
 //! | `shaders/math.wgsl`         | [`math`]                |
 //! | `shaders/ghosh_bisect.wgsl` | [`ghosh_bisect`]        |
 //! | `shaders/helix_eval.wgsl`   | [`helix_eval`]          |
+//! | `shaders/frenet_integrate.wgsl` | [`frenet_integrate`] |
 
+pub mod frenet_integrate;
 pub mod ghosh_bisect;
 pub mod helix_eval;
 pub mod math;

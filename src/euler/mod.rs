@@ -1,0 +1,15 @@
+//! 3D Euler spirals (paper 004): curves whose curvature and torsion are
+//! linear in arc length, `κ(s) = κ₀ + γs`, `τ(s) = τ₀ + δs`, `0 ≤ s ≤ L`.
+//!
+//! The curve has no closed form; it is the solution of the Frenet–Serret
+//! equations from a start point and frame (Definition 4.1 of the paper).
+//! [`frenet`] integrates them in `f64` with a fourth-order Lie-group method
+//! that keeps the frame orthonormal by construction — the reference that the
+//! GPU kernel `shaders/frenet_integrate.wgsl` (twin:
+//! [`crate::twin::frenet_integrate`]) is checked against. The paper's own
+//! integrator (explicit Euler) is first order and drifts off the rotation
+//! group; see `shared/papers/ERRATA.md`, section 004.
+
+pub mod frenet;
+
+pub use frenet::{FrenetEnd, FrenetError, FrenetProblem, FRAME_TOL};
