@@ -11,12 +11,15 @@
 //! | `fit`         | sampling and relaxation on the CPU (rayon; the dense 2N+3 LU stays there by design), all Ghosh interpolations of a batch of curves in one `ghosh_bisect` run |
 //! | `evaluate`    | `helix_eval.wgsl` (piecewise helices → points and tangents) |
 //! | `sample`      | CPU for now (`spline_sample.wgsl` lands next) |
+//! | `integrate`   | `frenet_integrate.wgsl` (Euler spirals: end point and frame, or samples) |
 
 use std::sync::OnceLock;
 
 use rayon::prelude::*;
 
+use crate::euler::{FrenetEnd, FrenetError, FrenetProblem};
 use crate::fit::{fit_splines, relaxed_pairs, FitError, FitOptions, FitScratch};
+use crate::gpu::frenet::{FrenetGpu, SpiralSamples};
 use crate::gpu::ghosh::GhoshGpu;
 use crate::gpu::helix_eval::{ChainSamples, HelixEvalGpu};
 use crate::gpu::{GpuContext, GpuError, Precision, Timings};
@@ -55,6 +58,7 @@ pub struct GpuEngine {
     pub precision: Precision,
     ghosh: OnceLock<GhoshGpu>,
     helix_eval: OnceLock<HelixEvalGpu>,
+    frenet: OnceLock<FrenetGpu>,
 }
 
 impl GpuEngine {
@@ -74,6 +78,7 @@ impl GpuEngine {
             precision,
             ghosh: OnceLock::new(),
             helix_eval: OnceLock::new(),
+            frenet: OnceLock::new(),
         })
     }
 
@@ -93,6 +98,15 @@ impl GpuEngine {
         }
         let k = HelixEvalGpu::new(&self.ctx, self.precision)?;
         Ok(self.helix_eval.get_or_init(|| k))
+    }
+
+    /// The Frenet–Serret kernel (compiled once).
+    pub fn frenet(&self) -> Result<&FrenetGpu, GpuError> {
+        if let Some(k) = self.frenet.get() {
+            return Ok(k);
+        }
+        let k = FrenetGpu::new(&self.ctx, self.precision)?;
+        Ok(self.frenet.get_or_init(|| k))
     }
 }
 
@@ -302,5 +316,57 @@ impl Backend {
             out.extend(kernel.sample_chains_full(&g.ctx, batch, m, timings)?);
         }
         Ok(out)
+    }
+
+    /// End point and frame of every Euler spiral after `steps` steps of the
+    /// fourth-order scheme of [`crate::euler::frenet`] (order kept; a bad
+    /// problem gets its own error).
+    pub fn integrate(
+        &self,
+        problems: &[FrenetProblem],
+        steps: usize,
+    ) -> Result<Vec<Result<FrenetEnd, FrenetError>>, GpuError> {
+        self.integrate_timed(problems, steps, &mut Timings::default())
+    }
+
+    /// [`Backend::integrate`] reporting where the GPU time went.
+    pub fn integrate_timed(
+        &self,
+        problems: &[FrenetProblem],
+        steps: usize,
+        timings: &mut Timings,
+    ) -> Result<Vec<Result<FrenetEnd, FrenetError>>, GpuError> {
+        match self {
+            Backend::Cpu => Ok(problems.par_iter().map(|p| p.integrate(steps)).collect()),
+            Backend::Gpu(g) => g.frenet()?.integrate(&g.ctx, problems, steps, timings),
+        }
+    }
+
+    /// `m` points and unit tangents of every Euler spiral, equally spaced
+    /// in arc length (ends included), `steps_per_interval` steps apart.
+    pub fn integrate_samples(
+        &self,
+        problems: &[FrenetProblem],
+        m: usize,
+        steps_per_interval: usize,
+    ) -> Result<Vec<Result<SpiralSamples, FrenetError>>, GpuError> {
+        match self {
+            Backend::Cpu => Ok(problems
+                .par_iter()
+                .map(|p| {
+                    p.sample(m, steps_per_interval).map(|s| SpiralSamples {
+                        points: s.iter().map(|e| e.point).collect(),
+                        tangents: s.iter().map(|e| e.frame[0]).collect(),
+                    })
+                })
+                .collect()),
+            Backend::Gpu(g) => g.frenet()?.sample(
+                &g.ctx,
+                problems,
+                m,
+                steps_per_interval,
+                &mut Timings::default(),
+            ),
+        }
     }
 }

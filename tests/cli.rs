@@ -354,3 +354,60 @@ fn sample_writes_equal_arclength_points() {
     );
     assert!(!bad.status.success());
 }
+
+/// `integrate`: a circle (κ constant, τ = 0) of radius 1 over half a turn
+/// ends at (0, 2, 0) facing back; samples include both ends; bad lines give
+/// errors naming the line and never stop the others.
+#[test]
+fn integrate_answers_every_line() {
+    let input = concat!(
+        r#"{"start":[0,0,0],"tangent":[1,0,0],"normal":[0,1,0],"kappa0":1,"length":3.141592653589793}"#,
+        "\n",
+        "junk\n",
+        r#"{"start":[0,0,0],"tangent":[1,0,0],"normal":[1,0,0],"kappa0":1,"length":1}"#,
+        "\n",
+        r#"{"start":[0,0,0],"tangent":[1,0,0],"normal":[0,1,0],"kappa0":1,"length":-1}"#,
+        "\n",
+        r#"{"start":[1,2,3],"tangent":[0,0,1],"normal":[1,0,0],"kappa0":0.5,"gamma":0.2,"tau0":0.3,"delta":-0.1,"length":5}"#,
+        "\n",
+    );
+    let out = strandfit(
+        &["--backend", "cpu", "integrate", "--steps", "512", "-m", "5"],
+        input,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<serde_json::Value> = out
+        .stdout
+        .split(|&b| b == b'\n')
+        .filter(|l| !l.is_empty())
+        .map(json)
+        .collect();
+    assert_eq!(lines.len(), 5);
+    // Fourth order: (π/512)⁴ ≈ 1.4e-9, times a small constant.
+    let end = v3(&lines[0]["end"]);
+    assert!(
+        (end - strandfit::DVec3::new(0.0, 2.0, 0.0)).length() < 1e-9,
+        "{end}"
+    );
+    assert!((v3(&lines[0]["tangent"]) + strandfit::DVec3::X).length() < 1e-12);
+    let pts = points(&lines[0]["points"]);
+    assert_eq!(pts.len(), 5);
+    assert_eq!(pts[0], strandfit::DVec3::ZERO);
+    assert_eq!(pts[4], end);
+    assert!((pts[2] - strandfit::DVec3::new(1.0, 1.0, 0.0)).length() < 1e-9);
+    assert!(lines[1]["error"].as_str().unwrap().contains("line 2"));
+    assert!(lines[2]["error"].as_str().unwrap().contains("orthonormal"));
+    assert!(lines[3]["error"].as_str().unwrap().contains("line 4"));
+    assert_eq!(
+        v3(&lines[4]["points"][0]),
+        strandfit::DVec3::new(1.0, 2.0, 3.0)
+    );
+    assert!(!strandfit(&["integrate", "--steps", "0"], "")
+        .status
+        .success());
+    assert!(!strandfit(&["integrate", "-m", "1"], "").status.success());
+}

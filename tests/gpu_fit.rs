@@ -189,3 +189,89 @@ fn evaluate_gpu_matches_cpu_on_the_bundled_example() {
         assert!(t <= 80.0 * eps, "{precision}: tangents {t:e}");
     }
 }
+
+/// `integrate --backend gpu` (frenet_integrate.wgsl) against `--backend cpu`
+/// on a family of Euler spirals through the command line. The kernel and
+/// the reference run the same scheme at the same step count, so only
+/// rounding differs: `tests/gpu_frenet.rs` bounds it by 2(√N + Θ)ε on the
+/// frame and on the offset relative to L (N steps, Θ total turning), plus
+/// 4ε₆₄(|x₀| + L) for the host's f64 addition. Here N = 256 and Θ ≤ 12.
+#[test]
+fn integrate_gpu_matches_cpu() {
+    let Some(ctx) = common::gpu_or_skip("integrate_gpu_matches_cpu") else {
+        return;
+    };
+    let mut lines = String::new();
+    for i in 0..200 {
+        let x = i as f64 / 200.0;
+        lines.push_str(&format!(
+            "{{\"start\":[{},{},0.5],\"tangent\":[0,0,1],\"normal\":[0,1,0],\"kappa0\":{},\"gamma\":{},\"tau0\":{},\"delta\":{},\"length\":{}}}\n",
+            10.0 * x,
+            -3.0 * x,
+            2.0 * x - 0.5,
+            0.3 - x,
+            1.5 * (x - 0.5),
+            0.1 * x,
+            1.0 + 3.0 * x
+        ));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("spirals.jsonl");
+    std::fs::write(&path, &lines).unwrap();
+    let run = |backend: &str, precision: &str| -> Vec<Value> {
+        let args = [
+            "--backend",
+            backend,
+            "--precision",
+            precision,
+            "integrate",
+            "--steps",
+            "256",
+            "-m",
+            "9",
+        ];
+        let out = Command::new(env!("CARGO_BIN_EXE_strandfit"))
+            .args(args)
+            .arg(&path)
+            .env(
+                "XDG_RUNTIME_DIR",
+                std::env::var("XDG_RUNTIME_DIR").unwrap_or("/tmp".into()),
+            )
+            .output()
+            .expect("run strandfit");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out.stdout
+            .split(|&b| b == b'\n')
+            .filter(|l| !l.is_empty())
+            .map(|l| serde_json::from_slice(l).unwrap())
+            .collect()
+    };
+    let cpu = run("cpu", "auto");
+    let mut runs = vec![("f32", f32::EPSILON as f64)];
+    if ctx.supports_f64() {
+        runs.push(("f64", f64::EPSILON));
+    }
+    for (precision, eps) in runs {
+        let gpu = run("gpu", precision);
+        assert_eq!(gpu.len(), cpu.len());
+        let mut worst = 0.0f64;
+        for (g, c) in gpu.iter().zip(&cpu) {
+            assert!(c["error"].is_null() && g["error"].is_null());
+            // Absolute, in units of ε: 2(√256 + 12)·L ≤ 224 (L ≤ 4) for the
+            // scheme's rounding plus 4(|x₀| + L) ≤ 60 for the host's f64
+            // addition (f64 only; f32 has no such term but a larger ε): 300.
+            for key in ["end", "tangent", "normal", "binormal"] {
+                for i in 0..3 {
+                    let d = (g[key][i].as_f64().unwrap() - c[key][i].as_f64().unwrap()).abs();
+                    worst = worst.max(d / eps);
+                }
+            }
+        }
+        eprintln!("integrate {precision} kernel vs cpu: worst {worst:.2} ε");
+        assert!(worst <= 300.0, "{precision}: {worst} ε");
+    }
+}

@@ -1,9 +1,11 @@
-//! The `strandfit` command line: `helix`, `fit`, `sample`, `evaluate`, `bench`.
+//! The `strandfit` command line: `helix`, `fit`, `sample`, `evaluate`,
+//! `integrate`, `bench`.
 
 mod bench_cmd;
 mod evaluate_cmd;
 mod fit_cmd;
 mod helix_cmd;
+mod integrate_cmd;
 mod io_util;
 mod sample_cmd;
 
@@ -81,6 +83,10 @@ pub enum Command {
     /// Sample fitted piecewise helices (the output of `fit`) back to
     /// polylines: M points per curve equally spaced in arc length.
     Evaluate(EvaluateArgs),
+    /// Integrate 3D Euler spirals (curvature and torsion linear in arc
+    /// length) from JSON Lines records {"start","tangent","normal","kappa0",
+    /// "gamma","tau0","delta","length"}: end point and frame, optionally samples.
+    Integrate(IntegrateArgs),
     /// Measure whole-fit throughput on synthetic splines (elements per second).
     Bench(BenchArgs),
 }
@@ -162,6 +168,24 @@ pub struct EvaluateArgs {
 }
 
 #[derive(clap::Args, Debug)]
+pub struct IntegrateArgs {
+    /// Input JSON Lines file ("-" or absent: standard input).
+    pub input: Option<PathBuf>,
+    /// Integration steps over the whole length (fourth-order Magnus +
+    /// Simpson; error ≈ C (Θ/steps)⁴, Θ the total turning).
+    #[arg(long, default_value_t = 64)]
+    pub steps: usize,
+    /// Also write this many points and unit tangents per curve, equally
+    /// spaced in arc length, ends included (0: none). Steps per interval are
+    /// ⌈steps/(samples − 1)⌉.
+    #[arg(short = 'm', long, default_value_t = 0)]
+    pub samples: usize,
+    /// Output file (absent: standard output). Written atomically.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+}
+
+#[derive(clap::Args, Debug)]
 pub struct BenchArgs {
     /// Number of synthetic splines.
     #[arg(long, default_value_t = 20_000)]
@@ -194,6 +218,7 @@ pub fn main() -> ExitCode {
         Command::Fit(a) => cli.backend().and_then(|b| fit_cmd::run(a, &b)),
         Command::Sample(a) => cli.backend().and_then(|b| sample_cmd::run(a, &b)),
         Command::Evaluate(a) => cli.backend().and_then(|b| evaluate_cmd::run(a, &b)),
+        Command::Integrate(a) => cli.backend().and_then(|b| integrate_cmd::run(a, &b)),
         Command::Bench(a) => cli.backend().and_then(|b| bench_cmd::run(a, &b)),
     };
     match result {
