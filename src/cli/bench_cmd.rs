@@ -6,11 +6,35 @@ use std::time::Instant;
 
 use super::BenchArgs;
 use crate::backend::Backend;
+use crate::euler::FrenetProblem;
 use crate::fit::{relaxed_pairs, FitOptions, FitScratch};
 use crate::gpu::Timings;
 use crate::helix::HermitePair;
 use crate::synthetic::synthetic_splines;
 use anyhow::Result;
+
+/// Steps per spiral in the Frenet–Serret benchmark.
+const FRENET_STEPS: usize = 64;
+
+/// Deterministic Euler spirals with up to about two turns.
+fn synthetic_spirals(n: usize) -> Vec<FrenetProblem> {
+    (0..n)
+        .map(|i| {
+            let x = (i as f64 * 0.618_033_988_749_895).fract();
+            let y = (i as f64 * 0.754_877_666_246_693).fract();
+            FrenetProblem::new(
+                crate::DVec3::new(x, y, 0.0),
+                crate::DVec3::X,
+                crate::DVec3::Y,
+                0.5 + x,
+                0.4 * (y - 0.5),
+                2.0 * (x - 0.5),
+                0.2 * y,
+                2.0 + 4.0 * y,
+            )
+        })
+        .collect()
+}
 
 /// Points per element in the decompression benchmark.
 const EVAL_POINTS_PER_ELEMENT: usize = 8;
@@ -109,6 +133,25 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         &format!("helix evaluation ({m} points/curve)"),
         (chains.len() * m) as f64,
         "points",
+        &mut times,
+    );
+
+    // Frenet–Serret integration of Euler spirals (one per curve), as the
+    // Euler-spiral descent uses it: end point and frame after 64 steps.
+    let problems = synthetic_spirals(args.curves);
+    let _ = backend.integrate(&problems[..problems.len().min(16)], FRENET_STEPS)?;
+    let mut times = Vec::with_capacity(args.repeat);
+    for _ in 0..args.repeat {
+        let mut t = Timings::default();
+        let start = Instant::now();
+        let r = backend.integrate_timed(&problems, FRENET_STEPS, &mut t)?;
+        times.push((start.elapsed().as_secs_f64(), t));
+        std::hint::black_box(r);
+    }
+    report(
+        &format!("frenet integration ({FRENET_STEPS} steps)"),
+        problems.len() as f64,
+        "spirals",
         &mut times,
     );
     Ok(())
