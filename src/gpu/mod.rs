@@ -11,6 +11,7 @@ mod context;
 mod dispatch;
 pub mod ghosh;
 pub mod helix_eval;
+pub mod spline_sample;
 
 pub use context::{list_adapters, GpuContext, GpuError, ADAPTER_ENV};
 pub use dispatch::Timings;

@@ -15,10 +15,12 @@
 //! | `shaders/math.wgsl`         | [`math`]                |
 //! | `shaders/ghosh_bisect.wgsl` | [`ghosh_bisect`]        |
 //! | `shaders/helix_eval.wgsl`   | [`helix_eval`]          |
+//! | `shaders/spline_sample.wgsl` | [`spline_sample`]      |
 
 pub mod ghosh_bisect;
 pub mod helix_eval;
 pub mod math;
+pub mod spline_sample;
 
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
