@@ -543,6 +543,26 @@ fn spline_sample_edge_cases() {
         .sample_counts(&ctx, &splines, &vec![33; splines.len()], &mut t)
         .unwrap();
     assert_eq!(uniform, ragged);
+    // Far from the origin (1e6): segments travel relative to their start, so
+    // f32 keeps its relative precision along the curve (|Δp| a few ε₃₂ L,
+    // not ε₃₂·1e6) and the host adds the start in f64.
+    let far = hermite_spline(
+        |u| v(1e6 + u.cos(), -1e6 + u.sin(), 1e6 + 0.1 * u),
+        0.0,
+        6.0,
+        12,
+    )
+    .unwrap();
+    let got = k
+        .sample(&ctx, std::slice::from_ref(&far), 500, &mut t)
+        .unwrap();
+    assert!(!got[0].fallback);
+    let want = far.sample_equal_arclen(500).unwrap();
+    for (j, (p, tan)) in want.iter().enumerate() {
+        let ep = (got[0].points[j] - *p).length();
+        assert!(ep < 8.0 * E32 * far.length() + 1e-9, "far {j}: {ep:e}");
+        assert!((got[0].tangents[j] - *tan).length() < 64.0 * E32, "far {j}");
+    }
     // A spline too large for one chunk's segment table goes to the
     // reference (exactly), the rest stay on the GPU.
     let small = SplineSampleGpu::new(&ctx, Precision::F32)
