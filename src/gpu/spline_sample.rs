@@ -7,9 +7,11 @@
 //! The GPU does the arc-length work from the control points (three passes,
 //! see the twin's docs). The host, in `f64`, hands each segment over
 //! relative to its start point and divided by a per-spline power of two,
-//! groups whole splines into chunks (a spline with more samples than a chunk
-//! holds is split into pieces, each carrying the spline's segments), keeps
-//! two chunks in flight, and turns records back into points
+//! fills chunks (bounded in samples and segments) with splines in order —
+//! a spline whose samples overflow the chunk is split into pieces at the
+//! boundary, each piece carrying all of the spline's segments, so results
+//! do not depend on the chunking — keeps two chunks in flight, and turns
+//! records back into points
 //! (`P₀ + S·offset`). Splines the kernel cannot take at working precision
 //! are sampled by the `f64` reference instead, flagged in
 //! [`SplineSamples::fallback`]:
@@ -511,8 +513,10 @@ fn check_counts(splines: &[BezierSpline], n_elements: &[usize]) -> Result<(), Gp
     Ok(())
 }
 
-/// Splits the splines the kernel takes into chunks of whole splines, a
-/// spline with more samples than `caps.samples` into several pieces.
+/// Fills chunks with the splines the kernel takes, in order; a spline whose
+/// samples overflow a chunk continues as a new piece in the next one (its
+/// segments are packed again there; a spline never overflows the segment
+/// limit, the host refuses those).
 fn plan_chunks(
     splines: &[BezierSpline],
     n_elements: &[usize],
