@@ -198,6 +198,51 @@ fn frenet(c: &mut Criterion) {
     g.finish();
 }
 
+/// Equal-arc-length sampling of a batch of splines (samples per second):
+/// the `f64` reference on all cores vs the `spline_sample` kernel in `f64`
+/// and `f32` (host packing, transfers, readback included). Skipped, with a
+/// note, when no GPU adapter exists.
+fn spline_sample(c: &mut Criterion) {
+    use rayon::prelude::*;
+    use strandfit::gpu::spline_sample::SplineSampleGpu;
+    use strandfit::gpu::{GpuContext, Precision, Timings};
+    let splines = synthetic_splines(5000, 8);
+    let mut g = c.benchmark_group("spline_sample");
+    g.sample_size(10);
+    let ctx = GpuContext::new()
+        .map_err(|e| eprintln!("spline_sample bench: GPU skipped: {e}"))
+        .ok();
+    for n in [20usize, 200] {
+        g.throughput(Throughput::Elements((splines.len() * (n + 1)) as u64));
+        g.bench_function(BenchmarkId::new("cpu", n), |b| {
+            b.iter(|| {
+                let out: Vec<_> = splines
+                    .par_iter()
+                    .map(|s| s.sample_equal_arclen(n).expect("sampling"))
+                    .collect();
+                black_box(out)
+            })
+        });
+        let Some(ctx) = &ctx else { continue };
+        for (name, p) in [("gpu_f64", Precision::F64), ("gpu_f32", Precision::F32)] {
+            let k = match SplineSampleGpu::new(ctx, p) {
+                Ok(k) => k,
+                Err(e) => {
+                    eprintln!("spline_sample bench: {name} skipped: {e}");
+                    continue;
+                }
+            };
+            g.bench_function(BenchmarkId::new(name, n), |b| {
+                b.iter(|| {
+                    let mut t = Timings::default();
+                    black_box(k.sample(ctx, &splines, n, &mut t).expect("gpu"))
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
 criterion_group!(
     benches,
     sampling,
@@ -205,6 +250,7 @@ criterion_group!(
     interpolation,
     whole_fit,
     backends,
-    frenet
+    frenet,
+    spline_sample
 );
 criterion_main!(benches);

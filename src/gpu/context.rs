@@ -32,6 +32,8 @@ pub enum GpuError {
     Shader { name: String, reason: String },
     #[error("GPU execution failed: {0}")]
     Execution(String),
+    #[error("invalid input: {0}")]
+    InvalidInput(String),
 }
 
 /// One opened GPU.

@@ -12,6 +12,7 @@ mod dispatch;
 pub mod frenet;
 pub mod ghosh;
 pub mod helix_eval;
+pub mod spline_sample;
 
 pub use context::{list_adapters, GpuContext, GpuError, ADAPTER_ENV};
 pub use dispatch::Timings;

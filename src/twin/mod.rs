@@ -16,11 +16,13 @@
 //! | `shaders/ghosh_bisect.wgsl` | [`ghosh_bisect`]        |
 //! | `shaders/helix_eval.wgsl`   | [`helix_eval`]          |
 //! | `shaders/frenet_integrate.wgsl` | [`frenet_integrate`] |
+//! | `shaders/spline_sample.wgsl` | [`spline_sample`]      |
 
 pub mod frenet_integrate;
 pub mod ghosh_bisect;
 pub mod helix_eval;
 pub mod math;
+pub mod spline_sample;
 
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
