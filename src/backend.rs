@@ -10,7 +10,7 @@
 //! | `interpolate` | `ghosh_bisect.wgsl`                            |
 //! | `fit`         | sampling and relaxation on the CPU (rayon; the dense 2N+3 LU stays there by design), all Ghosh interpolations of a batch of curves in one `ghosh_bisect` run |
 //! | `evaluate`    | `helix_eval.wgsl` (piecewise helices → points and tangents) |
-//! | `sample`      | CPU for now (`spline_sample.wgsl` lands next) |
+//! | `sample`      | `spline_sample.wgsl` (arc-length tables and inversion on the GPU; splines with cusps fall back to the `f64` reference) |
 //! | `integrate`   | `frenet_integrate.wgsl` (Euler spirals: end point and frame, or samples) |
 
 use std::sync::OnceLock;
@@ -22,6 +22,7 @@ use crate::fit::{fit_splines, relaxed_pairs, FitError, FitOptions, FitScratch};
 use crate::gpu::frenet::{FrenetGpu, SpiralSamples};
 use crate::gpu::ghosh::GhoshGpu;
 use crate::gpu::helix_eval::{ChainSamples, HelixEvalGpu};
+use crate::gpu::spline_sample::SplineSampleGpu;
 use crate::gpu::{GpuContext, GpuError, Precision, Timings};
 use crate::helix::{HelixError, HermitePair, PiecewiseHelix, ShortHelix};
 use crate::spline::BezierSpline;
@@ -59,6 +60,7 @@ pub struct GpuEngine {
     ghosh: OnceLock<GhoshGpu>,
     helix_eval: OnceLock<HelixEvalGpu>,
     frenet: OnceLock<FrenetGpu>,
+    spline_sample: OnceLock<SplineSampleGpu>,
 }
 
 impl GpuEngine {
@@ -79,6 +81,7 @@ impl GpuEngine {
             ghosh: OnceLock::new(),
             helix_eval: OnceLock::new(),
             frenet: OnceLock::new(),
+            spline_sample: OnceLock::new(),
         })
     }
 
@@ -98,6 +101,15 @@ impl GpuEngine {
         }
         let k = HelixEvalGpu::new(&self.ctx, self.precision)?;
         Ok(self.helix_eval.get_or_init(|| k))
+    }
+
+    /// The spline sampling kernel (compiled once).
+    pub fn spline_sample(&self) -> Result<&SplineSampleGpu, GpuError> {
+        if let Some(k) = self.spline_sample.get() {
+            return Ok(k);
+        }
+        let k = SplineSampleGpu::new(&self.ctx, self.precision)?;
+        Ok(self.spline_sample.get_or_init(|| k))
     }
 
     /// The Frenet–Serret kernel (compiled once).
@@ -269,18 +281,29 @@ impl Backend {
         &self,
         splines: &[BezierSpline],
         n: usize,
-        _timings: &mut Timings,
+        timings: &mut Timings,
     ) -> Result<Vec<Samples>, GpuError> {
         let n = n.max(1);
-        Ok(splines
-            .par_iter()
-            .map(|s| {
-                let mut out = Samples::default();
-                // Cannot fail for n ≥ 1.
-                let _ = s.sample_equal_arclen_into(n, &mut out.points, &mut out.tangents);
-                out
-            })
-            .collect())
+        match self {
+            Backend::Cpu => Ok(splines
+                .par_iter()
+                .map(|s| {
+                    let mut out = Samples::default();
+                    // Cannot fail for n ≥ 1.
+                    let _ = s.sample_equal_arclen_into(n, &mut out.points, &mut out.tangents);
+                    out
+                })
+                .collect()),
+            Backend::Gpu(g) => Ok(g
+                .spline_sample()?
+                .sample(&g.ctx, splines, n, timings)?
+                .into_iter()
+                .map(|s| Samples {
+                    points: s.points,
+                    tangents: s.tangents,
+                })
+                .collect()),
+        }
     }
 
     /// `m` points (and unit tangents) of every chain equally spaced in arc
