@@ -5,6 +5,8 @@ use std::io::{self, BufRead, BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use rayon::prelude::*;
+use serde::Serialize;
 
 /// Display name of an input ("<stdin>" for standard input).
 pub fn input_name(path: &Option<PathBuf>) -> String {
@@ -108,4 +110,101 @@ pub fn label(kind: &str, array: &str, index: usize, id: &serde_json::Value) -> S
         v if v.as_u64() == Some(index as u64) => format!("{array}[{index}]"),
         v => format!("{kind} {v} ({array}[{index}])"),
     }
+}
+
+/// Lines processed per parallel batch by [`map_json_lines`]: bounds memory
+/// for any input size.
+const JSONL_CHUNK: usize = 1 << 16;
+
+#[derive(Serialize)]
+struct Failure {
+    error: String,
+}
+
+/// One answer per input line, in order, for a JSON Lines input: each batch
+/// of lines is parsed in parallel, the records that parsed go to `solve`
+/// together (which returns one result per record, in order), and every
+/// line gets its answer or an `{"error":"line K: …"}` object. A bad line
+/// never stops the others; the output is committed only at the end.
+pub fn map_json_lines<P, A>(
+    input: &Option<PathBuf>,
+    output: &Option<PathBuf>,
+    parse: impl Fn(&str) -> Result<P, String> + Sync,
+    mut solve: impl FnMut(&[P]) -> Result<Vec<Result<A, String>>>,
+) -> Result<()>
+where
+    P: Clone + Send,
+    A: Serialize + Send,
+{
+    let name = input_name(input);
+    let mut reader = open_input(input)?;
+    let mut out = Output::create(output)?;
+    let mut lines: Vec<String> = Vec::with_capacity(JSONL_CHUNK);
+    let mut line_no = 0usize;
+    loop {
+        lines.clear();
+        for _ in 0..JSONL_CHUNK {
+            let mut s = String::new();
+            let n = reader.read_line(&mut s).with_context(|| {
+                format!("{name}: cannot read line {}", line_no + lines.len() + 1)
+            })?;
+            if n == 0 {
+                break;
+            }
+            lines.push(s);
+        }
+        if lines.is_empty() {
+            break;
+        }
+        let first = line_no + 1;
+        let parsed: Vec<Result<P, String>> = lines
+            .par_iter()
+            .map(|line| {
+                let line = line.trim_end_matches(['\n', '\r']);
+                if line.trim().is_empty() {
+                    Err("empty line".into())
+                } else {
+                    parse(line)
+                }
+            })
+            .collect();
+        let records: Vec<P> = parsed
+            .iter()
+            .filter_map(|p| p.as_ref().ok())
+            .cloned()
+            .collect();
+        let mut answers = solve(&records)?.into_iter();
+        let solved: Vec<Result<A, String>> = parsed
+            .into_iter()
+            .map(|p| {
+                p.and_then(|_| {
+                    answers
+                        .next()
+                        .unwrap_or_else(|| Err("internal error: missing result".into()))
+                })
+            })
+            .collect();
+        let json: Vec<String> = solved
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, r)| to_json(r, first + k))
+            .collect();
+        let w = out.writer();
+        for a in &json {
+            w.write_all(a.as_bytes())?;
+            w.write_all(b"\n")?;
+        }
+        line_no += lines.len();
+    }
+    out.commit()
+}
+
+fn to_json<A: Serialize>(result: Result<A, String>, line_no: usize) -> String {
+    let json = match result {
+        Ok(a) => serde_json::to_string(&a),
+        Err(reason) => serde_json::to_string(&Failure {
+            error: format!("line {line_no}: {reason}"),
+        }),
+    };
+    json.unwrap_or_else(|e| format!("{{\"error\":\"line {line_no}: cannot serialise: {e}\"}}"))
 }
