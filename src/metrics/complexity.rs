@@ -213,8 +213,16 @@ impl Integrand {
         }
         // τ|B'| = (D/|c|²)|B'|; `D/|c|²` scales as 1/length, so it neither
         // under- nor overflows for any reasonable scale.
+        //
+        // Its rounding is not `ε|τ|`: `|c|²` carries an absolute error of a
+        // few `ε|B'|²|B''|²` (the cross product cancels when `B'` and `B''`
+        // are nearly parallel, i.e. near an inflection), so `τ` is good only
+        // to `ε|τ|·|B'||B''|/|c|` relative, which at the peak of a torsion
+        // spike is many ulps. Counting that keeps the refinement from
+        // chasing rounding through the whole panel budget.
         let tau = (self.det / c2) * s2.sqrt();
-        (k.hypot(tau), noise + tau.abs())
+        let ill = (s2 * b2.length_squared() / c2).sqrt(); // |B'||B''|/|c| ≥ 1
+        (k.hypot(tau), noise + tau.abs() * ill)
     }
 
     /// Sorted panel boundaries in `[0, 1]`: the endpoints, the local minima
@@ -535,6 +543,28 @@ mod tests {
         for tol in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let c = complexity_cubic(&arc, tol);
             assert!((c - 1.0).abs() < 1e-6, "tol={tol}: {c}");
+        }
+    }
+
+    /// Found by `scale_invariant`: a torsion spike of width 1.7e-4 near an
+    /// inflection, where `τ` is only good to ~1e-12 relative. Counting only
+    /// `ε|τ|` as its rounding made the refinement chase noise through the
+    /// whole panel budget on one panel, leaving the next one unrefined and
+    /// the result wrong by 1.6e-3 at some scales and not others.
+    #[test]
+    fn torsion_spike_near_inflection_is_scale_invariant() {
+        let seg = cb([
+            v(-1.6582352953918742, -3.675526994599044, 0.09020961184859612),
+            v(2.7765599361946256, -4.915995498539613, -3.780016612703046),
+            v(-3.9478770646815664, 3.309004333353315, -4.411991623631272),
+            v(2.33708273212256, -3.440992175060444, -4.772667163817349),
+        ]);
+        // Independent check: composite Simpson on the textbook integrand,
+        // fine enough (h = 2.5e-7 against a spike of width 1.7e-4).
+        let r = reference(&seg, 4_000_000);
+        for s in [0.01, 0.1, 1.0, 10.0, 100.0] {
+            let c = complexity_cubic(&map(&seg, |p| s * p), 1e-12);
+            assert!((c - r).abs() < 1e-10, "scale {s}: {c} vs reference {r}");
         }
     }
 
