@@ -8,6 +8,8 @@
 //! the first violation.
 
 mod common;
+use common::unit_vector;
+use common::{E32, E64};
 
 use std::f64::consts::TAU;
 use std::sync::OnceLock;
@@ -42,19 +44,6 @@ const FAMILIES: [Family; 9] = [
     Family::NearZero,
     Family::ManyTurns,
 ];
-
-fn unit(rng: &mut ChaCha8Rng) -> DVec3 {
-    loop {
-        let v = DVec3::new(
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        );
-        if v.length() > 0.2 && v.length() < 1.0 {
-            return v.normalize();
-        }
-    }
-}
 
 /// A random problem of `fam`, described by its scaled rates
 /// `(k₀, g, t₀, d) = (κ₀L, γL², τ₀L, δL²)` and `L`, starting at the origin
@@ -123,10 +112,10 @@ fn problem(rng: &mut ChaCha8Rng, fam: Family) -> FrenetProblem {
             rng.gen_range(-1.0..1.0),
             rng.gen_range(-1.0..1.0),
             rng.gen_range(-1.0..1.0),
-        ) + 100.0 * unit(rng)
+        ) + 100.0 * unit_vector(rng)
     };
-    let t = unit(rng);
-    let n = unit(rng);
+    let t = unit_vector(rng);
+    let n = unit_vector(rng);
     let n = (n - n.dot(t) * t).normalize();
     FrenetProblem::new(start, t, n, k0 / l, g / (l * l), t0 / l, d / (l * l), l)
 }
@@ -261,9 +250,6 @@ fn check(
     worst
 }
 
-const E32: f64 = f32::EPSILON as f64;
-const E64: f64 = f64::EPSILON;
-
 // Why the tolerances are what they are. Kernel, twin and reference run the
 // same scheme at the same step count, so the truncation error (≈ C(Θ/N)⁴,
 // measured order 4 in `euler::frenet`'s tests) is common to all three and
@@ -369,13 +355,9 @@ fn parity(ctx: &GpuContext, precision: Precision) {
 
 #[test]
 fn frenet_parity_f64() {
-    let Some(ctx) = common::gpu_or_skip("frenet_parity_f64") else {
+    let Some(ctx) = common::gpu_f64_or_skip("frenet_parity_f64") else {
         return;
     };
-    if !ctx.supports_f64() {
-        eprintln!("adapter has no SHADER_F64; f64 parity not applicable");
-        return;
-    }
     parity(&ctx, Precision::F64);
 }
 

@@ -3,6 +3,8 @@
 //! with every degenerate and near-degenerate branch.
 
 mod common;
+use common::unit_vector;
+use common::{E32, E64};
 
 use std::f64::consts::{PI, TAU};
 
@@ -13,22 +15,9 @@ use strandfit::gpu::ghosh::{interpolate_twin, GhoshGpu};
 use strandfit::gpu::{Precision, Timings};
 use strandfit::helix::{HelixElement, HelixError, HermitePair, ShortHelix, DEFAULT_COHELICAL_TOL};
 
-fn unit(rng: &mut ChaCha8Rng) -> DVec3 {
-    loop {
-        let v = DVec3::new(
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        );
-        if v.length() > 0.2 && v.length() < 1.0 {
-            return v.normalize();
-        }
-    }
-}
-
 fn element(rng: &mut ChaCha8Rng, kappa: f64, tau: f64, phi: f64) -> HelixElement {
-    let t0 = unit(rng);
-    let n = unit(rng);
+    let t0 = unit_vector(rng);
+    let n = unit_vector(rng);
     let n0 = (n - n.dot(t0) * t0).normalize();
     let scale = 10f64.powf(rng.gen_range(-2.0..2.0));
     let start = DVec3::new(
@@ -110,7 +99,7 @@ fn case(rng: &mut ChaCha8Rng, i: usize) -> (Family, HermitePair) {
             )
         }
         11 => {
-            let t0 = unit(rng);
+            let t0 = unit_vector(rng);
             let p0 = DVec3::new(rng.gen_range(-50.0..50.0), 0.0, 1.0);
             let p1 = p0 + rng.gen_range(0.01..10.0) * t0;
             (
@@ -124,8 +113,8 @@ fn case(rng: &mut ChaCha8Rng, i: usize) -> (Family, HermitePair) {
             )
         }
         12 => {
-            let t0 = unit(rng);
-            let n = unit(rng);
+            let t0 = unit_vector(rng);
+            let n = unit_vector(rng);
             let d = (n - n.dot(t0) * t0).normalize() * rng.gen_range(0.01..10.0);
             let p0 = DVec3::new(1.0, rng.gen_range(-50.0..50.0), 0.0);
             (
@@ -261,8 +250,6 @@ fn check(
 
 const N: usize = 100_000;
 
-const E32: f64 = f32::EPSILON as f64;
-const E64: f64 = f64::EPSILON;
 // Kernel vs its twin: the same operations; drivers may still contract
 // a·b + c into fma or reorder, so allow a few ulps (lavapipe: bit-identical).
 const TWIN_F64: Tol = Tol {
@@ -299,13 +286,9 @@ fn cases() -> Vec<(Family, HermitePair)> {
 
 #[test]
 fn ghosh_bisect_parity_f64() {
-    let Some(ctx) = common::gpu_or_skip("ghosh_bisect_parity_f64") else {
+    let Some(ctx) = common::gpu_f64_or_skip("ghosh_bisect_parity_f64") else {
         return;
     };
-    if !ctx.supports_f64() {
-        eprintln!("adapter has no SHADER_F64; f64 parity not applicable");
-        return;
-    }
     let cases = cases();
     let pairs: Vec<HermitePair> = cases.iter().map(|c| c.1).collect();
     let tol = DEFAULT_COHELICAL_TOL;

@@ -4,6 +4,8 @@
 //! steep and long elements, far from the origin.
 
 mod common;
+use common::unit_vector;
+use common::{E32, E64};
 
 use std::f64::consts::PI;
 
@@ -39,19 +41,6 @@ const FAMILIES: [Family; 6] = [
     Family::Steep,
     Family::Long,
 ];
-
-fn unit(rng: &mut ChaCha8Rng) -> DVec3 {
-    loop {
-        let v = DVec3::new(
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        );
-        if v.length() > 0.2 && v.length() < 1.0 {
-            return v.normalize();
-        }
-    }
-}
 
 /// `(L, κ, τ)` of one element of `fam`; `φ* = ωL` at most ≈ 6.2 rad.
 fn shape(rng: &mut ChaCha8Rng, fam: Family) -> (f64, f64, f64) {
@@ -105,12 +94,12 @@ fn chain(rng: &mut ChaCha8Rng, n: usize) -> (PiecewiseHelix, Vec<Family>) {
         rng.gen_range(-1.0..1.0),
         rng.gen_range(-1.0..1.0),
         rng.gen_range(-1.0..1.0),
-    ) + 100.0 * unit(rng);
-    let tangent = unit(rng);
+    ) + 100.0 * unit_vector(rng);
+    let tangent = unit_vector(rng);
     let params = ChainParams {
         start,
         tangent,
-        normal: unit(rng),
+        normal: unit_vector(rng),
         elements,
     };
     (PiecewiseHelix::from_params(&params), fams)
@@ -226,9 +215,6 @@ fn reference(chains: &[PiecewiseHelix], m: usize) -> Vec<ChainSamples> {
         })
         .collect()
 }
-
-const E32: f64 = f32::EPSILON as f64;
-const E64: f64 = f64::EPSILON;
 
 // Why the tolerances are what they are. The offset is
 // `a t₀ + b n₀ + c b₀` with `a = s − κ²s³g`, `b = κs²h`, `c = κτs³g`; with
@@ -381,13 +367,9 @@ fn parity(ctx: &GpuContext, precision: Precision, twin_tol: Tol, ref_tol: Tol) {
 
 #[test]
 fn helix_eval_parity_f64() {
-    let Some(ctx) = common::gpu_or_skip("helix_eval_parity_f64") else {
+    let Some(ctx) = common::gpu_f64_or_skip("helix_eval_parity_f64") else {
         return;
     };
-    if !ctx.supports_f64() {
-        eprintln!("adapter has no SHADER_F64; f64 parity not applicable");
-        return;
-    }
     parity(&ctx, Precision::F64, TWIN_F64, REF_F64);
 }
 

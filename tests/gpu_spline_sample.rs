@@ -5,6 +5,7 @@
 //! end-degenerate, near-cusp and cusp splines.
 
 mod common;
+use common::{E32, E64};
 
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
@@ -224,9 +225,6 @@ fn batch() -> Batch {
         counts,
     }
 }
-
-const E32: f64 = f32::EPSILON as f64;
-const E64: f64 = f64::EPSILON;
 
 // Error argument (units: ε of the kernel's precision; L the spline's
 // length, k its segment count). A sample's position along the curve is off
@@ -492,13 +490,9 @@ fn parity(ctx: &GpuContext, precision: Precision) {
 
 #[test]
 fn spline_sample_parity_f64() {
-    let Some(ctx) = common::gpu_or_skip("spline_sample_parity_f64") else {
+    let Some(ctx) = common::gpu_f64_or_skip("spline_sample_parity_f64") else {
         return;
     };
-    if !ctx.supports_f64() {
-        eprintln!("adapter has no SHADER_F64; f64 parity not applicable");
-        return;
-    }
     parity(&ctx, Precision::F64);
 }
 
