@@ -21,7 +21,7 @@ use crate::euler::{FrenetEnd, FrenetError, FrenetProblem};
 use crate::fit::{fit_splines, relaxed_pairs, FitError, FitOptions, FitScratch};
 use crate::gpu::frenet::{FrenetGpu, SpiralSamples};
 use crate::gpu::ghosh::GhoshGpu;
-use crate::gpu::helix_eval::{ChainSamples, HelixEvalGpu};
+use crate::gpu::helix_eval::HelixEvalGpu;
 use crate::gpu::spline_sample::SplineSampleGpu;
 use crate::gpu::{GpuContext, GpuError, Precision, Timings};
 use crate::helix::{HelixError, HermitePair, PiecewiseHelix, ShortHelix};
@@ -29,7 +29,7 @@ use crate::spline::BezierSpline;
 
 /// Points with their unit tangents along one curve (what `sample` and
 /// `evaluate` return per curve).
-pub type Samples = ChainSamples;
+pub type Samples = crate::sampled::SampledCurve;
 
 /// What the user asked for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

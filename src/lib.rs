@@ -31,6 +31,7 @@ pub mod fit;
 pub mod gpu;
 pub mod helix;
 pub mod metrics;
+pub mod sampled;
 pub mod spline;
 pub mod synthetic;
 pub mod twin;

@@ -47,18 +47,12 @@ pub fn kernel_body(samples: usize) -> String {
 }
 
 /// Points and unit tangents at `m` equally spaced arc lengths of one spiral.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SpiralSamples {
-    pub points: Vec<DVec3>,
-    pub tangents: Vec<DVec3>,
-}
+pub type SpiralSamples = crate::sampled::SampledCurve;
 
-impl SpiralSamples {
-    fn from_reference(s: &[FrenetEnd]) -> Self {
-        SpiralSamples {
-            points: s.iter().map(|e| e.point).collect(),
-            tangents: s.iter().map(|e| e.frame[0]).collect(),
-        }
+fn from_reference(s: &[FrenetEnd]) -> SpiralSamples {
+    SpiralSamples {
+        points: s.iter().map(|e| e.point).collect(),
+        tangents: s.iter().map(|e| e.frame[0]).collect(),
     }
 }
 
@@ -347,7 +341,7 @@ fn unpack_sampled<R: Real>(
                 .unzip();
             Ok(SpiralSamples { points, tangents })
         }
-        _ => Ok(SpiralSamples::from_reference(
+        _ => Ok(from_reference(
             &p.sample_unchecked(m, steps_per_interval),
         )),
     }

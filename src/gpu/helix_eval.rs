@@ -21,11 +21,7 @@ use crate::twin::Real;
 pub const HELIX_EVAL_WGSL: &str = include_str!("../../shaders/helix_eval.wgsl");
 
 /// Points and unit tangents of one sampled chain.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct ChainSamples {
-    pub points: Vec<DVec3>,
-    pub tangents: Vec<DVec3>,
-}
+pub type ChainSamples = crate::sampled::SampledCurve;
 
 /// The compiled kernel in one precision.
 pub struct HelixEvalGpu {
