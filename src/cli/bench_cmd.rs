@@ -1,6 +1,8 @@
-//! `strandfit bench`: throughput on synthetic splines, on the chosen backend —
-//! Ghosh interpolation alone and the whole fit — in elements per second,
-//! with the GPU time split into prepare / upload / wait / readback.
+//! `strandfit bench`: throughput on synthetic splines, on the chosen backend:
+//! Ghosh interpolation alone and the whole fit (elements/s), arc-length
+//! sampling of the splines and evaluation of the fitted chains (points/s),
+//! and Frenet–Serret integration (spirals/s), with the GPU time of each
+//! split into prepare / upload / wait / readback.
 
 use std::time::Instant;
 
@@ -60,6 +62,23 @@ fn report(label: &str, items: f64, unit: &str, times: &mut [(f64, Timings)]) {
     }
 }
 
+/// `repeat` timed runs of `job` (wall time and the GPU split of each).
+fn time_runs<T>(
+    repeat: usize,
+    mut job: impl FnMut(&mut Timings) -> Result<T>,
+) -> Result<(Vec<(f64, Timings)>, T)> {
+    let mut times = Vec::with_capacity(repeat);
+    let mut last = None;
+    for _ in 0..repeat {
+        let mut t = Timings::default();
+        let start = Instant::now();
+        let r = job(&mut t)?;
+        times.push((start.elapsed().as_secs_f64(), t));
+        last = Some(std::hint::black_box(r));
+    }
+    Ok((times, last.expect("repeat >= 1")))
+}
+
 pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     if args.curves == 0 || args.elements == 0 || args.segments == 0 || args.repeat == 0 {
         anyhow::bail!("--curves, --elements, --segments and --repeat must be at least 1");
@@ -83,14 +102,9 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         relaxed_pairs(s, &opts, &mut scratch, &mut pairs)?;
     }
     let _ = backend.interpolate(&pairs[..pairs.len().min(1024)], opts.cohelical_tol)?; // warm-up, compile
-    let mut times = Vec::with_capacity(args.repeat);
-    for _ in 0..args.repeat {
-        let mut t = Timings::default();
-        let start = Instant::now();
-        let r = backend.interpolate_timed(&pairs, opts.cohelical_tol, &mut t)?;
-        times.push((start.elapsed().as_secs_f64(), t));
-        std::hint::black_box(r);
-    }
+    let (mut times, _) = time_runs(args.repeat, |t| {
+        Ok(backend.interpolate_timed(&pairs, opts.cohelical_tol, t)?)
+    })?;
     report(
         "ghosh interpolation",
         pairs.len() as f64,
@@ -99,19 +113,28 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     );
     drop(pairs);
 
-    let mut times = Vec::with_capacity(args.repeat);
-    let mut failures = 0;
-    for _ in 0..args.repeat {
-        let mut t = Timings::default();
-        let start = Instant::now();
-        let results = backend.fit_timed(&splines, &opts, &mut t)?;
-        times.push((start.elapsed().as_secs_f64(), t));
-        failures = results.iter().filter(|r| r.is_err()).count();
-    }
+    let (mut times, results) =
+        time_runs(args.repeat, |t| Ok(backend.fit_timed(&splines, &opts, t)?))?;
+    let failures = results.iter().filter(|r| r.is_err()).count();
+    drop(results);
     report("whole fit          ", elements, "elements", &mut times);
     if failures > 0 {
         println!("  ({failures} curves failed to fit)");
     }
+
+    // Arc-length sampling of the input splines (spline_sample), at the
+    // fit's `2N + 1` points.
+    let n_samples = 2 * args.elements;
+    let _ = backend.sample(&splines[..splines.len().min(16)], n_samples)?; // warm-up, compile
+    let (mut times, _) = time_runs(args.repeat, |t| {
+        Ok(backend.sample_timed(&splines, n_samples, t)?)
+    })?;
+    report(
+        &format!("spline sampling ({} points/curve)", n_samples + 1),
+        (splines.len() * (n_samples + 1)) as f64,
+        "points",
+        &mut times,
+    );
 
     // Decompression: the fitted chains back to points (helix_eval), at
     // `EVAL_POINTS_PER_ELEMENT` points per element.
@@ -121,14 +144,7 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         .collect();
     let m = EVAL_POINTS_PER_ELEMENT * args.elements + 1;
     let _ = backend.evaluate(&chains[..chains.len().min(16)], m)?; // warm-up, compile
-    let mut times = Vec::with_capacity(args.repeat);
-    for _ in 0..args.repeat {
-        let mut t = Timings::default();
-        let start = Instant::now();
-        let r = backend.evaluate_timed(&chains, m, &mut t)?;
-        times.push((start.elapsed().as_secs_f64(), t));
-        std::hint::black_box(r);
-    }
+    let (mut times, _) = time_runs(args.repeat, |t| Ok(backend.evaluate_timed(&chains, m, t)?))?;
     report(
         &format!("helix evaluation ({m} points/curve)"),
         (chains.len() * m) as f64,
@@ -140,14 +156,9 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     // Euler-spiral descent uses it: end point and frame after 64 steps.
     let problems = synthetic_spirals(args.curves);
     let _ = backend.integrate(&problems[..problems.len().min(16)], FRENET_STEPS)?;
-    let mut times = Vec::with_capacity(args.repeat);
-    for _ in 0..args.repeat {
-        let mut t = Timings::default();
-        let start = Instant::now();
-        let r = backend.integrate_timed(&problems, FRENET_STEPS, &mut t)?;
-        times.push((start.elapsed().as_secs_f64(), t));
-        std::hint::black_box(r);
-    }
+    let (mut times, _) = time_runs(args.repeat, |t| {
+        Ok(backend.integrate_timed(&problems, FRENET_STEPS, t)?)
+    })?;
     report(
         &format!("frenet integration ({FRENET_STEPS} steps)"),
         problems.len() as f64,

@@ -341,9 +341,7 @@ fn unpack_sampled<R: Real>(
                 .unzip();
             Ok(SpiralSamples { points, tangents })
         }
-        _ => Ok(from_reference(
-            &p.sample_unchecked(m, steps_per_interval),
-        )),
+        _ => Ok(from_reference(&p.sample_unchecked(m, steps_per_interval))),
     }
 }
 
