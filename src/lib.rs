@@ -30,6 +30,7 @@ pub mod euler;
 pub mod fit;
 pub mod gpu;
 pub mod helix;
+pub mod io;
 pub mod metrics;
 pub mod sampled;
 pub mod spline;

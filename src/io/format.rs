@@ -1,0 +1,99 @@
+//! File formats, chosen by extension or by name.
+
+use std::path::Path;
+
+use super::{CurveReader, CurveWriter, IoError, Metadata};
+
+/// The curve file formats strandfit reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Format {
+    /// MRtrix `.tck`: text header, float32/float64 triplets, NaN separators,
+    /// Inf terminator; RAS+ mm.
+    Tck,
+    /// TrackVis `.trk` v2: 1000-byte header, voxmm coordinates.
+    Trk,
+    /// VTK legacy POLYDATA with LINES, ASCII or BINARY.
+    Vtk,
+    /// Cem Yuksel's `.hair`.
+    Hair,
+    /// JSON `{"curves":[{"id":…,"points":[[x,y,z],…]},…]}`.
+    Json,
+    /// CSV `curve,x,y,z` rows, one per point.
+    Csv,
+}
+
+impl Format {
+    pub const ALL: [Format; 6] = [
+        Format::Tck,
+        Format::Trk,
+        Format::Vtk,
+        Format::Hair,
+        Format::Json,
+        Format::Csv,
+    ];
+
+    /// The usual extension (without the dot).
+    pub fn extension(self) -> &'static str {
+        match self {
+            Format::Tck => "tck",
+            Format::Trk => "trk",
+            Format::Vtk => "vtk",
+            Format::Hair => "hair",
+            Format::Json => "json",
+            Format::Csv => "csv",
+        }
+    }
+
+    /// By name or extension, case-insensitive (`"tck"`, `"TRK"`, …).
+    pub fn from_name(name: &str) -> Option<Format> {
+        let n = name.to_ascii_lowercase();
+        Format::ALL.into_iter().find(|f| f.extension() == n)
+    }
+
+    /// By the extension of `path`.
+    pub fn from_path(path: &Path) -> Result<Format, IoError> {
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+        Format::from_name(ext).ok_or_else(|| {
+            IoError::new(
+                path,
+                format!(
+                    "cannot tell the format from the extension {:?}; use one of {} or name the format",
+                    ext,
+                    Format::ALL.map(|f| f.extension()).join(", ")
+                ),
+            )
+        })
+    }
+
+    pub(super) fn open_reader(self, path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
+        match self {
+            Format::Tck => super::tck::open(path),
+            Format::Trk => super::trk::open(path),
+            Format::Vtk => super::vtk::open(path),
+            Format::Hair => super::hair::open(path),
+            Format::Json => super::polyline::open_json(path),
+            Format::Csv => super::polyline::open_csv(path),
+        }
+    }
+
+    pub(super) fn create_writer(
+        self,
+        path: &Path,
+        meta: &Metadata,
+    ) -> Result<Box<dyn CurveWriter>, IoError> {
+        match self {
+            Format::Tck => super::tck::create(path, meta),
+            Format::Trk => super::trk::create(path, meta),
+            Format::Vtk => super::vtk::create(path, meta),
+            Format::Hair => super::hair::create(path, meta),
+            Format::Json => super::polyline::create_json(path, meta),
+            Format::Csv => super::polyline::create_csv(path, meta),
+        }
+    }
+}
+
+impl std::fmt::Display for Format {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.extension())
+    }
+}

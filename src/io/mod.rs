@@ -1,0 +1,211 @@
+//! Reading and writing the curve files users have: tractography (MRtrix
+//! `.tck`, TrackVis `.trk`), VTK legacy polylines, Cem Yuksel's `.hair`,
+//! and plain JSON/CSV polylines.
+//!
+//! Every reader is a streaming iterator over [`Curve`]s, so files larger than
+//! memory work: only the header and one curve are held at a time. Points come
+//! out in **world space** (RAS+ millimetres for tractography; the file's own
+//! units otherwise), and the [`Metadata`] a reader returns carries what a
+//! writer needs to put them back exactly in the source's convention (the
+//! affine, voxel sizes, header fields, names of per-point and per-curve data).
+//!
+//! Errors name the file, the curve (0-based index) where known, the byte
+//! offset or line where known, and the reason ([`IoError`]). No reader
+//! panics on any input: truncated, corrupted and hostile files (absurd
+//! counts in headers) are errors, and counts from headers never size an
+//! allocation before the bytes behind them have been seen.
+//!
+//! Writers write to a temporary file next to the target and rename it into
+//! place in [`CurveWriter::finish`]; dropping a writer without finishing it
+//! (a failed run) leaves nothing behind and never clobbers an existing file.
+
+pub mod atomic;
+pub mod bytes;
+pub mod format;
+pub mod hair;
+pub mod polyline;
+pub mod tck;
+pub mod trk;
+pub mod vtk;
+
+use std::path::{Path, PathBuf};
+
+use glam::{DMat4, DVec3};
+
+pub use atomic::AtomicFile;
+pub use format::Format;
+
+/// One curve as read from a file: points in world space, plus the per-point
+/// and per-curve values the file carried (carried through to writers of the
+/// same format; see [`Metadata::point_data_names`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Curve {
+    /// Points in world space, in order.
+    pub points: Vec<DVec3>,
+    /// Per-point values, `points.len() × point_data_names.len()`, row-major
+    /// (all values of point 0, then point 1, …).
+    pub point_data: Vec<f32>,
+    /// Per-curve values, `curve_data_names.len()` of them.
+    pub curve_data: Vec<f32>,
+}
+
+impl Curve {
+    /// A curve of points only.
+    pub fn from_points(points: Vec<DVec3>) -> Self {
+        Curve {
+            points,
+            ..Default::default()
+        }
+    }
+}
+
+/// What a reader learned from a file's header that is not per curve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Metadata {
+    /// The format the file was read as.
+    pub format: Format,
+    /// Number of curves the header announces, when it does (`.tck` `count`,
+    /// `.trk` `n_count`, `.hair` strand count, VTK line count). Advisory: a
+    /// reader checks it against what it finds, and never allocates by it.
+    pub count: Option<u64>,
+    /// Voxel-to-world (RAS+ mm) affine of the reference image, for
+    /// tractography; identity otherwise.
+    pub vox_to_world: DMat4,
+    /// Voxel sizes (mm) and image dimensions of the reference image, where
+    /// the format has them (`.trk`).
+    pub voxel_size: Option<[f64; 3]>,
+    pub dimensions: Option<[u32; 3]>,
+    /// Length unit of the world coordinates, e.g. "mm" for tractography,
+    /// "solar radius" for the bundled field lines; `None` when unknown.
+    pub units: Option<String>,
+    /// Names of the per-point values in [`Curve::point_data`].
+    pub point_data_names: Vec<String>,
+    /// Names of the per-curve values in [`Curve::curve_data`].
+    pub curve_data_names: Vec<String>,
+    /// Format-specific header fields kept verbatim so that a writer of the
+    /// same format reproduces them (e.g. `.tck` key-value lines, the `.trk`
+    /// header bytes, the `.hair` info string, the VTK title line).
+    pub extra: Vec<(String, String)>,
+}
+
+impl Metadata {
+    /// Metadata with nothing but the format: identity affine, no data names.
+    pub fn new(format: Format) -> Self {
+        Metadata {
+            format,
+            count: None,
+            vox_to_world: DMat4::IDENTITY,
+            voxel_size: None,
+            dimensions: None,
+            units: None,
+            point_data_names: Vec::new(),
+            curve_data_names: Vec::new(),
+            extra: Vec::new(),
+        }
+    }
+
+    /// The value of an [`extra`](Self::extra) field.
+    pub fn extra(&self, key: &str) -> Option<&str> {
+        self.extra
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+}
+
+/// A read or write failure, naming the file, the curve and where in the
+/// file, and why.
+#[derive(Debug, thiserror::Error)]
+#[error("{}{}{}: {reason}", path.display(), curve.map(|c| format!(", curve {c}")).unwrap_or_default(), at.as_ref().map(|a| format!(" ({a})")).unwrap_or_default())]
+pub struct IoError {
+    pub path: PathBuf,
+    /// 0-based index of the curve being read or written, if any.
+    pub curve: Option<u64>,
+    /// Where in the file: "byte 1234", "line 17", "header field `count`".
+    pub at: Option<String>,
+    pub reason: String,
+    #[source]
+    pub source: Option<std::io::Error>,
+}
+
+impl IoError {
+    /// An error about `path` for `reason`.
+    pub fn new(path: &Path, reason: impl Into<String>) -> Self {
+        IoError {
+            path: path.to_path_buf(),
+            curve: None,
+            at: None,
+            reason: reason.into(),
+            source: None,
+        }
+    }
+
+    /// An operating-system error (open, read, write) on `path`.
+    pub fn os(path: &Path, what: &str, e: std::io::Error) -> Self {
+        IoError {
+            reason: format!("{what}: {e}"),
+            source: Some(e),
+            ..IoError::new(path, "")
+        }
+    }
+
+    /// The same error, about curve `index`.
+    pub fn curve(mut self, index: u64) -> Self {
+        self.curve = Some(index);
+        self
+    }
+
+    /// The same error, at a place in the file.
+    pub fn at(mut self, at: impl Into<String>) -> Self {
+        self.at = Some(at.into());
+        self
+    }
+}
+
+/// A streaming reader: its [`Metadata`] up front, then the curves in file
+/// order. After the first `Err` the iterator ends (returns `None`).
+pub trait CurveReader: Iterator<Item = Result<Curve, IoError>> {
+    fn metadata(&self) -> &Metadata;
+}
+
+/// A streaming writer. Curves are written in order; [`finish`](Self::finish)
+/// completes the file (counts, terminators) and renames it into place.
+pub trait CurveWriter {
+    fn write_curve(&mut self, curve: &Curve) -> Result<(), IoError>;
+    fn finish(self: Box<Self>) -> Result<(), IoError>;
+}
+
+/// Open `path` for reading as `format` (or by its extension, see
+/// [`Format::from_path`]).
+pub fn open_reader(path: &Path, format: Option<Format>) -> Result<Box<dyn CurveReader>, IoError> {
+    let format = match format {
+        Some(f) => f,
+        None => Format::from_path(path)?,
+    };
+    format.open_reader(path)
+}
+
+/// Create a writer for `path` as `format` (or by its extension). `meta`
+/// describes the curves to come (their source convention, data names); a
+/// writer of the same format as `meta.format` reproduces the source's
+/// header, another format gets what it can express (and drops the rest, as
+/// its documentation says).
+pub fn create_writer(
+    path: &Path,
+    format: Option<Format>,
+    meta: &Metadata,
+) -> Result<Box<dyn CurveWriter>, IoError> {
+    let format = match format {
+        Some(f) => f,
+        None => Format::from_path(path)?,
+    };
+    format.create_writer(path, meta)
+}
+
+/// Read a whole file into memory (for tests and small inputs).
+pub fn read_all(path: &Path, format: Option<Format>) -> Result<(Metadata, Vec<Curve>), IoError> {
+    let reader = open_reader(path, format)?;
+    let meta = reader.metadata().clone();
+    let curves = reader.collect::<Result<Vec<_>, _>>()?;
+    Ok((meta, curves))
+}
