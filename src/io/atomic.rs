@@ -47,8 +47,13 @@ impl AtomicFile {
         temp.as_file()
             .sync_all()
             .map_err(|e| IoError::os(&target, "cannot sync", e))?;
-        temp.persist(&target)
-            .map_err(|e| IoError::os(&target, "cannot rename the temporary file into place", e.error))?;
+        temp.persist(&target).map_err(|e| {
+            IoError::os(
+                &target,
+                "cannot rename the temporary file into place",
+                e.error,
+            )
+        })?;
         Ok(())
     }
 

@@ -78,7 +78,9 @@ impl ByteSource {
                 buf.len(),
                 self.remaining()
             ))),
-            Err(e) => Err(IoError::os(&self.path, "cannot read", e).at(format!("byte {}", self.pos))),
+            Err(e) => {
+                Err(IoError::os(&self.path, "cannot read", e).at(format!("byte {}", self.pos)))
+            }
         }
     }
 

@@ -40,6 +40,9 @@ pub use format::Format;
 /// same format; see [`Metadata::point_data_names`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Curve {
+    /// The curve's name where the format has one (JSON, CSV); `None`
+    /// elsewhere, where curves are known by their index.
+    pub id: Option<String>,
     /// Points in world space, in order.
     pub points: Vec<DVec3>,
     /// Per-point values, `points.len() × point_data_names.len()`, row-major

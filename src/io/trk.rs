@@ -1,6 +1,6 @@
 //! Placeholder: being written.
-use std::path::Path;
 use super::{CurveReader, CurveWriter, IoError, Metadata};
+use std::path::Path;
 pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     Err(IoError::new(path, "format not supported yet"))
 }
