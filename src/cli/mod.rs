@@ -1,10 +1,12 @@
 //! The `strandfit` command line: `helix`, `fit`, `sample`, `evaluate`,
-//! `integrate`, `bench`.
+//! `integrate`, `inspect`, `convert`, `bench`.
 
 mod bench_cmd;
+mod convert_cmd;
 mod evaluate_cmd;
 mod fit_cmd;
 mod helix_cmd;
+mod inspect_cmd;
 mod integrate_cmd;
 mod io_util;
 mod sample_cmd;
@@ -87,6 +89,12 @@ pub enum Command {
     /// length) from JSON Lines records {"start","tangent","normal","kappa0",
     /// "gamma","tau0","delta","length"}: end point and frame, optionally samples.
     Integrate(IntegrateArgs),
+    /// Summarise a curve file (.tck, .trk, .vtk, .hair, .json, .csv): header,
+    /// counts, lengths, sizes and problems (empty or one-point curves,
+    /// repeated points); stops at the first unreadable curve, naming it.
+    Inspect(InspectArgs),
+    /// Convert curves between file formats (streamed, in world coordinates).
+    Convert(ConvertArgs),
     /// Measure whole-fit throughput on synthetic splines (elements per second).
     Bench(BenchArgs),
 }
@@ -186,6 +194,33 @@ pub struct IntegrateArgs {
 }
 
 #[derive(clap::Args, Debug)]
+pub struct InspectArgs {
+    /// The file to inspect.
+    pub input: PathBuf,
+    /// Its format (default: from the extension): tck, trk, vtk, hair, json, csv.
+    #[arg(long)]
+    pub format: Option<String>,
+    /// Machine-readable report on standard output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct ConvertArgs {
+    /// Input file.
+    pub input: PathBuf,
+    /// Output file. Written atomically.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Input format (default: from the extension).
+    #[arg(long)]
+    pub from: Option<String>,
+    /// Output format (default: from the extension).
+    #[arg(long)]
+    pub to: Option<String>,
+}
+
+#[derive(clap::Args, Debug)]
 pub struct BenchArgs {
     /// Number of synthetic splines.
     #[arg(long, default_value_t = 20_000)]
@@ -219,6 +254,8 @@ pub fn main() -> ExitCode {
         Command::Sample(a) => cli.backend().and_then(|b| sample_cmd::run(a, &b)),
         Command::Evaluate(a) => cli.backend().and_then(|b| evaluate_cmd::run(a, &b)),
         Command::Integrate(a) => cli.backend().and_then(|b| integrate_cmd::run(a, &b)),
+        Command::Inspect(a) => inspect_cmd::run(a),
+        Command::Convert(a) => convert_cmd::run(a),
         Command::Bench(a) => cli.backend().and_then(|b| bench_cmd::run(a, &b)),
     };
     match result {

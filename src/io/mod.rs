@@ -23,6 +23,7 @@ pub mod atomic;
 pub mod bytes;
 pub mod format;
 pub mod hair;
+pub mod inspect;
 pub mod polyline;
 pub mod tck;
 pub mod trk;

@@ -1,0 +1,120 @@
+//! `strandfit inspect FILE`: what a curve file holds (format, header,
+//! counts, lengths, sizes, problems), streamed, as text or `--json`.
+
+use std::path::Path;
+
+use anyhow::Result;
+use serde_json::json;
+
+use super::InspectArgs;
+use crate::io::inspect::CurveStats;
+use crate::io::{open_reader, Format};
+
+pub fn run(args: &InspectArgs) -> Result<()> {
+    let format = args.format.as_deref().map(parse_format).transpose()?;
+    let bytes = std::fs::metadata(&args.input)
+        .map_err(|e| anyhow::anyhow!("{}: cannot stat: {e}", args.input.display()))?
+        .len();
+    let mut reader = open_reader(&args.input, format)?;
+    let meta = reader.metadata().clone();
+    let mut stats = CurveStats::default();
+    let mut error = None;
+    for c in reader.by_ref() {
+        match c {
+            Ok(c) => stats.add(&c),
+            Err(e) => {
+                error = Some(e);
+                break;
+            }
+        }
+    }
+    stats.finish();
+    let count_mismatch = match meta.count {
+        Some(n) if error.is_none() && n != stats.curves => Some(n),
+        _ => None,
+    };
+    if args.json {
+        let report = json!({
+            "file": args.input.display().to_string(),
+            "format": meta.format.extension(),
+            "bytes": bytes,
+            "bytes_per_point": if stats.points > 0 { bytes as f64 / stats.points as f64 } else { 0.0 },
+            "header_count": meta.count,
+            "units": meta.units,
+            "vox_to_world": meta.vox_to_world.transpose().to_cols_array_2d(),
+            "voxel_size": meta.voxel_size,
+            "dimensions": meta.dimensions,
+            "point_data": meta.point_data_names,
+            "curve_data": meta.curve_data_names,
+            "stats": stats,
+            "error": error.as_ref().map(|e| e.to_string()),
+        });
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_text(&args.input, bytes, &meta, &stats);
+    }
+    if let Some(n) = count_mismatch {
+        eprintln!(
+            "warning: {}: the header announces {n} curves, the file holds {}",
+            args.input.display(),
+            stats.curves
+        );
+    }
+    match error {
+        Some(e) => Err(anyhow::anyhow!(
+            "{e} (after {} complete curves)",
+            stats.curves
+        )),
+        None => Ok(()),
+    }
+}
+
+pub fn parse_format(name: &str) -> Result<Format> {
+    Format::from_name(name).ok_or_else(|| {
+        anyhow::anyhow!(
+            "unknown format {name:?}; one of {}",
+            Format::ALL.map(|f| f.extension()).join(", ")
+        )
+    })
+}
+
+fn print_text(path: &Path, bytes: u64, meta: &crate::io::Metadata, s: &CurveStats) {
+    let unit = meta.units.as_deref().unwrap_or("units");
+    println!("{}: {} file, {bytes} bytes", path.display(), meta.format);
+    if let Some(n) = meta.count {
+        println!("  header count    {n}");
+    }
+    println!("  curves          {}", s.curves);
+    println!(
+        "  points          {} (per curve min {} / median {} / max {})",
+        s.points, s.points_min, s.points_median, s.points_max
+    );
+    if s.points > 0 {
+        println!("  bytes/point     {:.2}", bytes as f64 / s.points as f64);
+    }
+    println!(
+        "  length          total {:.6e} {unit}, per curve min {:.6} / max {:.6}, mean step {:.6}",
+        s.length_total, s.length_min, s.length_max, s.step_mean
+    );
+    if let Some(b) = s.bbox {
+        println!("  bounding box    {:?} .. {:?}", b[0], b[1]);
+    }
+    if meta.voxel_size.is_some() || meta.vox_to_world != glam::DMat4::IDENTITY {
+        println!(
+            "  voxel size      {:?}, dimensions {:?}",
+            meta.voxel_size, meta.dimensions
+        );
+        let m = meta.vox_to_world.transpose().to_cols_array_2d();
+        println!("  vox_to_world    {:?}", m);
+    }
+    if !meta.point_data_names.is_empty() {
+        println!("  per-point data  {}", meta.point_data_names.join(", "));
+    }
+    if !meta.curve_data_names.is_empty() {
+        println!("  per-curve data  {}", meta.curve_data_names.join(", "));
+    }
+    println!(
+        "  problems        {} empty, {} single-point curves, {} repeated consecutive points",
+        s.empty_curves, s.single_point_curves, s.repeated_points
+    );
+}
