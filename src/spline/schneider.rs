@@ -157,8 +157,8 @@ fn end_tangent(d: &[DVec3], at_end: bool, tol: f64) -> DVec3 {
     };
     let s1 = (at(a) - p0).length();
     let s2 = s1 + (at(b) - at(a)).length();
-    let t = -(1.0 / s1 + 1.0 / s2) * p0 + s2 / (s1 * (s2 - s1)) * at(a)
-        - s1 / (s2 * (s2 - s1)) * at(b);
+    let t =
+        -(1.0 / s1 + 1.0 / s2) * p0 + s2 / (s1 * (s2 - s1)) * at(a) - s1 / (s2 * (s2 - s1)) * at(b);
     match t.try_normalize() {
         Some(t) if t.dot(chord) > 0.0 => t,
         _ => chord,
