@@ -24,6 +24,7 @@
     clippy::needless_range_loop
 )]
 
+pub mod adaptive;
 pub mod backend;
 pub mod cli;
 pub mod euler;

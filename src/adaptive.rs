@@ -1,0 +1,402 @@
+//! Polylines → piecewise helices with the element count chosen per curve:
+//! fixed (`--elements N`), by a target element length (`--element-length S`)
+//! or by a tolerance (`--tolerance T`: the fewest elements whose chain stays
+//! within `T` of the input, in the continuous Fréchet distance).
+//!
+//! Pipeline per curve: Schneider smoothing to a G1 cubic spline
+//! ([`spline::schneider`](crate::spline::schneider)), then the floating
+//! tangents fit ([`fit`](crate::fit)) with `N` elements, then the check of
+//! the chain against the *input* polyline — not against the spline, so the
+//! smoothing error is inside the tolerance, not added to it.
+//!
+//! The check samples the chain at arc step `h` with `κ_max h²/8 ≤ T/64`: a
+//! curve of curvature at most `κ` is within its sagitta `κh²/8` of its
+//! chords, so `F(chain, input) ≤ F(samples, input) + T/64`, and the test
+//! is `F(samples, input) ≤ T − sagitta`. The reported distance is that
+//! bound, never an underestimate.
+//!
+//! Failure modes the floating tangents paper names, and what is done:
+//! * too few elements on a long curve: the chain cuts corners. The search
+//!   raises `N` until the distance is met.
+//! * on a short curve with many elements, the relaxation can move break
+//!   points past each other and the chain loops. An element whose chord
+//!   runs against the chord of the samples it was fitted to marks that `N`
+//!   as failed (`inverted`); a loop larger than the tolerance also fails
+//!   the Fréchet test, which forbids backtracking.
+//!
+//! Search for the tolerance: `N = 1, 2, 4, …` until the test passes (or
+//! `max_elements`), then bisection between the last failure and the first
+//! pass. The distance is not monotone in `N` in general, so this finds a
+//! passing `N` within a factor of two of the smallest in the worst case and
+//! the smallest in the usual, monotone one. If no `N` up to the cap passes,
+//! the best chain tried is returned with `within_tolerance = false`.
+
+use glam::DVec3;
+
+use crate::fit::{fit_spline_with, FitError, FitOptions, FitScratch};
+use crate::helix::PiecewiseHelix;
+use crate::metrics::{frechet_polyline, frechet_within};
+use crate::spline::schneider::{fit_polyline, PolylineFitError, SchneiderOptions};
+use crate::spline::{BezierSpline, SplineError};
+
+/// How many elements per curve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ElementCount {
+    /// Exactly `N`.
+    Fixed(usize),
+    /// `max(1, round(L/S))` for a curve of length `L`.
+    ElementLength(f64),
+    /// The fewest within this Fréchet distance of the input.
+    Tolerance(f64),
+}
+
+/// Options of [`fit_polyline_chain`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptiveOptions {
+    pub count: ElementCount,
+    /// Schneider tolerance for the smoothing spline. Default: `T/2` with a
+    /// tolerance (half the budget to smoothing, half to the helices),
+    /// otherwise a tenth of the mean input step (a near-interpolation).
+    pub smoothing: Option<f64>,
+    /// Cap on `N` per curve.
+    pub max_elements: usize,
+    /// Passed to the floating tangents fit.
+    pub fit: FitOptions,
+}
+
+impl AdaptiveOptions {
+    pub fn new(count: ElementCount) -> Self {
+        AdaptiveOptions {
+            count,
+            smoothing: None,
+            max_elements: 4096,
+            fit: FitOptions::new(1),
+        }
+    }
+}
+
+/// One fitted curve.
+#[derive(Clone, Debug)]
+pub struct ChainFit {
+    pub chain: PiecewiseHelix,
+    /// Upper bound on the continuous Fréchet distance between the chain and
+    /// the input polyline (relative accuracy 1e-3 plus the sampling
+    /// sagitta).
+    pub frechet: f64,
+    /// `false` only in tolerance mode when no `N ≤ max_elements` met it.
+    pub within_tolerance: bool,
+    /// Segments of the smoothing spline.
+    pub spline_segments: usize,
+    /// Floating-tangents fits run by the search.
+    pub fits: usize,
+}
+
+/// Why a polyline could not be fitted.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum AdaptiveError {
+    #[error("{0}")]
+    Smoothing(#[from] PolylineFitError),
+    #[error("smoothing spline: {0}")]
+    Spline(#[from] SplineError),
+    #[error("{0}")]
+    Fit(#[from] FitError),
+    #[error("invalid option: {0}")]
+    Options(&'static str),
+}
+
+/// Fit one polyline (at least two distinct finite points).
+pub fn fit_polyline_chain(
+    points: &[DVec3],
+    opts: &AdaptiveOptions,
+) -> Result<ChainFit, AdaptiveError> {
+    let tol = match opts.count {
+        ElementCount::Tolerance(t) if !(t > 0.0 && t.is_finite()) => {
+            return Err(AdaptiveError::Options(
+                "tolerance must be positive and finite",
+            ))
+        }
+        ElementCount::ElementLength(s) if !(s > 0.0 && s.is_finite()) => {
+            return Err(AdaptiveError::Options(
+                "element length must be positive and finite",
+            ))
+        }
+        ElementCount::Fixed(0) => {
+            return Err(AdaptiveError::Options("elements must be at least 1"))
+        }
+        ElementCount::Tolerance(t) => Some(t),
+        _ => None,
+    };
+    if opts.max_elements == 0 {
+        return Err(AdaptiveError::Options("max elements must be at least 1"));
+    }
+    let smoothing = match (opts.smoothing, tol) {
+        (Some(s), _) => s,
+        (None, Some(t)) => 0.5 * t,
+        (None, None) => 0.1 * mean_step(points),
+    };
+    let cps = fit_polyline(points, &SchneiderOptions::new(smoothing))?;
+    let spline = BezierSpline::from_control_points(&cps)?;
+    let spline_segments = spline.num_segments();
+    let mut scratch = FitScratch::default();
+    let mut fit_n = |n: usize| {
+        let o = FitOptions {
+            elements: n,
+            ..opts.fit
+        };
+        fit_spline_with(&spline, &o, &mut scratch)
+    };
+    let (chain, fits) = match opts.count {
+        ElementCount::Fixed(n) => (fit_n(n.min(opts.max_elements))?, 1),
+        ElementCount::ElementLength(s) => {
+            let n = ((spline.length() / s).round() as usize).clamp(1, opts.max_elements);
+            (fit_n(n)?, 1)
+        }
+        ElementCount::Tolerance(t) => {
+            let mut fits = 0;
+            let mut try_n = |n: usize| -> Option<(PiecewiseHelix, bool)> {
+                fits += 1;
+                let chain = fit_n(n).ok()?;
+                let ok = !inverted(&chain, &spline) && chain_within(&chain, points, t);
+                Some((chain, ok))
+            };
+            // Exponential search for a passing N, keeping the last failure.
+            let (mut lo, mut hi) = (0usize, 1usize);
+            let mut best: Option<PiecewiseHelix> = None;
+            let mut passed = None;
+            loop {
+                match try_n(hi) {
+                    Some((chain, true)) => {
+                        passed = Some(chain);
+                        break;
+                    }
+                    Some((chain, false)) => best = Some(chain),
+                    None => {}
+                }
+                if hi >= opts.max_elements {
+                    break;
+                }
+                lo = hi;
+                hi = (2 * hi).min(opts.max_elements);
+            }
+            match passed {
+                Some(mut chain) => {
+                    // Smallest passing N in (lo, hi].
+                    while hi - lo > 1 {
+                        let mid = lo + (hi - lo) / 2;
+                        match try_n(mid) {
+                            Some((c, true)) => {
+                                hi = mid;
+                                chain = c;
+                            }
+                            _ => lo = mid,
+                        }
+                    }
+                    (chain, fits)
+                }
+                None => {
+                    let chain = match best {
+                        Some(c) => c,
+                        // Every N failed to fit at all: report the last error.
+                        None => fit_n(opts.max_elements)?,
+                    };
+                    let frechet = chain_frechet(&chain, points, smoothing);
+                    return Ok(ChainFit {
+                        chain,
+                        frechet,
+                        within_tolerance: false,
+                        spline_segments,
+                        fits,
+                    });
+                }
+            }
+        }
+    };
+    let frechet = chain_frechet(&chain, points, tol.unwrap_or(smoothing));
+    Ok(ChainFit {
+        frechet,
+        within_tolerance: tol.is_none_or(|t| frechet <= t),
+        chain,
+        spline_segments,
+        fits,
+    })
+}
+
+/// Mean distance between consecutive distinct points.
+fn mean_step(points: &[DVec3]) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for w in points.windows(2) {
+        let d = w[0].distance(w[1]);
+        if d > 0.0 {
+            sum += d;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        1.0
+    } else {
+        sum / n as f64
+    }
+}
+
+/// Break points inverted by the relaxation: an element whose chord runs
+/// against the chord between the spline samples it was made from,
+/// `(p₁ − p₀)·(q₁ − q₀) ≤ 0`. Its short helix must turn back, a loop. (A
+/// geometric test on the element alone, such as its chord against its end
+/// tangents, would also flag faithful elements that turn by more than π.)
+fn inverted(chain: &PiecewiseHelix, spline: &BezierSpline) -> bool {
+    let Ok(q) = spline.sample_points(chain.len() + 1) else {
+        return true;
+    };
+    chain
+        .elements()
+        .iter()
+        .zip(q.windows(2))
+        .any(|(e, w)| (e.end_point() - e.start).dot(w[1] - w[0]) <= 0.0)
+}
+
+/// Chain samples at an arc step whose sagitta is at most `tol/64`, and
+/// that sagitta.
+fn chain_samples(chain: &PiecewiseHelix, tol: f64) -> (Vec<DVec3>, f64) {
+    let kappa = chain
+        .elements()
+        .iter()
+        .fold(0.0f64, |k, e| k.max(e.curvature.abs()));
+    let length = chain.length();
+    let n = chain.len();
+    // κ h²/8 ≤ tol/64  ⇔  h ≤ √(tol/(8κ)).
+    let h = if kappa > 0.0 {
+        (tol / (8.0 * kappa)).sqrt()
+    } else {
+        length
+    };
+    let m = ((length / h).ceil() as usize).clamp(2 * n + 1, 256 * n + 1);
+    let step = length / (m - 1) as f64;
+    (chain.sample(m), kappa * step * step / 8.0)
+}
+
+fn chain_within(chain: &PiecewiseHelix, input: &[DVec3], tol: f64) -> bool {
+    let (s, sag) = chain_samples(chain, tol);
+    tol > sag && frechet_within(&s, input, tol - sag).unwrap_or(false)
+}
+
+/// Fréchet bound of the chain against the input (see the module docs).
+fn chain_frechet(chain: &PiecewiseHelix, input: &[DVec3], scale: f64) -> f64 {
+    let (s, sag) = chain_samples(chain, scale);
+    frechet_polyline(&s, input, 1e-3).map_or(f64::INFINITY, |f| f + sag)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn helix_points(n: usize, turns: f64) -> Vec<DVec3> {
+        (0..n)
+            .map(|k| {
+                let t = turns * std::f64::consts::TAU * k as f64 / (n - 1) as f64;
+                DVec3::new(5.0 * t.cos(), 5.0 * t.sin(), 1.5 * t)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn tolerance_is_met_with_the_fewest_elements_found() {
+        let pts = helix_points(120, 2.0);
+        for t in [0.5, 0.1, 0.02] {
+            let f = fit_polyline_chain(&pts, &AdaptiveOptions::new(ElementCount::Tolerance(t)))
+                .unwrap();
+            assert!(
+                f.within_tolerance && f.frechet <= t,
+                "T = {t}: {}",
+                f.frechet
+            );
+            let n = f.chain.len();
+            // One fewer must fail (monotone here), unless N = 1.
+            if n > 1 {
+                let o = AdaptiveOptions {
+                    smoothing: Some(0.5 * t), // the spline the search used
+                    ..AdaptiveOptions::new(ElementCount::Fixed(n - 1))
+                };
+                let g = fit_polyline_chain(&pts, &o).unwrap();
+                assert!(
+                    !chain_within(&g.chain, &pts, t),
+                    "T = {t}: N − 1 = {} also passes",
+                    n - 1
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_sampled_helix_needs_few_elements() {
+        // The input is a helix; at a tolerance well above the chord sagitta
+        // of its sampling, a handful of elements suffice.
+        let pts = helix_points(200, 2.0);
+        let f =
+            fit_polyline_chain(&pts, &AdaptiveOptions::new(ElementCount::Tolerance(0.2))).unwrap();
+        assert!(f.chain.len() <= 4, "{} elements", f.chain.len());
+    }
+
+    #[test]
+    fn element_length_and_fixed() {
+        let pts = helix_points(100, 1.0);
+        let l: f64 = pts.windows(2).map(|w| w[0].distance(w[1])).sum();
+        let f = fit_polyline_chain(
+            &pts,
+            &AdaptiveOptions::new(ElementCount::ElementLength(l / 7.0)),
+        )
+        .unwrap();
+        assert_eq!(f.chain.len(), 7);
+        let f = fit_polyline_chain(&pts, &AdaptiveOptions::new(ElementCount::Fixed(5))).unwrap();
+        assert_eq!(f.chain.len(), 5);
+        assert!(f.within_tolerance);
+    }
+
+    #[test]
+    fn unreachable_tolerance_is_reported_not_hidden() {
+        // A zigzag of amplitude 1 cannot be followed within 1e-3 by 4 elements.
+        let pts: Vec<DVec3> = (0..40)
+            .map(|k| DVec3::new(k as f64, if k % 2 == 0 { 0.0 } else { 1.0 }, 0.0))
+            .collect();
+        let o = AdaptiveOptions {
+            max_elements: 4,
+            ..AdaptiveOptions::new(ElementCount::Tolerance(1e-3))
+        };
+        let f = fit_polyline_chain(&pts, &o).unwrap();
+        assert!(!f.within_tolerance && f.frechet > 1e-3);
+    }
+
+    #[test]
+    fn inversion_is_detected_against_the_samples() {
+        let pts = helix_points(60, 1.5);
+        let cps = fit_polyline(&pts, &SchneiderOptions::new(0.01)).unwrap();
+        let spline = BezierSpline::from_control_points(&cps).unwrap();
+        let chain = crate::fit::fit_spline(&spline, &FitOptions::new(5)).unwrap();
+        // Elements of 108° each turn: a test on the element's own chord
+        // and tangents would not tell this from a loop; the samples do.
+        assert!(!inverted(&chain, &spline));
+        let rev: Vec<DVec3> = cps.iter().rev().copied().collect();
+        let back = BezierSpline::from_control_points(&rev).unwrap();
+        assert!(inverted(&chain, &back));
+    }
+
+    #[test]
+    fn bad_options_and_points() {
+        let pts = helix_points(10, 0.5);
+        for c in [
+            ElementCount::Tolerance(0.0),
+            ElementCount::Tolerance(f64::NAN),
+            ElementCount::ElementLength(-1.0),
+            ElementCount::Fixed(0),
+        ] {
+            assert!(matches!(
+                fit_polyline_chain(&pts, &AdaptiveOptions::new(c)),
+                Err(AdaptiveError::Options(_))
+            ));
+        }
+        let o = AdaptiveOptions::new(ElementCount::Fixed(3));
+        assert!(matches!(
+            fit_polyline_chain(&[DVec3::ONE, DVec3::ONE], &o),
+            Err(AdaptiveError::Smoothing(PolylineFitError::TooFewPoints(2)))
+        ));
+    }
+}
