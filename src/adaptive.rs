@@ -214,7 +214,7 @@ pub fn fit_polyline_chain(
     let frechet = chain_frechet(&chain, points, tol.unwrap_or(smoothing));
     Ok(ChainFit {
         frechet,
-        within_tolerance: tol.is_none_or(|t| frechet <= t),
+        within_tolerance: tol.map_or(true, |t| frechet <= t),
         chain,
         spline_segments,
         fits,

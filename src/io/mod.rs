@@ -21,6 +21,7 @@
 
 pub mod atomic;
 pub mod bytes;
+pub mod container;
 pub mod format;
 pub mod hair;
 pub mod inspect;

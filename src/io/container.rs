@@ -1,0 +1,1036 @@
+//! The `.sfh` container: piecewise helices, compressed, with the source's
+//! metadata. The layout is documented in `docs/container.md`; in short:
+//!
+//! ```text
+//! magic "\x89SFH\r\n\x1a\n" · version u16 · flags u16
+//! header: u32 length · u32 CRC-32 · JSON (storage, tolerance, source metadata)
+//! blocks: "SFHB" · u32 curves · u32 raw length · u32 stored length · u8 encoding
+//!         · 3 zero bytes · u32 CRC-32 of the stored bytes · stored bytes
+//! end:    "SFHE" · u64 curves · u32 CRC-32 of the block CRCs
+//! ```
+//!
+//! A block holds up to [`BLOCK_CURVES`] curve records, deflated. A curve is
+//! empty, a verbatim polyline (one-point curves and curves that could not be
+//! fitted), or a chain in its compact form ([`ChainParams`]: start point and
+//! frame, then length, curvature, torsion and twist per element) stored as
+//! `f64`, `f32`, or quantised ([`Storage::Compact`], see [`QuantChain`]).
+//!
+//! Every read is checked: magic, version, lengths against the file size,
+//! CRC-32 of the header and of every block, the decoded record lengths, and
+//! the end record's count. Truncation or corruption is an error naming the
+//! file, the block and the curve — never a panic or a wrong curve.
+
+use std::io::{Read, Write};
+use std::path::Path;
+
+use glam::{DMat4, DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+
+use super::bytes::{ByteSource, Endian};
+use super::{AtomicFile, Format, IoError, Metadata};
+use crate::helix::{ChainParams, ElementParams};
+
+/// File magic: non-ASCII first byte, then "SFH", then CR LF SUB LF (as PNG
+/// does), so text-mode transfers and truncated-to-text files are caught.
+pub const MAGIC: [u8; 8] = *b"\x89SFH\r\n\x1a\n";
+pub const VERSION: u16 = 1;
+const BLOCK_MAGIC: [u8; 4] = *b"SFHB";
+const END_MAGIC: [u8; 4] = *b"SFHE";
+/// Curves per block: small enough to bound memory and to localise damage,
+/// large enough for deflate to find the repetition between curves.
+pub const BLOCK_CURVES: usize = 4096;
+/// Largest header or block accepted (a guard against absurd lengths).
+const MAX_SECTION: u32 = 1 << 30;
+
+const KIND_EMPTY: u8 = 0;
+const KIND_POINTS: u8 = 1;
+const KIND_CHAIN: u8 = 2;
+const KIND_QCHAIN: u8 = 3;
+
+/// How chain parameters are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Storage {
+    F64,
+    F32,
+    /// Quantised on per-curve power-of-two grids, delta- and varint-coded.
+    Compact,
+}
+
+/// The container header (stored as JSON).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    pub storage: Storage,
+    /// The Fréchet tolerance the curves were compressed to, if one was set.
+    pub tolerance: Option<f64>,
+    /// How element counts were chosen, for the record ("tolerance 0.5").
+    pub mode: String,
+    /// The input's metadata (format, affine, units, per-curve data names).
+    pub source: SourceMeta,
+    /// Per-point data names of the input that are not stored (the points
+    /// themselves are replaced by helices).
+    pub dropped_point_data: Vec<String>,
+    pub written_by: String,
+}
+
+/// [`Metadata`] in a serialisable form.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SourceMeta {
+    pub format: String,
+    pub file: Option<String>,
+    /// Row-major 4×4.
+    pub vox_to_world: [[f64; 4]; 4],
+    pub voxel_size: Option<[f64; 3]>,
+    pub dimensions: Option<[u32; 3]>,
+    pub units: Option<String>,
+    pub curve_data_names: Vec<String>,
+    pub extra: Vec<(String, String)>,
+}
+
+impl SourceMeta {
+    pub fn from_metadata(m: &Metadata, file: Option<&Path>) -> Self {
+        SourceMeta {
+            format: m.format.extension().to_string(),
+            file: file.map(|f| f.display().to_string()),
+            vox_to_world: m.vox_to_world.transpose().to_cols_array_2d(),
+            voxel_size: m.voxel_size,
+            dimensions: m.dimensions,
+            units: m.units.clone(),
+            curve_data_names: m.curve_data_names.clone(),
+            extra: m.extra.clone(),
+        }
+    }
+
+    /// Back to [`Metadata`] for a writer: per-point data are gone; an
+    /// unknown format name becomes JSON.
+    pub fn to_metadata(&self) -> Metadata {
+        let mut m = Metadata::new(Format::from_name(&self.format).unwrap_or(Format::Json));
+        m.vox_to_world = DMat4::from_cols_array_2d(&self.vox_to_world).transpose();
+        m.voxel_size = self.voxel_size;
+        m.dimensions = self.dimensions;
+        m.units = self.units.clone();
+        m.curve_data_names = self.curve_data_names.clone();
+        m.extra = self.extra.clone();
+        m
+    }
+}
+
+/// A chain quantised for [`Storage::Compact`]: integers on per-curve grids
+/// of step `ΔL = 2^len_exp` (lengths, start point) and `Δθ = 2^angle_exp`
+/// (the turning angles `κL`, `τL`, the twists, and the start frame as a
+/// unit quaternion's vector part). A curved element keeps `κL ≥ Δθ` so
+/// that it stays curved: a straight element carries the reference normal
+/// on instead of resetting it, which would reinterpret every later twist.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct QuantChain {
+    pub len_exp: i8,
+    pub angle_exp: i8,
+    pub start: [i64; 3],
+    /// Quaternion `(x, y, z)` of the start frame (`w ≥ 0` implied).
+    pub frame: [i64; 3],
+    /// Per element: `L`, `κL`, `τL`, twist.
+    pub elements: Vec<[i64; 4]>,
+}
+
+/// Rotation taking the x, y, z axes to the tangent, normal and binormal.
+fn frame_quat(t: DVec3, n: DVec3) -> DQuat {
+    let b = t.cross(n);
+    DQuat::from_mat3(&glam::DMat3::from_cols(t, n, b)).normalize()
+}
+
+fn q(x: f64, step: f64) -> i64 {
+    (x / step).round() as i64
+}
+
+impl QuantChain {
+    /// Quantise `c` on the grids `2^len_exp` and `2^angle_exp`.
+    pub fn quantize(c: &ChainParams, len_exp: i8, angle_exp: i8) -> Self {
+        let dl = 2f64.powi(len_exp as i32);
+        let da = 2f64.powi(angle_exp as i32);
+        let mut rot = frame_quat(c.tangent.normalize(), c.normal.normalize());
+        if rot.w < 0.0 {
+            rot = -rot;
+        }
+        let elements = c
+            .elements
+            .iter()
+            .map(|e| {
+                let mut k = q(e.curvature * e.length, da);
+                if e.curvature > 0.0 && k == 0 {
+                    k = 1;
+                }
+                [
+                    q(e.length, dl),
+                    k,
+                    q(e.torsion * e.length, da),
+                    q(e.twist, da),
+                ]
+            })
+            .collect();
+        QuantChain {
+            len_exp,
+            angle_exp,
+            start: [q(c.start.x, dl), q(c.start.y, dl), q(c.start.z, dl)],
+            frame: [q(rot.x, da), q(rot.y, da), q(rot.z, da)],
+            elements,
+        }
+    }
+
+    /// The chain these integers stand for.
+    pub fn dequantize(&self) -> ChainParams {
+        let dl = 2f64.powi(self.len_exp as i32);
+        let da = 2f64.powi(self.angle_exp as i32);
+        let v = DVec3::new(
+            self.frame[0] as f64 * da,
+            self.frame[1] as f64 * da,
+            self.frame[2] as f64 * da,
+        );
+        let w = (1.0 - v.length_squared()).max(0.0).sqrt();
+        let rot = DQuat::from_xyzw(v.x, v.y, v.z, w).normalize();
+        let elements = self
+            .elements
+            .iter()
+            .map(|&[l, k, t, tw]| {
+                let length = l as f64 * dl;
+                let (curvature, torsion) = if length > 0.0 {
+                    (k as f64 * da / length, t as f64 * da / length)
+                } else {
+                    (0.0, 0.0)
+                };
+                ElementParams {
+                    length,
+                    curvature,
+                    torsion,
+                    twist: tw as f64 * da,
+                }
+            })
+            .collect();
+        ChainParams {
+            start: DVec3::new(
+                self.start[0] as f64 * dl,
+                self.start[1] as f64 * dl,
+                self.start[2] as f64 * dl,
+            ),
+            tangent: rot * DVec3::X,
+            normal: rot * DVec3::Y,
+            elements,
+        }
+    }
+}
+
+/// What a curve record holds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    Empty,
+    /// Stored verbatim (one-point curves, curves that could not be fitted).
+    Points(Vec<DVec3>),
+    /// A chain (`f64`/`f32` storage, or dequantised on reading).
+    Chain(ChainParams),
+    /// A quantised chain (writing in [`Storage::Compact`] only).
+    Quantized(QuantChain),
+}
+
+/// One curve of the container.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoredCurve {
+    pub id: Option<String>,
+    pub curve_data: Vec<f32>,
+    pub shape: Shape,
+}
+
+// ---------------------------------------------------------------- encoding
+
+fn put_varint(out: &mut Vec<u8>, mut v: u64) {
+    while v >= 0x80 {
+        out.push((v as u8) | 0x80);
+        v >>= 7;
+    }
+    out.push(v as u8);
+}
+
+fn zigzag(v: i64) -> u64 {
+    ((v << 1) ^ (v >> 63)) as u64
+}
+
+fn unzigzag(u: u64) -> i64 {
+    ((u >> 1) as i64) ^ -((u & 1) as i64)
+}
+
+fn put_real(out: &mut Vec<u8>, x: f64, storage: Storage) {
+    match storage {
+        Storage::F64 => out.extend_from_slice(&x.to_le_bytes()),
+        _ => out.extend_from_slice(&(x as f32).to_le_bytes()),
+    }
+}
+
+fn put_vec(out: &mut Vec<u8>, v: DVec3, storage: Storage) {
+    for x in v.to_array() {
+        put_real(out, x, storage);
+    }
+}
+
+fn encode(out: &mut Vec<u8>, c: &StoredCurve, storage: Storage) -> Result<(), String> {
+    let kind = match (&c.shape, storage) {
+        (Shape::Empty, _) => KIND_EMPTY,
+        (Shape::Points(_), _) => KIND_POINTS,
+        (Shape::Chain(_), Storage::Compact) => {
+            return Err("a compact container stores quantised chains".into())
+        }
+        (Shape::Chain(_), _) => KIND_CHAIN,
+        (Shape::Quantized(_), Storage::Compact) => KIND_QCHAIN,
+        (Shape::Quantized(_), _) => return Err("a quantised chain needs compact storage".into()),
+    };
+    out.push(kind);
+    match &c.id {
+        None => put_varint(out, 0),
+        Some(id) => {
+            put_varint(out, id.len() as u64 + 1);
+            out.extend_from_slice(id.as_bytes());
+        }
+    }
+    for v in &c.curve_data {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    // Verbatim points: f64 unless the container is f32 or compact.
+    let point_storage = if storage == Storage::F64 {
+        Storage::F64
+    } else {
+        Storage::F32
+    };
+    match &c.shape {
+        Shape::Empty => {}
+        Shape::Points(p) => {
+            put_varint(out, p.len() as u64);
+            for &x in p {
+                put_vec(out, x, point_storage);
+            }
+        }
+        Shape::Chain(ch) => {
+            put_varint(out, ch.elements.len() as u64);
+            put_vec(out, ch.start, storage);
+            put_vec(out, ch.tangent, storage);
+            put_vec(out, ch.normal, storage);
+            for e in &ch.elements {
+                for x in [e.length, e.curvature, e.torsion, e.twist] {
+                    put_real(out, x, storage);
+                }
+            }
+        }
+        Shape::Quantized(qc) => {
+            put_varint(out, qc.elements.len() as u64);
+            out.push(qc.len_exp as u8);
+            out.push(qc.angle_exp as u8);
+            for v in qc.start.iter().chain(&qc.frame) {
+                put_varint(out, zigzag(*v));
+            }
+            // Lengths, κL and τL change slowly along a chain (equal arc-
+            // length break points): deltas. Twists do not: raw.
+            let mut prev = [0i64; 3];
+            for e in &qc.elements {
+                for k in 0..3 {
+                    put_varint(out, zigzag(e[k].wrapping_sub(prev[k])));
+                    prev[k] = e[k];
+                }
+                put_varint(out, zigzag(e[3]));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A cursor over a decompressed block, with errors that say what was cut.
+struct Cursor<'a> {
+    b: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Cursor<'a> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        if self.b.len() - self.pos < n {
+            return Err(format!("record ends inside {what}"));
+        }
+        let s = &self.b[self.pos..self.pos + n];
+        self.pos += n;
+        Ok(s)
+    }
+    fn u8(&mut self, what: &str) -> Result<u8, String> {
+        Ok(self.take(1, what)?[0])
+    }
+    fn varint(&mut self, what: &str) -> Result<u64, String> {
+        let mut v = 0u64;
+        for shift in (0..64).step_by(7) {
+            let b = self.u8(what)?;
+            v |= ((b & 0x7f) as u64) << shift;
+            if b < 0x80 {
+                return Ok(v);
+            }
+        }
+        Err(format!("{what}: varint longer than 64 bits"))
+    }
+    /// A count, checked against the bytes left (each item needs at least
+    /// `min_bytes`), so a corrupt count cannot size an allocation.
+    fn count(&mut self, min_bytes: usize, what: &str) -> Result<usize, String> {
+        let n = self.varint(what)?;
+        let left = (self.b.len() - self.pos) as u64;
+        if n.saturating_mul(min_bytes as u64) > left {
+            return Err(format!("{what} {n} exceeds the record"));
+        }
+        Ok(n as usize)
+    }
+    fn f32(&mut self, what: &str) -> Result<f32, String> {
+        let b = self.take(4, what)?;
+        Ok(f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+    fn real(&mut self, storage: Storage, what: &str) -> Result<f64, String> {
+        let x = match storage {
+            Storage::F64 => {
+                let b = self.take(8, what)?;
+                f64::from_le_bytes(b.try_into().expect("8 bytes"))
+            }
+            _ => self.f32(what)? as f64,
+        };
+        if !x.is_finite() {
+            return Err(format!("{what} is not finite"));
+        }
+        Ok(x)
+    }
+    fn vec(&mut self, storage: Storage, what: &str) -> Result<DVec3, String> {
+        Ok(DVec3::new(
+            self.real(storage, what)?,
+            self.real(storage, what)?,
+            self.real(storage, what)?,
+        ))
+    }
+    fn zz(&mut self, what: &str) -> Result<i64, String> {
+        Ok(unzigzag(self.varint(what)?))
+    }
+}
+
+fn decode(c: &mut Cursor, storage: Storage, n_curve_data: usize) -> Result<StoredCurve, String> {
+    let kind = c.u8("the curve kind")?;
+    let id = match c.count(1, "the id length")? {
+        0 => None,
+        n => Some(
+            String::from_utf8(c.take(n - 1, "the id")?.to_vec())
+                .map_err(|_| "the id is not UTF-8".to_string())?,
+        ),
+    };
+    let mut curve_data = Vec::with_capacity(n_curve_data);
+    for _ in 0..n_curve_data {
+        curve_data.push(c.f32("the per-curve data")?);
+    }
+    let point_storage = if storage == Storage::F64 {
+        Storage::F64
+    } else {
+        Storage::F32
+    };
+    let psize = if point_storage == Storage::F64 {
+        24
+    } else {
+        12
+    };
+    let shape = match kind {
+        KIND_EMPTY => Shape::Empty,
+        KIND_POINTS => {
+            let n = c.count(psize, "the point count")?;
+            let mut p = Vec::with_capacity(n);
+            for _ in 0..n {
+                p.push(c.vec(point_storage, "a point")?);
+            }
+            Shape::Points(p)
+        }
+        KIND_CHAIN if storage != Storage::Compact => {
+            let size = if storage == Storage::F64 { 8 } else { 4 };
+            let n = c.count(4 * size, "the element count")?;
+            let start = c.vec(storage, "the start point")?;
+            let tangent = c.vec(storage, "the start tangent")?;
+            let normal = c.vec(storage, "the start normal")?;
+            let mut elements = Vec::with_capacity(n);
+            for _ in 0..n {
+                let length = c.real(storage, "an element length")?;
+                let curvature = c.real(storage, "a curvature")?;
+                let torsion = c.real(storage, "a torsion")?;
+                let twist = c.real(storage, "a twist")?;
+                if length < 0.0 || curvature < 0.0 {
+                    return Err("an element with negative length or curvature".into());
+                }
+                elements.push(ElementParams {
+                    length,
+                    curvature,
+                    torsion,
+                    twist,
+                });
+            }
+            if tangent.length() < 0.5 || normal.length() < 0.5 {
+                return Err("a start frame that is not unit".into());
+            }
+            Shape::Chain(ChainParams {
+                start,
+                tangent,
+                normal,
+                elements,
+            })
+        }
+        KIND_QCHAIN if storage == Storage::Compact => {
+            let n = c.count(4, "the element count")?;
+            let len_exp = c.u8("the length grid")? as i8;
+            let angle_exp = c.u8("the angle grid")? as i8;
+            if !(-60..=60).contains(&len_exp) || !(-60..=0).contains(&angle_exp) {
+                return Err(format!(
+                    "grid exponents {len_exp}, {angle_exp} out of range"
+                ));
+            }
+            let mut start = [0i64; 3];
+            let mut frame = [0i64; 3];
+            for v in start.iter_mut().chain(frame.iter_mut()) {
+                *v = c.zz("the start point and frame")?;
+            }
+            let mut elements = Vec::with_capacity(n);
+            let mut prev = [0i64; 3];
+            for _ in 0..n {
+                let mut e = [0i64; 4];
+                for k in 0..3 {
+                    e[k] = prev[k].wrapping_add(c.zz("an element")?);
+                    prev[k] = e[k];
+                }
+                e[3] = c.zz("a twist")?;
+                if e[0] < 0 || e[1] < 0 {
+                    return Err("an element with negative length or curvature".into());
+                }
+                elements.push(e);
+            }
+            let qc = QuantChain {
+                len_exp,
+                angle_exp,
+                start,
+                frame,
+                elements,
+            };
+            let ch = qc.dequantize();
+            if !ch.start.is_finite() || ch.elements.iter().any(|e| !e.length.is_finite()) {
+                return Err("a quantised chain out of range".into());
+            }
+            Shape::Chain(ch)
+        }
+        k => return Err(format!("unknown curve kind {k} for {storage:?} storage")),
+    };
+    Ok(StoredCurve {
+        id,
+        curve_data,
+        shape,
+    })
+}
+
+// ---------------------------------------------------------------- writing
+
+/// Streams curves into a container; [`finish`](Self::finish) writes the
+/// last block and the end record and renames the file into place.
+pub struct ContainerWriter {
+    out: AtomicFile,
+    header: Header,
+    raw: Vec<u8>,
+    in_block: u32,
+    curves: u64,
+    crcs: crc32fast::Hasher,
+    /// Bytes written so far (the compressed size, for reports).
+    bytes: u64,
+}
+
+impl ContainerWriter {
+    pub fn create(path: &Path, header: Header) -> Result<Self, IoError> {
+        let mut out = AtomicFile::create(path)?;
+        let json = serde_json::to_vec(&header)
+            .map_err(|e| IoError::new(path, format!("cannot encode the header: {e}")))?;
+        let mut head = Vec::with_capacity(json.len() + 20);
+        head.extend_from_slice(&MAGIC);
+        head.extend_from_slice(&VERSION.to_le_bytes());
+        head.extend_from_slice(&0u16.to_le_bytes());
+        head.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        head.extend_from_slice(&crc32fast::hash(&json).to_le_bytes());
+        head.extend_from_slice(&json);
+        out.write_all(&head).map_err(|e| out.err(e))?;
+        Ok(ContainerWriter {
+            out,
+            bytes: head.len() as u64,
+            header,
+            raw: Vec::new(),
+            in_block: 0,
+            curves: 0,
+            crcs: crc32fast::Hasher::new(),
+        })
+    }
+
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    pub fn write(&mut self, c: &StoredCurve) -> Result<(), IoError> {
+        let err = |r: String| IoError::new(self.out.target(), r).curve(self.curves);
+        if c.curve_data.len() != self.header.source.curve_data_names.len() {
+            return Err(err(format!(
+                "{} per-curve values where the header names {}",
+                c.curve_data.len(),
+                self.header.source.curve_data_names.len()
+            )));
+        }
+        encode(&mut self.raw, c, self.header.storage).map_err(err)?;
+        self.curves += 1;
+        self.in_block += 1;
+        if self.in_block as usize >= BLOCK_CURVES || self.raw.len() >= 8 << 20 {
+            self.flush_block()?;
+        }
+        Ok(())
+    }
+
+    fn flush_block(&mut self) -> Result<(), IoError> {
+        if self.in_block == 0 {
+            return Ok(());
+        }
+        let mut z = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::best());
+        z.write_all(&self.raw).map_err(|e| self.out.err(e))?;
+        let stored = z.finish().map_err(|e| self.out.err(e))?;
+        let crc = crc32fast::hash(&stored);
+        self.crcs.update(&crc.to_le_bytes());
+        let mut head = Vec::with_capacity(24);
+        head.extend_from_slice(&BLOCK_MAGIC);
+        head.extend_from_slice(&self.in_block.to_le_bytes());
+        head.extend_from_slice(&(self.raw.len() as u32).to_le_bytes());
+        head.extend_from_slice(&(stored.len() as u32).to_le_bytes());
+        head.extend_from_slice(&[1, 0, 0, 0]); // encoding 1 = deflate
+        head.extend_from_slice(&crc.to_le_bytes());
+        self.out.write_all(&head).map_err(|e| self.out.err(e))?;
+        self.out.write_all(&stored).map_err(|e| self.out.err(e))?;
+        self.bytes += (head.len() + stored.len()) as u64;
+        self.raw.clear();
+        self.in_block = 0;
+        Ok(())
+    }
+
+    /// Complete and commit the file; returns its size in bytes.
+    pub fn finish(mut self) -> Result<u64, IoError> {
+        self.flush_block()?;
+        let mut end = Vec::with_capacity(16);
+        end.extend_from_slice(&END_MAGIC);
+        end.extend_from_slice(&self.curves.to_le_bytes());
+        end.extend_from_slice(&self.crcs.clone().finalize().to_le_bytes());
+        self.out.write_all(&end).map_err(|e| self.out.err(e))?;
+        self.out.commit()?;
+        Ok(self.bytes + end.len() as u64)
+    }
+}
+
+// ---------------------------------------------------------------- reading
+
+/// Streams the curves of a container, block by block.
+pub struct ContainerReader {
+    src: ByteSource,
+    header: Header,
+    block: Vec<u8>,
+    pos: usize,
+    left_in_block: u32,
+    block_index: u64,
+    curve: u64,
+    crcs: crc32fast::Hasher,
+    done: bool,
+}
+
+impl ContainerReader {
+    pub fn open(path: &Path) -> Result<Self, IoError> {
+        let mut src = ByteSource::open(path)?;
+        let magic = src.array::<8>("the magic number")?;
+        if magic != MAGIC {
+            return Err(
+                IoError::new(path, "not a strandfit container (wrong magic number)").at("byte 0"),
+            );
+        }
+        let version = src.u16(Endian::Little, "the version")?;
+        if version != VERSION {
+            return Err(src.error(format!(
+                "container version {version}; this build reads version {VERSION}"
+            )));
+        }
+        let flags = src.u16(Endian::Little, "the flags")?;
+        if flags != 0 {
+            return Err(src.error(format!("unknown flags {flags:#x} (reserved, must be 0)")));
+        }
+        let len = src.u32(Endian::Little, "the header length")?;
+        let crc = src.u32(Endian::Little, "the header checksum")?;
+        if len > MAX_SECTION || len as u64 > src.remaining() {
+            return Err(src.error(format!(
+                "header length {len} exceeds the file ({} bytes left)",
+                src.remaining()
+            )));
+        }
+        let mut json = vec![0u8; len as usize];
+        src.read_exact(&mut json, "the header")?;
+        if crc32fast::hash(&json) != crc {
+            return Err(
+                IoError::new(path, "header checksum mismatch (the file is corrupt)").at("header"),
+            );
+        }
+        let header: Header = serde_json::from_slice(&json)
+            .map_err(|e| IoError::new(path, format!("unreadable header: {e}")).at("header"))?;
+        Ok(ContainerReader {
+            src,
+            header,
+            block: Vec::new(),
+            pos: 0,
+            left_in_block: 0,
+            block_index: 0,
+            curve: 0,
+            crcs: crc32fast::Hasher::new(),
+            done: false,
+        })
+    }
+
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    pub fn path(&self) -> &Path {
+        self.src.path()
+    }
+
+    fn err(&self, reason: impl Into<String>) -> IoError {
+        IoError::new(self.src.path(), reason)
+            .curve(self.curve)
+            .at(format!("block {}", self.block_index))
+    }
+
+    /// Load the next block; `false` at the end record.
+    fn next_block(&mut self) -> Result<bool, IoError> {
+        let magic = self.src.array::<4>("the next block").map_err(|e| {
+            IoError::new(
+                self.src.path(),
+                format!("{}: no end record (truncated?)", e.reason),
+            )
+            .at(format!("block {}", self.block_index))
+        })?;
+        if magic == END_MAGIC {
+            let n = u64::from_le_bytes(self.src.array::<8>("the end record")?);
+            let crc = self.src.u32(Endian::Little, "the end record")?;
+            if n != self.curve {
+                return Err(self.err(format!(
+                    "the end record counts {n} curves, the blocks hold {}",
+                    self.curve
+                )));
+            }
+            if crc != self.crcs.clone().finalize() {
+                return Err(self.err("block checksum list mismatch (blocks reordered or lost?)"));
+            }
+            return Ok(false);
+        }
+        if magic != BLOCK_MAGIC {
+            return Err(self.err("expected a block or the end record (corrupt file)"));
+        }
+        let curves = self.src.u32(Endian::Little, "a block header")?;
+        let raw_len = self.src.u32(Endian::Little, "a block header")?;
+        let stored_len = self.src.u32(Endian::Little, "a block header")?;
+        let enc = self.src.array::<4>("a block header")?;
+        let crc = self.src.u32(Endian::Little, "a block header")?;
+        if stored_len > MAX_SECTION || stored_len as u64 > self.src.remaining() {
+            return Err(self.err(format!(
+                "block of {stored_len} bytes exceeds the file ({} bytes left)",
+                self.src.remaining()
+            )));
+        }
+        if raw_len > MAX_SECTION || curves == 0 || curves as usize > BLOCK_CURVES.max(1 << 20) {
+            return Err(self.err(format!(
+                "implausible block header ({curves} curves, {raw_len} bytes)"
+            )));
+        }
+        if enc[1..] != [0, 0, 0] {
+            return Err(self.err("non-zero reserved bytes in a block header (corrupt file)"));
+        }
+        let mut stored = vec![0u8; stored_len as usize];
+        self.src.read_exact(&mut stored, "a block")?;
+        if crc32fast::hash(&stored) != crc {
+            return Err(self.err("block checksum mismatch (the file is corrupt)"));
+        }
+        self.crcs.update(&crc.to_le_bytes());
+        self.block.clear();
+        match enc[0] {
+            0 => self.block = stored,
+            1 => {
+                let mut z = flate2::read::DeflateDecoder::new(&stored[..]).take(raw_len as u64 + 1);
+                z.read_to_end(&mut self.block)
+                    .map_err(|e| self.err(format!("cannot inflate the block: {e}")))?;
+            }
+            e => return Err(self.err(format!("unknown block encoding {e}"))),
+        }
+        if self.block.len() != raw_len as usize {
+            return Err(self.err(format!(
+                "block inflates to {} bytes, its header says {raw_len}",
+                self.block.len()
+            )));
+        }
+        self.pos = 0;
+        self.left_in_block = curves;
+        self.block_index += 1;
+        Ok(true)
+    }
+
+    fn next_curve(&mut self) -> Result<Option<StoredCurve>, IoError> {
+        if self.left_in_block == 0 {
+            if self.pos != self.block.len() {
+                return Err(self.err("bytes left over after the block's last curve"));
+            }
+            if !self.next_block()? {
+                return Ok(None);
+            }
+        }
+        let mut c = Cursor {
+            b: &self.block,
+            pos: self.pos,
+        };
+        let n_cd = self.header.source.curve_data_names.len();
+        let r = decode(&mut c, self.header.storage, n_cd);
+        let pos = c.pos;
+        let curve = r.map_err(|e| self.err(e))?;
+        self.pos = pos;
+        self.left_in_block -= 1;
+        self.curve += 1;
+        Ok(Some(curve))
+    }
+}
+
+impl Iterator for ContainerReader {
+    type Item = Result<StoredCurve, IoError>;
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        match self.next_curve() {
+            Ok(Some(c)) => Some(Ok(c)),
+            Ok(None) => {
+                self.done = true;
+                None
+            }
+            Err(e) => {
+                self.done = true;
+                Some(Err(e))
+            }
+        }
+    }
+}
+
+/// Is `path` a container (by its magic number)?
+pub fn is_container(path: &Path) -> bool {
+    let mut b = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut b))
+        .is_ok()
+        && b == MAGIC
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::helix::PiecewiseHelix;
+
+    fn chain(seed: u64) -> ChainParams {
+        let s = seed as f64;
+        ChainParams {
+            start: DVec3::new(10.0 + s, -3.0, 7.5),
+            tangent: DVec3::new(1.0, 0.2, -0.1).normalize(),
+            normal: DVec3::new(-0.2, 1.0, 0.0).normalize(),
+            elements: (0..6)
+                .map(|k| ElementParams {
+                    length: 2.0 + 0.1 * k as f64,
+                    curvature: if k == 2 { 0.0 } else { 0.3 + 0.01 * s },
+                    torsion: -0.1 * k as f64,
+                    twist: if k == 2 { 0.0 } else { 0.2 * k as f64 - 0.5 },
+                })
+                .collect(),
+        }
+    }
+
+    fn header(storage: Storage) -> Header {
+        let mut m = Metadata::new(Format::Trk);
+        m.curve_data_names = vec!["weight".into()];
+        m.vox_to_world = DMat4::from_cols_array(&[
+            1.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 3.0, 0.0, 4.0, 5.0, 6.0, 1.0,
+        ]);
+        Header {
+            storage,
+            tolerance: Some(0.1),
+            mode: "test".into(),
+            source: SourceMeta::from_metadata(&m, None),
+            dropped_point_data: vec![],
+            written_by: "test".into(),
+        }
+    }
+
+    fn curves(storage: Storage) -> Vec<StoredCurve> {
+        let mut v = vec![
+            StoredCurve {
+                id: Some("é-1".into()),
+                curve_data: vec![1.5],
+                shape: Shape::Empty,
+            },
+            StoredCurve {
+                id: None,
+                curve_data: vec![-2.0],
+                shape: Shape::Points(vec![DVec3::new(1.0, 2.0, 3.0)]),
+            },
+        ];
+        for s in 0..5000 {
+            let c = chain(s);
+            v.push(StoredCurve {
+                id: Some(format!("c{s}")),
+                curve_data: vec![s as f32],
+                shape: match storage {
+                    Storage::Compact => Shape::Quantized(QuantChain::quantize(&c, -12, -14)),
+                    _ => Shape::Chain(c),
+                },
+            });
+        }
+        v
+    }
+
+    fn write(path: &Path, storage: Storage, cs: &[StoredCurve]) -> u64 {
+        let mut w = ContainerWriter::create(path, header(storage)).unwrap();
+        for c in cs {
+            w.write(c).unwrap();
+        }
+        w.finish().unwrap()
+    }
+
+    #[test]
+    fn round_trips_in_every_storage() {
+        let dir = tempfile::tempdir().unwrap();
+        for storage in [Storage::F64, Storage::F32, Storage::Compact] {
+            let path = dir.path().join("x.sfh");
+            let cs = curves(storage);
+            let bytes = write(&path, storage, &cs);
+            assert_eq!(bytes, std::fs::metadata(&path).unwrap().len());
+            let r = ContainerReader::open(&path).unwrap();
+            assert_eq!(r.header(), &header(storage));
+            assert_eq!(
+                r.header().source.to_metadata().vox_to_world,
+                header(storage).source.to_metadata().vox_to_world
+            );
+            let back: Vec<StoredCurve> = r.collect::<Result<_, _>>().unwrap();
+            assert_eq!(back.len(), cs.len());
+            for (a, b) in cs.iter().zip(&back) {
+                assert_eq!((&a.id, &a.curve_data), (&b.id, &b.curve_data));
+                match (&a.shape, &b.shape, storage) {
+                    (Shape::Chain(x), Shape::Chain(y), Storage::F64) => assert_eq!(x, y),
+                    (Shape::Chain(x), Shape::Chain(y), _) => {
+                        // f32: each of the ~33 stored numbers is rounded by
+                        // ε₃₂/2 ≈ 6e-8 relative; an angle error acts over a
+                        // lever of up to 13 units: 33 × 6e-8 × 13 ≈ 2.6e-5.
+                        let (px, py) = (
+                            PiecewiseHelix::from_params(x),
+                            PiecewiseHelix::from_params(y),
+                        );
+                        let d = px
+                            .sample(50)
+                            .iter()
+                            .zip(py.sample(50))
+                            .map(|(a, b)| a.distance(b))
+                            .fold(0.0, f64::max);
+                        assert!(d < 5e-5, "{d}");
+                    }
+                    (Shape::Quantized(qc), Shape::Chain(y), Storage::Compact) => {
+                        assert_eq!(&qc.dequantize(), y)
+                    }
+                    (x, y, _) => assert_eq!(x, y),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn quantisation_error_is_bounded_by_the_grids() {
+        let c = chain(3);
+        let exact = PiecewiseHelix::from_params(&c);
+        let mut last = f64::INFINITY;
+        for p in [4i8, 8, 12, 16, 20] {
+            let qc = QuantChain::quantize(&c, -p, -p - 2);
+            let back = PiecewiseHelix::from_params(&qc.dequantize());
+            let d = exact
+                .sample(200)
+                .iter()
+                .zip(back.sample(200))
+                .map(|(a, b)| a.distance(b))
+                .fold(0.0, f64::max);
+            // Every quantity moves by at most half a grid step; their effect
+            // at the far end of a 13-unit chain is bounded by 13 Δθ + 6 ΔL.
+            let bound = 13.0 * 2f64.powi(-p as i32 - 2) * 6.0 + 6.0 * 2f64.powi(-p as i32);
+            assert!(d <= bound, "p = {p}: {d} > {bound}");
+            assert!(d < last, "error falls with the grid");
+            last = d;
+        }
+    }
+
+    #[test]
+    fn curved_elements_stay_curved() {
+        let mut c = chain(0);
+        c.elements[1].curvature = 1e-9;
+        let qc = QuantChain::quantize(&c, -10, -10);
+        assert!(qc.elements[1][1] >= 1);
+        assert_eq!(qc.elements[2][1], 0, "the straight one stays straight");
+    }
+
+    #[test]
+    fn damage_is_an_error_never_a_panic() {
+        use rand::{Rng, SeedableRng};
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("x.sfh");
+        let cs: Vec<StoredCurve> = curves(Storage::Compact).into_iter().take(300).collect();
+        write(&path, Storage::Compact, &cs);
+        let good = std::fs::read(&path).unwrap();
+        let bad = dir.path().join("bad.sfh");
+        let read = |b: &[u8]| {
+            std::fs::write(&bad, b).unwrap();
+            ContainerReader::open(&bad).and_then(|r| r.collect::<Result<Vec<_>, _>>())
+        };
+        // Every truncation is an error (the end record is last).
+        for cut in (0..good.len()).step_by(7).chain([good.len() - 1]) {
+            let e = read(&good[..cut]).unwrap_err();
+            assert!(e.to_string().contains("bad.sfh"), "{e}");
+        }
+        // Corruption: CRCs catch it (or the magic, lengths, header JSON).
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..500 {
+            let mut b = good.clone();
+            let i = rng.gen_range(0..b.len());
+            let old = b[i];
+            b[i] = loop {
+                let x: u8 = rng.gen();
+                if x != old {
+                    break x;
+                }
+            };
+            assert!(read(&b).is_err(), "a flipped byte at {i} went unnoticed");
+        }
+        let e = read(b"\x89PNG\r\n\x1a\n and more").unwrap_err().to_string();
+        assert!(e.contains("wrong magic"), "{e}");
+    }
+
+    #[test]
+    fn writer_refuses_mismatched_data_and_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("x.sfh");
+        let mut w = ContainerWriter::create(&path, header(Storage::F32)).unwrap();
+        let e = w
+            .write(&StoredCurve {
+                id: None,
+                curve_data: vec![],
+                shape: Shape::Empty,
+            })
+            .unwrap_err();
+        assert!(e.to_string().contains("curve 0"), "{e}");
+        let e = w
+            .write(&StoredCurve {
+                id: None,
+                curve_data: vec![0.0],
+                shape: Shape::Quantized(QuantChain::quantize(&chain(0), -8, -8)),
+            })
+            .unwrap_err();
+        assert!(e.to_string().contains("compact"), "{e}");
+        drop(w);
+        assert!(!path.exists());
+    }
+}
