@@ -1,7 +1,11 @@
 //! Polylines → piecewise helices with the element count chosen per curve:
 //! fixed (`--elements N`), by a target element length (`--element-length S`)
 //! or by a tolerance (`--tolerance T`: the fewest elements whose chain stays
-//! within `T` of the input, in the continuous Fréchet distance).
+//! within `T` of the input, in the distance chosen by [`Distance`]: by
+//! default the input's points must lie within `T` of the chain in order,
+//! the Fréchet distance with the input taken as its samples; optionally
+//! the continuous Fréchet distance between the chain and the input
+//! polyline).
 //!
 //! Pipeline per curve: Schneider smoothing to a G1 cubic spline
 //! ([`spline::schneider`](crate::spline::schneider)), then the floating
@@ -11,9 +15,9 @@
 //!
 //! The check samples the chain at arc step `h` with `κ_max h²/8 ≤ T/64`: a
 //! curve of curvature at most `κ` is within its sagitta `κh²/8` of its
-//! chords, so `F(chain, input) ≤ F(samples, input) + T/64`, and the test
-//! is `F(samples, input) ≤ T − sagitta`. The reported distance is that
-//! bound, never an underestimate.
+//! chords, so `d(chain, input) ≤ d(samples, input) + T/64` for either
+//! distance, and the test is `d(samples, input) ≤ T − sagitta`. The
+//! reported distance is that bound, never an underestimate.
 //!
 //! Failure modes the floating tangents paper names, and what is done:
 //! * too few elements on a long curve: the chain cuts corners. The search
@@ -35,7 +39,7 @@ use glam::DVec3;
 
 use crate::fit::{fit_spline_with, FitError, FitOptions, FitScratch};
 use crate::helix::PiecewiseHelix;
-use crate::metrics::{frechet_polyline, frechet_within};
+use crate::metrics::{frechet_polyline, frechet_within, ordered_distance, ordered_within};
 use crate::spline::schneider::{fit_polyline, PolylineFitError, SchneiderOptions};
 use crate::spline::{BezierSpline, SplineError};
 
@@ -50,6 +54,22 @@ pub enum ElementCount {
     Tolerance(f64),
 }
 
+/// How the distance between a chain and its input is measured.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Distance {
+    /// The input's points must lie within the tolerance of the chain, in
+    /// order, the first and last at its ends
+    /// ([`ordered_within`](crate::metrics::ordered_within)): the Fréchet
+    /// distance with the input taken as its samples. The default.
+    #[default]
+    Ordered,
+    /// The continuous Fréchet distance between the chain and the input
+    /// polyline ([`frechet_within`](crate::metrics::frechet_within)). It
+    /// also charges the input's own chords: on a bend of radius `R` sampled
+    /// every `h`, no smooth curve gets closer than `h²/8R`.
+    Frechet,
+}
+
 /// Options of [`fit_polyline_chain`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdaptiveOptions {
@@ -60,6 +80,8 @@ pub struct AdaptiveOptions {
     pub smoothing: Option<f64>,
     /// Cap on `N` per curve.
     pub max_elements: usize,
+    /// The distance the tolerance is measured in.
+    pub distance: Distance,
     /// Passed to the floating tangents fit.
     pub fit: FitOptions,
 }
@@ -70,6 +92,7 @@ impl AdaptiveOptions {
             count,
             smoothing: None,
             max_elements: 4096,
+            distance: Distance::Ordered,
             fit: FitOptions::new(1),
         }
     }
@@ -156,7 +179,8 @@ pub fn fit_polyline_chain(
             let mut try_n = |n: usize| -> Option<(PiecewiseHelix, bool)> {
                 fits += 1;
                 let chain = fit_n(n).ok()?;
-                let ok = !inverted(&chain, &spline) && chain_within(&chain, points, t);
+                let ok =
+                    !inverted(&chain, &spline) && chain_within(&chain, points, t, opts.distance);
                 Some((chain, ok))
             };
             // Exponential search for a passing N, keeping the last failure.
@@ -199,7 +223,7 @@ pub fn fit_polyline_chain(
                         // Every N failed to fit at all: report the last error.
                         None => fit_n(opts.max_elements)?,
                     };
-                    let frechet = chain_frechet(&chain, points, smoothing);
+                    let frechet = chain_frechet(&chain, points, smoothing, opts.distance);
                     return Ok(ChainFit {
                         chain,
                         frechet,
@@ -211,7 +235,7 @@ pub fn fit_polyline_chain(
             }
         }
     };
-    let frechet = chain_frechet(&chain, points, tol.unwrap_or(smoothing));
+    let frechet = chain_frechet(&chain, points, tol.unwrap_or(smoothing), opts.distance);
     Ok(ChainFit {
         frechet,
         within_tolerance: tol.map_or(true, |t| frechet <= t),
@@ -256,13 +280,13 @@ fn inverted(chain: &PiecewiseHelix, spline: &BezierSpline) -> bool {
 
 /// Chain samples at an arc step whose sagitta is at most `tol/64`, and
 /// that sagitta.
-fn chain_samples(chain: &PiecewiseHelix, tol: f64) -> (Vec<DVec3>, f64) {
+pub fn chain_samples(chain: &PiecewiseHelix, tol: f64) -> (Vec<DVec3>, f64) {
     let kappa = chain
         .elements()
         .iter()
         .fold(0.0f64, |k, e| k.max(e.curvature.abs()));
     let length = chain.length();
-    let n = chain.len();
+    let n = chain.len().max(1);
     // κ h²/8 ≤ tol/64  ⇔  h ≤ √(tol/(8κ)).
     let h = if kappa > 0.0 {
         (tol / (8.0 * kappa)).sqrt()
@@ -274,15 +298,29 @@ fn chain_samples(chain: &PiecewiseHelix, tol: f64) -> (Vec<DVec3>, f64) {
     (chain.sample(m), kappa * step * step / 8.0)
 }
 
-fn chain_within(chain: &PiecewiseHelix, input: &[DVec3], tol: f64) -> bool {
+/// `d(chain, input) ≤ tol`, conservatively: the chain is replaced by
+/// samples whose chords are within their sagitta of it, and the test is run
+/// at `tol − sagitta` (see the module docs).
+pub fn chain_within(chain: &PiecewiseHelix, input: &[DVec3], tol: f64, d: Distance) -> bool {
     let (s, sag) = chain_samples(chain, tol);
-    tol > sag && frechet_within(&s, input, tol - sag).unwrap_or(false)
+    tol > sag
+        && match d {
+            Distance::Ordered => ordered_within(input, &s, tol - sag),
+            Distance::Frechet => frechet_within(&s, input, tol - sag),
+        }
+        .unwrap_or(false)
 }
 
-/// Fréchet bound of the chain against the input (see the module docs).
-fn chain_frechet(chain: &PiecewiseHelix, input: &[DVec3], scale: f64) -> f64 {
-    let (s, sag) = chain_samples(chain, scale);
-    frechet_polyline(&s, input, 1e-3).map_or(f64::INFINITY, |f| f + sag)
+/// Upper bound on `d(chain, input)`, to 1e-3 relative plus the sampling
+/// sagitta; `scale` (the tolerance, or the expected distance) sets the
+/// sampling.
+pub fn chain_frechet(chain: &PiecewiseHelix, input: &[DVec3], scale: f64, d: Distance) -> f64 {
+    let (s, sag) = chain_samples(chain, scale.max(1e-300));
+    match d {
+        Distance::Ordered => ordered_distance(input, &s, 1e-3),
+        Distance::Frechet => frechet_polyline(&s, input, 1e-3),
+    }
+    .map_or(f64::INFINITY, |f| f + sag)
 }
 
 #[cfg(test)]
@@ -318,7 +356,7 @@ mod tests {
                 };
                 let g = fit_polyline_chain(&pts, &o).unwrap();
                 assert!(
-                    !chain_within(&g.chain, &pts, t),
+                    !chain_within(&g.chain, &pts, t, Distance::Ordered),
                     "T = {t}: N − 1 = {} also passes",
                     n - 1
                 );

@@ -27,6 +27,7 @@
 pub mod adaptive;
 pub mod backend;
 pub mod cli;
+pub mod compress;
 pub mod euler;
 pub mod fit;
 pub mod gpu;

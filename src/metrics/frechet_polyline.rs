@@ -174,6 +174,88 @@ pub fn frechet_polyline(p: &[DVec3], q: &[DVec3], rel_tol: f64) -> Result<f64, M
     Ok(hi)
 }
 
+/// Do the points `p` lie within `eps` of the polyline `q` *in order*:
+/// are there positions `0 = t₀ ≤ t₁ ≤ … ≤ t_m = end` along `q` with
+/// `|pᵢ − q(tᵢ)| ≤ eps`? This is the Fréchet distance with `p` taken as
+/// its vertices only (discrete) and `q` as a curve (continuous): what a
+/// fit of sampled data can be held to. The continuous distance between the
+/// polylines also charges the input's own chords (a smooth curve through
+/// samples spaced `h` on a bend of radius `R` is `h²/8R` from their
+/// chords), a floor no fit can get under; this one does not, and it still
+/// forbids going back, skipping a stretch or ending elsewhere.
+///
+/// Greedy (each point at the earliest admissible position after the
+/// previous one) is exact for this decision: an earlier position never
+/// removes options for the points after it. `O(m + n)` segment tests plus
+/// one scan per point of the segments it skips.
+pub fn ordered_within(p: &[DVec3], q: &[DVec3], eps: f64) -> Result<bool, MetricsError> {
+    check(p)?;
+    check(q)?;
+    Ok(ordered(p, q, eps))
+}
+
+fn ordered(p: &[DVec3], q: &[DVec3], eps: f64) -> bool {
+    if !(eps >= 0.0) {
+        return false;
+    }
+    let eps2 = eps * eps;
+    let last = p.len() - 1;
+    if p[0].distance_squared(q[0]) > eps2 || p[last].distance_squared(q[q.len() - 1]) > eps2 {
+        return false;
+    }
+    if q.len() == 1 {
+        return p.iter().all(|x| x.distance_squared(q[0]) <= eps2);
+    }
+    if last == 0 {
+        return true; // one point, matched to both ends
+    }
+    // Current position: segment j, parameter u in it.
+    let (mut j, mut u) = (0usize, 0.0f64);
+    for x in &p[1..last] {
+        loop {
+            if let Some((a, b)) = free_interval(*x, q[j], q[j + 1], eps2) {
+                if b >= u {
+                    u = a.max(u);
+                    break;
+                }
+            }
+            j += 1;
+            u = 0.0;
+            if j + 1 >= q.len() {
+                return false;
+            }
+        }
+    }
+    // The last point goes to the end, which is never before the position.
+    true
+}
+
+/// The smallest `eps` for which [`ordered_within`] holds, to `rel_tol`
+/// (returns an upper bound `≤ (1 + rel_tol)·exact`).
+pub fn ordered_distance(p: &[DVec3], q: &[DVec3], rel_tol: f64) -> Result<f64, MetricsError> {
+    check(p)?;
+    check(q)?;
+    // Bounds: the end points; and the discrete Fréchet distance, which
+    // couples every vertex of p in order with a vertex of q.
+    let mut lo = p[0]
+        .distance(q[0])
+        .max(p[p.len() - 1].distance(q[q.len() - 1]));
+    let mut hi = super::discrete_frechet(p, q)?;
+    if ordered(p, q, lo) {
+        return Ok(lo);
+    }
+    let rel_tol = rel_tol.max(4.0 * f64::EPSILON);
+    while hi - lo > rel_tol * hi && hi > 1e-300 {
+        let mid = 0.5 * (lo + hi);
+        if ordered(p, q, mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Ok(hi)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -230,6 +312,35 @@ mod tests {
         assert!(!frechet_within(&q, &q, f64::NAN).unwrap());
     }
 
+    #[test]
+    fn ordered_distance_ignores_chords_but_not_order() {
+        // Samples of a circle against a fine polygon of the same circle:
+        // the vertices lie on it (distance ~0), while the continuous
+        // distance pays the coarse chords' sagitta.
+        let circle = |n: usize| -> Vec<DVec3> {
+            (0..=n)
+                .map(|k| {
+                    let a = std::f64::consts::PI * k as f64 / n as f64;
+                    v(a.cos(), a.sin())
+                })
+                .collect()
+        };
+        let (coarse, fine) = (circle(6), circle(6000));
+        let d = ordered_distance(&coarse, &fine, 1e-9).unwrap();
+        assert!(d < 1e-6, "{d}");
+        let f = frechet_polyline(&coarse, &fine, 1e-9).unwrap();
+        let sagitta = 1.0 - (std::f64::consts::PI / 12.0).cos();
+        assert!((f - sagitta).abs() < 1e-3, "{f} vs {sagitta}");
+        // Order: the same points reversed in the middle are far.
+        let mut shuffled = coarse.clone();
+        shuffled.swap(2, 4);
+        assert!(ordered_distance(&shuffled, &fine, 1e-9).unwrap() > 0.5);
+        // A point that the curve does not pass is charged.
+        let mut off = coarse.clone();
+        off[3] += v(0.0, 0.25);
+        assert!((ordered_distance(&off, &fine, 1e-9).unwrap() - 0.25).abs() < 1e-6);
+    }
+
     fn densify(p: &[DVec3], k: usize) -> Vec<DVec3> {
         let mut out = vec![p[0]];
         for w in p.windows(2) {
@@ -263,6 +374,11 @@ mod tests {
             let dd = crate::metrics::discrete_frechet(&pd, &qd).unwrap();
             let spacing = pd.windows(2).chain(qd.windows(2)).map(|w| w[0].distance(w[1])).fold(0.0, f64::max);
             prop_assert!(dd >= f * (1.0 - 1e-9) - 1e-12 && dd <= f + spacing, "densified {dd} vs {f} (h = {spacing})");
+            // The ordered vertex distance lies between the directed
+            // vertex-to-polyline distance and the continuous one.
+            let o = ordered_distance(&p, &q, 1e-10).unwrap();
+            let hd = crate::metrics::hausdorff_directed(&p, &q).unwrap();
+            prop_assert!(hd <= o * (1.0 + 1e-9) + 1e-12 && o <= f * (1.0 + 1e-9) + 1e-12, "{hd} {o} {f}");
         }
     }
 }

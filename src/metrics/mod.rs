@@ -18,7 +18,7 @@ mod hausdorff;
 pub use complexity::{complexity_cubic, complexity_cubics};
 pub use error::MetricsError;
 pub use frechet::{discrete_frechet, discrete_frechet_with_buf};
-pub use frechet_polyline::{frechet_polyline, frechet_within};
+pub use frechet_polyline::{frechet_polyline, frechet_within, ordered_distance, ordered_within};
 pub use hausdorff::{
     hausdorff, hausdorff_directed, hausdorff_vertices, hausdorff_vertices_directed,
 };
