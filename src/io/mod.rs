@@ -24,6 +24,7 @@ pub mod bytes;
 pub mod format;
 pub mod hair;
 pub mod polyline;
+mod spool;
 pub mod tck;
 pub mod trk;
 pub mod vtk;
