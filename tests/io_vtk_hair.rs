@@ -658,9 +658,9 @@ fn hot_ranges(
 ) -> Vec<std::ops::Range<usize>> {
     let n = bytes.len();
     if ext == "hair" {
-        return vec![0..n.min(200)];
+        return std::iter::once(0..n.min(200)).collect();
     }
-    let mut r = vec![0..n.min(160)];
+    let mut r: Vec<_> = std::iter::once(0..n.min(160)).collect();
     for kw in [
         &b"POINTS"[..],
         b"VERTICES",
@@ -887,6 +887,9 @@ fn fuzz_shared_files_never_panic() {
 // ---------------------------------------------------------------------------
 // Hostile and broken files: errors that say what, where and which file
 
+/// A hostile file: name, bytes, what the message must say, which curve.
+type Case = (&'static str, Vec<u8>, Vec<&'static str>, Option<u64>);
+
 fn assert_error(e: &IoError, path: &Path, needles: &[&str]) {
     let msg = e.to_string();
     assert_eq!(e.path, path, "{msg}");
@@ -917,7 +920,7 @@ fn be_i32s(v: &[i32]) -> Vec<u8> {
 fn hostile_vtk_files() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let cases: Vec<(&str, Vec<u8>, Vec<&str>, Option<u64>)> = vec![
+    let cases: Vec<Case> = vec![
         ("magic", b"# vtk DataFile Versoin 3.0\nx\nASCII\nDATASET POLYDATA\n".to_vec(), vec!["not a VTK legacy file", "line 1"], None),
         ("empty", Vec::new(), vec!["not a VTK legacy file"], None),
         (
@@ -999,6 +1002,12 @@ fn hostile_vtk_files() {
             Some(1),
         ),
         (
+            "binary_lines_size_too_big",
+            [bin_lines(1, 5).as_slice(), &be_i32s(&[3, 0, 1, 2, 0])].concat(),
+            vec!["LINES announces 5 values, but its 1 lines hold 4"],
+            None,
+        ),
+        (
             "binary_index_out_of_range",
             [bin_lines(1, 3).as_slice(), &be_i32s(&[2, 0, 3])].concat(),
             vec!["index 3, out of range", "curve 0", "byte 117"],
@@ -1006,13 +1015,13 @@ fn hostile_vtk_files() {
         ),
         (
             "offsets_decrease",
-            format!("# vtk DataFile Version 5.1\nbad\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 2 0 0\nLINES 3 3\nOFFSETS vtktypeint64\n0 2 1\nCONNECTIVITY vtktypeint64\n0 1 2\n").into_bytes(),
+            "# vtk DataFile Version 5.1\nbad\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 2 0 0\nLINES 3 3\nOFFSETS vtktypeint64\n0 2 1\nCONNECTIVITY vtktypeint64\n0 1 2\n".as_bytes().to_vec(),
             vec!["OFFSETS[2] = 1", "must not decrease", "curve 1"],
             Some(1),
         ),
         (
             "float_offsets",
-            format!("# vtk DataFile Version 5.1\nbad\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 2 0 0\nLINES 2 3\nOFFSETS float\n0 3\nCONNECTIVITY vtktypeint64\n0 1 2\n").into_bytes(),
+            "# vtk DataFile Version 5.1\nbad\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 2 0 0\nLINES 2 3\nOFFSETS float\n0 3\nCONNECTIVITY vtktypeint64\n0 1 2\n".as_bytes().to_vec(),
             vec!["OFFSETS has type `float`, not an integer type"],
             None,
         ),
@@ -1020,6 +1029,12 @@ fn hostile_vtk_files() {
             "cell_data_count",
             format!("{HEAD}ASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 2 0 0\nLINES 1 4\n3 0 1 2\nCELL_DATA 2\nSCALARS p int\nLOOKUP_TABLE default\n1 2\n").into_bytes(),
             vec!["CELL_DATA 2 does not match the 1 cells"],
+            None,
+        ),
+        (
+            "point_data_count",
+            format!("{HEAD}ASCII\nDATASET POLYDATA\nPOINTS 1 float\n0 0 0\nPOINT_DATA 2\nSCALARS t float\nLOOKUP_TABLE default\n1 2\n").into_bytes(),
+            vec!["POINT_DATA 2 does not match the 1 points", "line 7"],
             None,
         ),
         (
@@ -1094,7 +1109,7 @@ fn hostile_hair_files() {
     nan[128 + 6 + 24..128 + 6 + 28].copy_from_slice(&f32::NAN.to_le_bytes());
     let mut bad_sum = good.clone();
     bad_sum[128..130].copy_from_slice(&5u16.to_le_bytes());
-    let cases: Vec<(&str, Vec<u8>, Vec<&str>, Option<u64>)> = vec![
+    let cases: Vec<Case> = vec![
         (
             "magic",
             [b"HAIX", &good[4..]].concat(),

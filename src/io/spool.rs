@@ -85,3 +85,30 @@ impl Spool {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chunks_are_whole_values_and_cover_everything() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out.bin");
+        let mut s = Spool::new(&target).unwrap();
+        // 3-byte values, more than one read buffer's worth, odd total.
+        let data: Vec<u8> = (0..3 * 50_001u32).map(|i| (i % 251) as u8).collect();
+        for piece in data.chunks(1000) {
+            s.write(piece).unwrap();
+        }
+        let mut back = Vec::new();
+        s.for_each_chunk(3, |c| {
+            assert_eq!(c.len() % 3, 0);
+            back.extend_from_slice(c);
+            Ok(())
+        })
+        .unwrap();
+        assert!(back == data);
+        // Unnamed: nothing is left next to the target.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+}

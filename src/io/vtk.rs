@@ -572,8 +572,9 @@ impl Src {
         txt: impl Fn(&str) -> Option<T>,
     ) -> Result<(), IoError> {
         self.check_room(n, dtype.size(), what)?;
-        // Bounded by the file size now.
-        out.reserve(n as usize);
+        // BINARY: the bytes are there, so `n` is bounded by the file size.
+        // ASCII: only loosely bounded (2 bytes a value), so let it grow.
+        out.reserve(if self.binary { n } else { n.min(1 << 16) } as usize);
         if self.binary {
             let size = dtype.size();
             let per_chunk = ((1 << 16) / size) as u64;
@@ -799,7 +800,8 @@ struct Scan {
     /// Cells per section: vertices, lines, polygons, strips.
     cells: [u64; 4],
     lines: Option<(Lines, u64, u64)>,
-    point_data: Option<u64>,
+    /// Tuple counts of the attribute sections, and where they were.
+    point_data: Option<(u64, String)>,
     cell_data: Option<(u64, String)>,
     point_arrays: Vec<Array>,
     cell_arrays: Vec<Array>,
@@ -834,12 +836,13 @@ impl VtkReader {
         let scan = scan(&mut src)?;
 
         let n_points = scan.points.as_ref().map_or(0, Points::count);
-        if let Some(n) = scan.point_data {
-            if n != n_points {
+        if let Some((n, at)) = &scan.point_data {
+            if *n != n_points {
                 return Err(IoError::new(
                     path,
                     format!("POINT_DATA {n} does not match the {n_points} points"),
-                ));
+                )
+                .at(at.clone()));
             }
         }
         let total_cells = scan.cells.iter().sum::<u64>();
@@ -1199,7 +1202,7 @@ fn scan(src: &mut Src) -> Result<Scan, IoError> {
                 }
             }
             b"POINT_DATA" => {
-                s.point_data = Some(src.count("the POINT_DATA count")?);
+                s.point_data = Some((src.count("the POINT_DATA count")?, at));
                 assoc = Assoc::Point;
             }
             b"CELL_DATA" => {
@@ -1394,7 +1397,7 @@ fn attr_type(
 /// One attribute of a POINT_DATA or CELL_DATA section (after its keyword).
 fn read_attribute(src: &mut Src, s: &mut Scan, assoc: Assoc, kw: &[u8]) -> Result<(), IoError> {
     let tuples = match assoc {
-        Assoc::Point => s.point_data.unwrap_or(0),
+        Assoc::Point => s.point_data.as_ref().map_or(0, |c| c.0),
         _ => s.cell_data.as_ref().map_or(0, |c| c.0),
     };
     let kw_s = String::from_utf8_lossy(kw).into_owned();
@@ -1494,7 +1497,7 @@ fn read_field(src: &mut Src, s: &mut Scan, assoc: Assoc) -> Result<(), IoError> 
     let field = decode_name(&src.tok);
     let k = src.count("the FIELD array count")?;
     let tuples = match assoc {
-        Assoc::Point => s.point_data,
+        Assoc::Point => s.point_data.as_ref().map(|c| c.0),
         Assoc::Cell => s.cell_data.as_ref().map(|c| c.0),
         Assoc::Dataset => None,
     };
