@@ -310,11 +310,13 @@ fn trk_carries_per_point_and_per_curve_values_from_other_sources() {
     ]);
     let curves = vec![
         Curve {
+            id: None,
             points: vec![DVec3::new(1.0, 2.0, 3.0), DVec3::new(-10.25, 7.5, 0.125)],
             point_data: vec![0.5, 1.0, 0.0, 0.0, 0.25, 0.0, 1.0, 0.0],
             curve_data: vec![11.0],
         },
         Curve {
+            id: None,
             points: vec![DVec3::new(3.0, -2.0, 1.0)],
             point_data: vec![0.75, 0.0, 0.0, 1.0],
             curve_data: vec![0.0],
@@ -354,6 +356,7 @@ fn writers_refuse_what_the_format_cannot_hold_and_leave_nothing_behind() {
     meta.point_data_names = vec!["fa".into()];
     let mut w = io::create_writer(&p, None, &meta).unwrap();
     w.write_curve(&Curve {
+        id: None,
         points: vec![DVec3::ZERO],
         point_data: vec![1.0],
         curve_data: vec![],
@@ -366,6 +369,7 @@ fn writers_refuse_what_the_format_cannot_hold_and_leave_nothing_behind() {
     assert!(e.reason.contains("per-point values"), "{e}");
     let e = w
         .write_curve(&Curve {
+            id: None,
             points: vec![DVec3::new(0.0, f64::INFINITY, 0.0)],
             point_data: vec![1.0],
             curve_data: vec![],

@@ -717,6 +717,7 @@ impl TrkReader {
         let curve_data = self.buf.chunks_exact(4).map(|b| get_f32(b, 0, e)).collect();
         self.index += 1;
         Ok(Some(Curve {
+            id: None,
             points,
             point_data,
             curve_data,
