@@ -35,6 +35,8 @@ pub struct CompressOptions {
     /// Share of the tolerance given to the fit; the rest is the
     /// quantisation's (compact storage only).
     pub fit_share: f64,
+    /// Share of the fit's tolerance given to the Schneider smoothing spline.
+    pub smoothing_share: f64,
     pub max_elements: usize,
     pub distance: Distance,
 }
@@ -45,6 +47,7 @@ impl CompressOptions {
             count,
             storage,
             fit_share: 0.8,
+            smoothing_share: 0.5,
             max_elements: 4096,
             distance: Distance::Ordered,
         }
@@ -96,7 +99,7 @@ pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome 
     let aopts = AdaptiveOptions {
         max_elements: opts.max_elements,
         distance: opts.distance,
-        smoothing: tol.map(|t| 0.5 * opts.fit_share * t),
+        smoothing: tol.map(|t| opts.smoothing_share * opts.fit_share * t),
         ..AdaptiveOptions::new(count)
     };
     let fit = match fit_polyline_chain(points, &aopts) {

@@ -1,8 +1,10 @@
 //! The `strandfit` command line: `helix`, `fit`, `sample`, `evaluate`,
-//! `integrate`, `inspect`, `convert`, `bench`.
+//! `integrate`, `compress`, `decompress`, `inspect`, `convert`, `bench`.
 
 mod bench_cmd;
+mod compress_cmd;
 mod convert_cmd;
+mod decompress_cmd;
 mod evaluate_cmd;
 mod fit_cmd;
 mod helix_cmd;
@@ -89,6 +91,13 @@ pub enum Command {
     /// length) from JSON Lines records {"start","tangent","normal","kappa0",
     /// "gamma","tau0","delta","length"}: end point and frame, optionally samples.
     Integrate(IntegrateArgs),
+    /// Compress curves (.tck, .trk, .vtk, .hair, .json, .csv) into a .sfh
+    /// container of piecewise helices: the fewest elements per curve within
+    /// --tolerance, or --elements N, or --element-length S.
+    Compress(CompressArgs),
+    /// Decompress a .sfh container back to polylines (.tck, .trk, .vtk,
+    /// .hair, .json, .csv), in the source's coordinate convention.
+    Decompress(DecompressArgs),
     /// Summarise a curve file (.tck, .trk, .vtk, .hair, .json, .csv): header,
     /// counts, lengths, sizes and problems (empty or one-point curves,
     /// repeated points); stops at the first unreadable curve, naming it.
@@ -193,6 +202,83 @@ pub struct IntegrateArgs {
     pub output: Option<PathBuf>,
 }
 
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum StorageArg {
+    /// Quantised to the coarsest grids that keep each decoded curve within
+    /// the tolerance, delta- and entropy-coded.
+    Compact,
+    F32,
+    F64,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum DistanceArg {
+    /// The input's points lie within the tolerance of the chain, in order
+    /// (Fréchet distance with the input taken as its samples).
+    Ordered,
+    /// Continuous Fréchet distance to the input polyline (also charges the
+    /// input's chords: h²/8R on a bend of radius R sampled every h).
+    Frechet,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct CompressArgs {
+    /// Input curve file.
+    pub input: std::path::PathBuf,
+    /// Output container (.sfh). Written atomically.
+    #[arg(short, long)]
+    pub output: std::path::PathBuf,
+    /// Fewest elements per curve within this distance (input units).
+    #[arg(long)]
+    pub tolerance: Option<f64>,
+    /// Exactly N elements per curve.
+    #[arg(short = 'n', long)]
+    pub elements: Option<usize>,
+    /// About one element per this arc length.
+    #[arg(long)]
+    pub element_length: Option<f64>,
+    /// How parameters are stored.
+    #[arg(long, value_enum, default_value_t = StorageArg::Compact)]
+    pub storage: StorageArg,
+    /// The distance --tolerance is measured in.
+    #[arg(long, value_enum, default_value_t = DistanceArg::Ordered)]
+    pub distance: DistanceArg,
+    /// Cap on elements per curve.
+    #[arg(long, default_value_t = 4096)]
+    pub max_elements: usize,
+    /// Share of the tolerance the helix fit may use; the rest is left to
+    /// quantisation (compact storage).
+    #[arg(long, default_value_t = 0.8)]
+    pub fit_share: f64,
+    /// Share of the fit's tolerance the smoothing spline may use.
+    #[arg(long, default_value_t = 0.5)]
+    pub smoothing_share: f64,
+    /// Input format (default: from the extension).
+    #[arg(long)]
+    pub from: Option<String>,
+    /// Print a machine-readable report (ratio, distances, curves/s) on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct DecompressArgs {
+    /// Input container (.sfh).
+    pub input: std::path::PathBuf,
+    /// Output curve file. Written atomically.
+    #[arg(short, long)]
+    pub output: std::path::PathBuf,
+    /// Sample each curve every S (input units) along its arc length.
+    #[arg(long, conflicts_with = "points")]
+    pub step: Option<f64>,
+    /// Sample each curve at M points (default: as many as the input had).
+    #[arg(short = 'm', long)]
+    pub points: Option<usize>,
+    /// Output format (default: from the extension).
+    #[arg(long)]
+    pub to: Option<String>,
+}
+
 #[derive(clap::Args, Debug)]
 pub struct InspectArgs {
     /// The file to inspect.
@@ -254,6 +340,8 @@ pub fn main() -> ExitCode {
         Command::Sample(a) => cli.backend().and_then(|b| sample_cmd::run(a, &b)),
         Command::Evaluate(a) => cli.backend().and_then(|b| evaluate_cmd::run(a, &b)),
         Command::Integrate(a) => cli.backend().and_then(|b| integrate_cmd::run(a, &b)),
+        Command::Compress(a) => compress_cmd::run(a),
+        Command::Decompress(a) => decompress_cmd::run(a),
         Command::Inspect(a) => inspect_cmd::run(a),
         Command::Convert(a) => convert_cmd::run(a),
         Command::Bench(a) => cli.backend().and_then(|b| bench_cmd::run(a, &b)),

@@ -234,6 +234,9 @@ pub enum Shape {
 #[derive(Clone, Debug, PartialEq)]
 pub struct StoredCurve {
     pub id: Option<String>,
+    /// Points of the input curve, so that decompression can give back as
+    /// many by default.
+    pub source_points: u64,
     pub curve_data: Vec<f32>,
     pub shape: Shape,
 }
@@ -288,6 +291,7 @@ fn encode(out: &mut Vec<u8>, c: &StoredCurve, storage: Storage) -> Result<(), St
             out.extend_from_slice(id.as_bytes());
         }
     }
+    put_varint(out, c.source_points);
     for v in &c.curve_data {
         out.extend_from_slice(&v.to_le_bytes());
     }
@@ -415,6 +419,7 @@ fn decode(c: &mut Cursor, storage: Storage, n_curve_data: usize) -> Result<Store
                 .map_err(|_| "the id is not UTF-8".to_string())?,
         ),
     };
+    let source_points = c.varint("the source point count")?;
     let mut curve_data = Vec::with_capacity(n_curve_data);
     for _ in 0..n_curve_data {
         curve_data.push(c.f32("the per-curve data")?);
@@ -516,6 +521,7 @@ fn decode(c: &mut Cursor, storage: Storage, n_curve_data: usize) -> Result<Store
     };
     Ok(StoredCurve {
         id,
+        source_points,
         curve_data,
         shape,
     })
@@ -865,11 +871,13 @@ mod tests {
         let mut v = vec![
             StoredCurve {
                 id: Some("é-1".into()),
+                source_points: 0,
                 curve_data: vec![1.5],
                 shape: Shape::Empty,
             },
             StoredCurve {
                 id: None,
+                source_points: 1,
                 curve_data: vec![-2.0],
                 shape: Shape::Points(vec![DVec3::new(1.0, 2.0, 3.0)]),
             },
@@ -878,6 +886,7 @@ mod tests {
             let c = chain(s);
             v.push(StoredCurve {
                 id: Some(format!("c{s}")),
+                source_points: 40 + s,
                 curve_data: vec![s as f32],
                 shape: match storage {
                     Storage::Compact => Shape::Quantized(QuantChain::quantize(&c, -12, -14)),
@@ -913,7 +922,10 @@ mod tests {
             let back: Vec<StoredCurve> = r.collect::<Result<_, _>>().unwrap();
             assert_eq!(back.len(), cs.len());
             for (a, b) in cs.iter().zip(&back) {
-                assert_eq!((&a.id, &a.curve_data), (&b.id, &b.curve_data));
+                assert_eq!(
+                    (&a.id, a.source_points, &a.curve_data),
+                    (&b.id, b.source_points, &b.curve_data)
+                );
                 match (&a.shape, &b.shape, storage) {
                     (Shape::Chain(x), Shape::Chain(y), Storage::F64) => assert_eq!(x, y),
                     (Shape::Chain(x), Shape::Chain(y), _) => {
@@ -1017,6 +1029,7 @@ mod tests {
         let e = w
             .write(&StoredCurve {
                 id: None,
+                source_points: 0,
                 curve_data: vec![],
                 shape: Shape::Empty,
             })
@@ -1025,6 +1038,7 @@ mod tests {
         let e = w
             .write(&StoredCurve {
                 id: None,
+                source_points: 0,
                 curve_data: vec![0.0],
                 shape: Shape::Quantized(QuantChain::quantize(&chain(0), -8, -8)),
             })
