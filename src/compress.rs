@@ -113,20 +113,17 @@ pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome 
     let elements = params.elements.len();
     match opts.storage {
         Storage::F64 | Storage::F32 => {
-            let frechet = if opts.storage == Storage::F32 {
+            let (frechet, within) = if opts.storage == Storage::F32 {
                 // f32 rounding: measure what will be decoded.
-                let decoded = round_f32(&params);
-                chain_frechet(
-                    &PiecewiseHelix::from_params(&decoded),
-                    points,
-                    fit.frechet,
-                    opts.distance,
-                )
+                let decoded = PiecewiseHelix::from_params(&round_f32(&params));
+                let f = chain_frechet(&decoded, points, fit.frechet, opts.distance);
+                let within = tol.map_or(true, |t| chain_within(&decoded, points, t, opts.distance));
+                (f, within)
             } else {
-                fit.frechet
+                (fit.frechet, fit.within_tolerance)
             };
             CurveOutcome {
-                within: tol.map_or(true, |t| frechet <= t),
+                within,
                 shape: Shape::Chain(params),
                 frechet,
                 elements,
@@ -148,7 +145,8 @@ pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome 
                 if chain_within(&decoded, points, budget, opts.distance) {
                     let frechet = chain_frechet(&decoded, points, budget, opts.distance);
                     return CurveOutcome {
-                        within: tol.map_or(true, |t| frechet <= t),
+                        // The test at `budget` (= the tolerance) passed.
+                        within: true,
                         shape: Shape::Quantized(qc),
                         frechet,
                         elements,

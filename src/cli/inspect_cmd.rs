@@ -11,6 +11,9 @@ use crate::io::inspect::CurveStats;
 use crate::io::{open_reader, Format};
 
 pub fn run(args: &InspectArgs) -> Result<()> {
+    if crate::io::container::is_container(&args.input) {
+        return inspect_container(args);
+    }
     let format = args.format.as_deref().map(parse_format).transpose()?;
     let bytes = std::fs::metadata(&args.input)
         .map_err(|e| anyhow::anyhow!("{}: cannot stat: {e}", args.input.display()))?
@@ -117,4 +120,86 @@ fn print_text(path: &Path, bytes: u64, meta: &crate::io::Metadata, s: &CurveStat
         "  problems        {} empty, {} single-point curves, {} repeated consecutive points",
         s.empty_curves, s.single_point_curves, s.repeated_points
     );
+}
+
+/// Summary of a `.sfh` container: its header, and counts read from every
+/// block (which also verifies every checksum).
+fn inspect_container(args: &InspectArgs) -> Result<()> {
+    use crate::io::container::{ContainerReader, Shape};
+    let bytes = std::fs::metadata(&args.input)?.len();
+    let mut reader = ContainerReader::open(&args.input)?;
+    let header = reader.header().clone();
+    let (mut curves, mut elements, mut verbatim, mut empty, mut source_points) =
+        (0u64, 0u64, 0u64, 0u64, 0u64);
+    let mut length = 0.0;
+    let mut error = None;
+    for c in reader.by_ref() {
+        match c {
+            Ok(c) => {
+                curves += 1;
+                source_points += c.source_points;
+                match &c.shape {
+                    Shape::Empty => empty += 1,
+                    Shape::Points(_) => verbatim += 1,
+                    Shape::Chain(ch) => {
+                        elements += ch.elements.len() as u64;
+                        length += ch.elements.iter().map(|e| e.length).sum::<f64>();
+                    }
+                    Shape::Quantized(_) => {}
+                }
+            }
+            Err(e) => {
+                error = Some(e);
+                break;
+            }
+        }
+    }
+    if args.json {
+        let report = json!({
+            "file": args.input.display().to_string(),
+            "format": "sfh",
+            "bytes": bytes,
+            "header": header,
+            "curves": curves,
+            "elements": elements,
+            "verbatim_curves": verbatim,
+            "empty_curves": empty,
+            "source_points": source_points,
+            "helix_length": length,
+            "bytes_per_curve": if curves > 0 { bytes as f64 / curves as f64 } else { 0.0 },
+            "error": error.as_ref().map(|e| e.to_string()),
+        });
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "{}: strandfit container, {bytes} bytes",
+            args.input.display()
+        );
+        println!("  storage         {:?}, {}", header.storage, header.mode);
+        println!(
+            "  source          {} ({}), units {}",
+            header.source.format,
+            header.source.file.as_deref().unwrap_or("?"),
+            header.source.units.as_deref().unwrap_or("unknown")
+        );
+        println!("  curves          {curves} ({verbatim} verbatim, {empty} empty), {source_points} source points");
+        println!(
+            "  elements        {elements} (mean {:.2} per curve), helix length {length:.6e}",
+            elements as f64 / curves.max(1) as f64
+        );
+        println!(
+            "  bytes/curve     {:.2}",
+            bytes as f64 / curves.max(1) as f64
+        );
+        if !header.dropped_point_data.is_empty() {
+            println!(
+                "  dropped         per-point data {}",
+                header.dropped_point_data.join(", ")
+            );
+        }
+    }
+    match error {
+        Some(e) => Err(anyhow::anyhow!("{e} (after {curves} complete curves)")),
+        None => Ok(()),
+    }
 }

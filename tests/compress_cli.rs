@@ -1,0 +1,320 @@
+//! `compress` / `decompress` / `inspect` end to end: read → compress →
+//! decompress → write → read, on the bundled tractograms (every CI run) and
+//! on the shared field lines and hair when `../shared/data` (or
+//! `STRANDFIT_SHARED_DATA`) has them. The deviation is measured here,
+//! independently of the compressor: each input curve against its
+//! decompressed polyline (sampled every 0.01 input units), in the ordered
+//! vertex distance the tolerance promises (`metrics::ordered_distance`).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use strandfit::io::read_all;
+use strandfit::metrics::ordered_distance;
+
+fn strandfit(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_strandfit"))
+        .args(args)
+        .output()
+        .expect("run strandfit")
+}
+
+fn ok(args: &[&str]) -> std::process::Output {
+    let out = strandfit(args);
+    assert!(
+        out.status.success(),
+        "strandfit {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn bundled(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/fibres")
+        .join(rel)
+}
+
+fn shared(rel: &str) -> Option<PathBuf> {
+    let root = std::env::var_os("STRANDFIT_SHARED_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    let p = root.join(rel);
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("SKIPPED: shared data file {} not found", p.display());
+        None
+    }
+}
+
+/// Compress `input` at `tol`, decompress to `ext`, and check every curve.
+/// Returns (container bytes, max deviation).
+fn round_trip(input: &Path, tol: f64, ext: &str, step: f64) -> (u64, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let sfh = dir.path().join("x.sfh");
+    let back = dir.path().join(format!("back.{ext}"));
+    let t = tol.to_string();
+    let out = ok(&[
+        "compress",
+        input.to_str().unwrap(),
+        "--tolerance",
+        &t,
+        "-o",
+        sfh.to_str().unwrap(),
+        "--json",
+    ]);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let s = step.to_string();
+    ok(&[
+        "decompress",
+        sfh.to_str().unwrap(),
+        "--step",
+        &s,
+        "-o",
+        back.to_str().unwrap(),
+    ]);
+    let (_, a) = read_all(input, None).unwrap();
+    let (_, b) = read_all(&back, None).unwrap();
+    assert_eq!(a.len(), b.len(), "{}: curve count", input.display());
+    let mut worst = 0.0f64;
+    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+        if x.points.is_empty() {
+            assert!(y.points.is_empty());
+            continue;
+        }
+        let d = ordered_distance(&x.points, &y.points, 1e-6).unwrap();
+        assert!(
+            d <= tol * (1.0 + 1e-6),
+            "{} curve {i}: deviation {d} > tolerance {tol}",
+            input.display()
+        );
+        worst = worst.max(d);
+    }
+    // The report's maximum bounds what we measure.
+    let reported = report["max_distance"].as_f64().unwrap();
+    assert!(
+        worst <= reported * (1.0 + 1e-3) + 1e-9,
+        "measured {worst} > reported {reported}"
+    );
+    assert_eq!(report["curves"].as_u64().unwrap(), a.len() as u64);
+    assert_eq!(report["over_tolerance"].as_u64().unwrap(), 0);
+    let bytes = std::fs::metadata(&sfh).unwrap().len();
+    assert_eq!(report["bytes_out"].as_u64().unwrap(), bytes);
+    eprintln!(
+        "{} T = {tol}: {} -> {bytes} bytes (ratio {:.2}), max deviation {worst:.4}",
+        input.display(),
+        report["bytes_in"],
+        report["ratio"].as_f64().unwrap()
+    );
+    (bytes, worst)
+}
+
+#[test]
+fn bundled_tractograms_round_trip_within_tolerance() {
+    for f in [
+        "dipy_fornix_tracks300.tck",
+        "dipy_fornix_tracks300.trk",
+        "dipy_EuDX_small_25.trk",
+        "dipy_minimal_bundles/AF_L.tck",
+    ] {
+        let p = bundled(f);
+        let ext = p.extension().unwrap().to_str().unwrap().to_string();
+        let (loose, _) = round_trip(&p, 0.5, &ext, 0.01);
+        let (tight, _) = round_trip(&p, 0.1, &ext, 0.01);
+        assert!(
+            loose < tight,
+            "{f}: a looser tolerance must give a smaller file"
+        );
+    }
+}
+
+#[test]
+fn fornix_container_is_small() {
+    // The fornix at 0.5 mm: the helices must beat storing the points
+    // (14,576 points × 12 bytes = 175 KB) by far.
+    let (bytes, _) = round_trip(&bundled("dipy_fornix_tracks300.tck"), 0.5, "tck", 0.05);
+    assert!(bytes < 175_000 / 8, "{bytes} bytes");
+}
+
+#[test]
+fn trk_comes_back_in_its_own_convention() {
+    // trk → sfh → trk keeps the affine, voxel sizes and header fields.
+    let src = bundled("dipy_fornix_tracks300.trk");
+    let dir = tempfile::tempdir().unwrap();
+    let sfh = dir.path().join("x.sfh");
+    let back = dir.path().join("back.trk");
+    ok(&[
+        "compress",
+        src.to_str().unwrap(),
+        "--tolerance",
+        "0.2",
+        "-o",
+        sfh.to_str().unwrap(),
+    ]);
+    ok(&[
+        "decompress",
+        sfh.to_str().unwrap(),
+        "-o",
+        back.to_str().unwrap(),
+    ]);
+    let (ma, a) = read_all(&src, None).unwrap();
+    let (mb, b) = read_all(&back, None).unwrap();
+    assert_eq!(ma.vox_to_world, mb.vox_to_world);
+    assert_eq!(ma.voxel_size, mb.voxel_size);
+    assert_eq!(ma.dimensions, mb.dimensions);
+    // Default sampling: as many points as the input curve had.
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.points.len(), y.points.len());
+    }
+}
+
+#[test]
+fn shared_field_lines_and_hair_round_trip() {
+    // Field lines are in solar radii: 1e-3 R☉ ≈ 700 km.
+    if let Some(p) = shared("fieldlines/pfss_fieldlines_every10th_ascii.vtk") {
+        round_trip(&p, 1e-3, "vtk", 1e-4);
+    }
+    if let Some(p) = shared("hair/synthetic_hair.hair") {
+        round_trip(&p, 0.5, "hair", 0.05);
+    }
+}
+
+#[test]
+fn one_point_and_empty_curves_are_kept_verbatim() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("odd.json");
+    std::fs::write(
+        &src,
+        r#"{"curves":[{"id":"one","points":[[1,2,3]]},{"id":"none","points":[]},
+            {"id":"same","points":[[0,0,0],[0,0,0]]},
+            {"id":"ok","points":[[0,0,0],[1,0,0],[2,0.5,0],[3,1.5,0.2]]}]}"#,
+    )
+    .unwrap();
+    let sfh = dir.path().join("x.sfh");
+    let out = ok(&[
+        "compress",
+        src.to_str().unwrap(),
+        "--tolerance",
+        "0.01",
+        "-o",
+        sfh.to_str().unwrap(),
+        "--json",
+    ]);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["verbatim"].as_u64(), Some(3));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("curve 0") && stderr.contains("fewer than two distinct points"),
+        "{stderr}"
+    );
+    let back = dir.path().join("back.json");
+    ok(&[
+        "decompress",
+        sfh.to_str().unwrap(),
+        "-o",
+        back.to_str().unwrap(),
+    ]);
+    let (_, b) = read_all(&back, None).unwrap();
+    let ids: Vec<_> = b.iter().map(|c| c.id.clone().unwrap()).collect();
+    assert_eq!(ids, ["one", "none", "same", "ok"]);
+    assert_eq!(b[0].points, vec![strandfit::DVec3::new(1.0, 2.0, 3.0)]);
+    assert!(b[1].points.is_empty());
+    assert_eq!(b[2].points.len(), 2);
+}
+
+#[test]
+fn bad_inputs_fail_cleanly_and_leave_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    // A truncated tractogram: the error names the file; no container.
+    let full = std::fs::read(bundled("dipy_fornix_tracks300.tck")).unwrap();
+    let cut = dir.path().join("cut.tck");
+    std::fs::write(&cut, &full[..full.len() / 2]).unwrap();
+    let sfh = dir.path().join("x.sfh");
+    let out = strandfit(&[
+        "compress",
+        cut.to_str().unwrap(),
+        "--tolerance",
+        "0.5",
+        "-o",
+        sfh.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(e.contains("cut.tck") && e.contains("curve"), "{e}");
+    assert!(!sfh.exists(), "a failed run leaves no container");
+
+    // A corrupted container: decompress fails, names it, writes nothing.
+    let good = dir.path().join("good.sfh");
+    ok(&[
+        "compress",
+        bundled("dipy_EuDX_small_25.tck").to_str().unwrap(),
+        "--tolerance",
+        "0.5",
+        "-o",
+        good.to_str().unwrap(),
+    ]);
+    let mut bytes = std::fs::read(&good).unwrap();
+    let n = bytes.len();
+    bytes[n / 2] ^= 0x40;
+    let bad = dir.path().join("bad.sfh");
+    std::fs::write(&bad, &bytes).unwrap();
+    let out_tck = dir.path().join("out.tck");
+    let out = strandfit(&[
+        "decompress",
+        bad.to_str().unwrap(),
+        "-o",
+        out_tck.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(e.contains("bad.sfh") && e.contains("checksum"), "{e}");
+    assert!(!out_tck.exists());
+
+    // Wrong magic, and options that make no sense.
+    let out = strandfit(&[
+        "decompress",
+        bundled("dipy_EuDX_small_25.tck").to_str().unwrap(),
+        "-o",
+        out_tck.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("wrong magic"));
+    for args in [
+        vec!["--tolerance", "0"],
+        vec!["--tolerance", "0.5", "-n", "3"],
+        vec![],
+    ] {
+        let mut a = vec![
+            "compress",
+            cut.to_str().unwrap(),
+            "-o",
+            sfh.to_str().unwrap(),
+        ];
+        a.extend(args.iter());
+        let out = strandfit(&a);
+        assert!(!out.status.success(), "{a:?}");
+    }
+}
+
+#[test]
+fn inspect_reports_containers_and_curve_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let sfh = dir.path().join("x.sfh");
+    let src = bundled("dipy_EuDX_small_25.trk");
+    ok(&[
+        "compress",
+        src.to_str().unwrap(),
+        "--tolerance",
+        "0.5",
+        "-o",
+        sfh.to_str().unwrap(),
+    ]);
+    let out = ok(&["inspect", sfh.to_str().unwrap(), "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["curves"].as_u64(), Some(60));
+    assert_eq!(r["header"]["source"]["format"], "trk");
+    let out = ok(&["inspect", src.to_str().unwrap(), "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["stats"]["curves"].as_u64(), Some(60));
+    assert_eq!(r["format"], "trk");
+}
