@@ -3,7 +3,8 @@
 //!
 //! ```text
 //! magic "\x89SFH\r\n\x1a\n" · version u16 · flags u16
-//! header: u32 length · u32 CRC-32 · JSON (storage, tolerance, source metadata)
+//! header: u32 JSON length · u32 stored length · u32 CRC-32 of the stored bytes
+//!         · deflated JSON (storage, tolerance, source metadata)
 //! blocks: "SFHB" · u32 curves · u32 raw length · u32 stored length · u8 encoding
 //!         · 3 zero bytes · u32 CRC-32 of the stored bytes · stored bytes
 //! end:    "SFHE" · u64 curves · u32 CRC-32 of the block CRCs
@@ -547,13 +548,19 @@ impl ContainerWriter {
         let mut out = AtomicFile::create(path)?;
         let json = serde_json::to_vec(&header)
             .map_err(|e| IoError::new(path, format!("cannot encode the header: {e}")))?;
-        let mut head = Vec::with_capacity(json.len() + 20);
+        // The header is deflated too: a .trk source's 1000-byte header
+        // (kept as hex) would otherwise cost 2 KB per file.
+        let mut z = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::best());
+        z.write_all(&json).map_err(|e| out.err(e))?;
+        let stored = z.finish().map_err(|e| out.err(e))?;
+        let mut head = Vec::with_capacity(stored.len() + 24);
         head.extend_from_slice(&MAGIC);
         head.extend_from_slice(&VERSION.to_le_bytes());
         head.extend_from_slice(&0u16.to_le_bytes());
         head.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        head.extend_from_slice(&crc32fast::hash(&json).to_le_bytes());
-        head.extend_from_slice(&json);
+        head.extend_from_slice(&(stored.len() as u32).to_le_bytes());
+        head.extend_from_slice(&crc32fast::hash(&stored).to_le_bytes());
+        head.extend_from_slice(&stored);
         out.write_all(&head).map_err(|e| out.err(e))?;
         Ok(ContainerWriter {
             out,
@@ -659,19 +666,33 @@ impl ContainerReader {
         if flags != 0 {
             return Err(src.error(format!("unknown flags {flags:#x} (reserved, must be 0)")));
         }
+        let raw_len = src.u32(Endian::Little, "the header length")?;
         let len = src.u32(Endian::Little, "the header length")?;
         let crc = src.u32(Endian::Little, "the header checksum")?;
-        if len > MAX_SECTION || len as u64 > src.remaining() {
+        if len > MAX_SECTION || raw_len > MAX_SECTION || len as u64 > src.remaining() {
             return Err(src.error(format!(
-                "header length {len} exceeds the file ({} bytes left)",
+                "header length {len} ({raw_len} inflated) exceeds the file ({} bytes left)",
                 src.remaining()
             )));
         }
-        let mut json = vec![0u8; len as usize];
-        src.read_exact(&mut json, "the header")?;
-        if crc32fast::hash(&json) != crc {
+        let mut stored = vec![0u8; len as usize];
+        src.read_exact(&mut stored, "the header")?;
+        if crc32fast::hash(&stored) != crc {
             return Err(
                 IoError::new(path, "header checksum mismatch (the file is corrupt)").at("header"),
+            );
+        }
+        let mut json = Vec::new();
+        flate2::read::DeflateDecoder::new(&stored[..])
+            .take(raw_len as u64 + 1)
+            .read_to_end(&mut json)
+            .map_err(|e| {
+                IoError::new(path, format!("cannot inflate the header: {e}")).at("header")
+            })?;
+        if json.len() != raw_len as usize {
+            return Err(
+                IoError::new(path, "header inflates to the wrong length (corrupt file)")
+                    .at("header"),
             );
         }
         let header: Header = serde_json::from_slice(&json)
