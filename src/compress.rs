@@ -4,7 +4,9 @@
 //! within the tolerance.
 //!
 //! Error budget with a tolerance `T`: the fit aims at `fit_share · T`
-//! (default 0.8); the quantiser then takes the coarsest grids
+//! (default 0.95: on the fornix at 0.5 mm, 0.8 gave 2,531 elements and
+//! 16.9 KB, 0.95 gave 2,235 and 14.5 KB — elements cost more than the finer
+//! grids the smaller quantisation margin needs); the quantiser then takes the coarsest grids
 //! `ΔL = 2^⌊log₂ T⌋ 2^{−p}`, `Δθ = 2^⌊log₂(T/S)⌋ 2^{−p}` (`S` the chain's
 //! length: an angle error `Δθ` moves the far end by at most `SΔθ`) for
 //! `p = 1, 2, …` whose decoded chain passes the same Fréchet test as the fit
@@ -46,7 +48,7 @@ impl CompressOptions {
         CompressOptions {
             count,
             storage,
-            fit_share: 0.8,
+            fit_share: 0.95,
             smoothing_share: 0.5,
             max_elements: 4096,
             distance: Distance::Ordered,

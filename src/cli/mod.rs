@@ -248,7 +248,7 @@ pub struct CompressArgs {
     pub max_elements: usize,
     /// Share of the tolerance the helix fit may use; the rest is left to
     /// quantisation (compact storage).
-    #[arg(long, default_value_t = 0.8)]
+    #[arg(long, default_value_t = 0.95)]
     pub fit_share: f64,
     /// Share of the fit's tolerance the smoothing spline may use.
     #[arg(long, default_value_t = 0.5)]

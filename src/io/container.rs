@@ -6,7 +6,8 @@
 //! header: u32 JSON length · u32 stored length · u32 CRC-32 of the stored bytes
 //!         · deflated JSON (storage, tolerance, source metadata)
 //! blocks: "SFHB" · u32 curves · u32 raw length · u32 stored length · u8 encoding
-//!         · 3 zero bytes · u32 CRC-32 of the stored bytes · stored bytes
+//!         · 3 zero bytes · u32 CRC-32 of the stored bytes · stored bytes, which
+//!         inflate to a table of 6 stream lengths and the 6 streams
 //! end:    "SFHE" · u64 curves · u32 CRC-32 of the block CRCs
 //! ```
 //!
@@ -118,8 +119,9 @@ impl SourceMeta {
 
 /// A chain quantised for [`Storage::Compact`]: integers on per-curve grids
 /// of step `ΔL = 2^len_exp` (lengths, start point) and `Δθ = 2^angle_exp`
-/// (the turning angles `κL`, `τL`, the twists, and the start frame as a
-/// unit quaternion's vector part). A curved element keeps `κL ≥ Δθ` so
+/// (the turning angles `κL`, and the start frame as a unit quaternion's
+/// vector part); `τL` and the twist on `Δθ·2^k`, coarser on gently bent
+/// elements (see `coarse_shift`). A curved element keeps `κL ≥ Δθ` so
 /// that it stays curved: a straight element carries the reference normal
 /// on instead of resetting it, which would reinterpret every later twist.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -143,6 +145,21 @@ fn q(x: f64, step: f64) -> i64 {
     (x / step).round() as i64
 }
 
+/// How many times coarser than `Δθ` the grid of an element's `τL` and
+/// twist is: `2^k` with `k = ⌊log₂(1/φ)⌋` clamped to `[0, 10]`, `φ = κL` the
+/// element's (quantised) turning angle. Both move the element's end
+/// tangent by about `φ` times their own error (a twist turns the bend's
+/// plane; a torsion change tilts it), so on a gently bent element they can
+/// be coarser by `1/φ` for the same effect down the chain. Integer
+/// arithmetic on the stored `κL`, so encoder and decoder agree exactly.
+fn coarse_shift(k_quant: i64, angle_exp: i8) -> i32 {
+    if k_quant <= 0 {
+        return 10;
+    }
+    let log2_phi = (63 - k_quant.leading_zeros() as i32) + angle_exp as i32;
+    (-log2_phi).clamp(0, 10)
+}
+
 impl QuantChain {
     /// Quantise `c` on the grids `2^len_exp` and `2^angle_exp`.
     pub fn quantize(c: &ChainParams, len_exp: i8, angle_exp: i8) -> Self {
@@ -160,11 +177,12 @@ impl QuantChain {
                 if e.curvature > 0.0 && k == 0 {
                     k = 1;
                 }
+                let dc = da * 2f64.powi(coarse_shift(k, angle_exp));
                 [
                     q(e.length, dl),
                     k,
-                    q(e.torsion * e.length, da),
-                    q(e.twist, da),
+                    q(e.torsion * e.length, dc),
+                    q(e.twist, dc),
                 ]
             })
             .collect();
@@ -193,8 +211,9 @@ impl QuantChain {
             .iter()
             .map(|&[l, k, t, tw]| {
                 let length = l as f64 * dl;
+                let dc = da * 2f64.powi(coarse_shift(k, self.angle_exp));
                 let (curvature, torsion) = if length > 0.0 {
-                    (k as f64 * da / length, t as f64 * da / length)
+                    (k as f64 * da / length, t as f64 * dc / length)
                 } else {
                     (0.0, 0.0)
                 };
@@ -202,7 +221,7 @@ impl QuantChain {
                     length,
                     curvature,
                     torsion,
-                    twist: tw as f64 * da,
+                    twist: tw as f64 * dc,
                 }
             })
             .collect();
@@ -273,7 +292,17 @@ fn put_vec(out: &mut Vec<u8>, v: DVec3, storage: Storage) {
     }
 }
 
-fn encode(out: &mut Vec<u8>, c: &StoredCurve, storage: Storage) -> Result<(), String> {
+/// Streams of a block: the record heads (kind, id, counts, per-curve data,
+/// verbatim points, grids), the start points and frames, and one stream per
+/// element field (length, `κL`, `τL`, twist). Like values side by side
+/// compress better than interleaved records: on the fornix at 0.5 mm the
+/// file is 3.6 % smaller than with row-wise records (14,007 vs 14,529 B).
+const STREAMS: usize = 6;
+const S_HEAD: usize = 0;
+const S_START: usize = 1;
+const S_ELEM: usize = 2;
+
+fn encode(out: &mut [Vec<u8>; STREAMS], c: &StoredCurve, storage: Storage) -> Result<(), String> {
     let kind = match (&c.shape, storage) {
         (Shape::Empty, _) => KIND_EMPTY,
         (Shape::Points(_), _) => KIND_POINTS,
@@ -284,17 +313,18 @@ fn encode(out: &mut Vec<u8>, c: &StoredCurve, storage: Storage) -> Result<(), St
         (Shape::Quantized(_), Storage::Compact) => KIND_QCHAIN,
         (Shape::Quantized(_), _) => return Err("a quantised chain needs compact storage".into()),
     };
-    out.push(kind);
+    let head = &mut out[S_HEAD];
+    head.push(kind);
     match &c.id {
-        None => put_varint(out, 0),
+        None => put_varint(head, 0),
         Some(id) => {
-            put_varint(out, id.len() as u64 + 1);
-            out.extend_from_slice(id.as_bytes());
+            put_varint(head, id.len() as u64 + 1);
+            head.extend_from_slice(id.as_bytes());
         }
     }
-    put_varint(out, c.source_points);
+    put_varint(head, c.source_points);
     for v in &c.curve_data {
-        out.extend_from_slice(&v.to_le_bytes());
+        head.extend_from_slice(&v.to_le_bytes());
     }
     // Verbatim points: f64 unless the container is f32 or compact.
     let point_storage = if storage == Storage::F64 {
@@ -305,38 +335,41 @@ fn encode(out: &mut Vec<u8>, c: &StoredCurve, storage: Storage) -> Result<(), St
     match &c.shape {
         Shape::Empty => {}
         Shape::Points(p) => {
-            put_varint(out, p.len() as u64);
+            put_varint(head, p.len() as u64);
             for &x in p {
-                put_vec(out, x, point_storage);
+                put_vec(head, x, point_storage);
             }
         }
         Shape::Chain(ch) => {
-            put_varint(out, ch.elements.len() as u64);
-            put_vec(out, ch.start, storage);
-            put_vec(out, ch.tangent, storage);
-            put_vec(out, ch.normal, storage);
+            put_varint(head, ch.elements.len() as u64);
+            put_vec(&mut out[S_START], ch.start, storage);
+            put_vec(&mut out[S_START], ch.tangent, storage);
+            put_vec(&mut out[S_START], ch.normal, storage);
             for e in &ch.elements {
-                for x in [e.length, e.curvature, e.torsion, e.twist] {
-                    put_real(out, x, storage);
+                for (k, x) in [e.length, e.curvature, e.torsion, e.twist]
+                    .into_iter()
+                    .enumerate()
+                {
+                    put_real(&mut out[S_ELEM + k], x, storage);
                 }
             }
         }
         Shape::Quantized(qc) => {
-            put_varint(out, qc.elements.len() as u64);
-            out.push(qc.len_exp as u8);
-            out.push(qc.angle_exp as u8);
+            put_varint(head, qc.elements.len() as u64);
+            head.push(qc.len_exp as u8);
+            head.push(qc.angle_exp as u8);
             for v in qc.start.iter().chain(&qc.frame) {
-                put_varint(out, zigzag(*v));
+                put_varint(&mut out[S_START], zigzag(*v));
             }
             // Lengths, κL and τL change slowly along a chain (equal arc-
             // length break points): deltas. Twists do not: raw.
             let mut prev = [0i64; 3];
             for e in &qc.elements {
                 for k in 0..3 {
-                    put_varint(out, zigzag(e[k].wrapping_sub(prev[k])));
+                    put_varint(&mut out[S_ELEM + k], zigzag(e[k].wrapping_sub(prev[k])));
                     prev[k] = e[k];
                 }
-                put_varint(out, zigzag(e[3]));
+                put_varint(&mut out[S_ELEM + 3], zigzag(e[3]));
             }
         }
     }
@@ -382,6 +415,17 @@ impl<'a> Cursor<'a> {
         }
         Ok(n as usize)
     }
+    /// A count read from `head`, checked against the bytes left in this
+    /// stream (each item needs at least `min_bytes` of it).
+    fn count_of(&self, head: &mut Cursor, min_bytes: usize, what: &str) -> Result<usize, String> {
+        let n = head.varint(what)?;
+        let left = (self.b.len() - self.pos) as u64;
+        if n.saturating_mul(min_bytes as u64) > left {
+            return Err(format!("{what} {n} exceeds the record"));
+        }
+        Ok(n as usize)
+    }
+
     fn f32(&mut self, what: &str) -> Result<f32, String> {
         let b = self.take(4, what)?;
         Ok(f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
@@ -411,7 +455,12 @@ impl<'a> Cursor<'a> {
     }
 }
 
-fn decode(c: &mut Cursor, storage: Storage, n_curve_data: usize) -> Result<StoredCurve, String> {
+fn decode(
+    cs: &mut [Cursor; STREAMS],
+    storage: Storage,
+    n_curve_data: usize,
+) -> Result<StoredCurve, String> {
+    let [c, st, el0, el1, el2, el3] = cs;
     let kind = c.u8("the curve kind")?;
     let id = match c.count(1, "the id length")? {
         0 => None,
@@ -447,16 +496,16 @@ fn decode(c: &mut Cursor, storage: Storage, n_curve_data: usize) -> Result<Store
         }
         KIND_CHAIN if storage != Storage::Compact => {
             let size = if storage == Storage::F64 { 8 } else { 4 };
-            let n = c.count(4 * size, "the element count")?;
-            let start = c.vec(storage, "the start point")?;
-            let tangent = c.vec(storage, "the start tangent")?;
-            let normal = c.vec(storage, "the start normal")?;
+            let n = el0.count_of(c, size, "the element count")?;
+            let start = st.vec(storage, "the start point")?;
+            let tangent = st.vec(storage, "the start tangent")?;
+            let normal = st.vec(storage, "the start normal")?;
             let mut elements = Vec::with_capacity(n);
             for _ in 0..n {
-                let length = c.real(storage, "an element length")?;
-                let curvature = c.real(storage, "a curvature")?;
-                let torsion = c.real(storage, "a torsion")?;
-                let twist = c.real(storage, "a twist")?;
+                let length = el0.real(storage, "an element length")?;
+                let curvature = el1.real(storage, "a curvature")?;
+                let torsion = el2.real(storage, "a torsion")?;
+                let twist = el3.real(storage, "a twist")?;
                 if length < 0.0 || curvature < 0.0 {
                     return Err("an element with negative length or curvature".into());
                 }
@@ -478,7 +527,7 @@ fn decode(c: &mut Cursor, storage: Storage, n_curve_data: usize) -> Result<Store
             })
         }
         KIND_QCHAIN if storage == Storage::Compact => {
-            let n = c.count(4, "the element count")?;
+            let n = el0.count_of(c, 1, "the element count")?;
             let len_exp = c.u8("the length grid")? as i8;
             let angle_exp = c.u8("the angle grid")? as i8;
             if !(-60..=60).contains(&len_exp) || !(-60..=0).contains(&angle_exp) {
@@ -489,17 +538,17 @@ fn decode(c: &mut Cursor, storage: Storage, n_curve_data: usize) -> Result<Store
             let mut start = [0i64; 3];
             let mut frame = [0i64; 3];
             for v in start.iter_mut().chain(frame.iter_mut()) {
-                *v = c.zz("the start point and frame")?;
+                *v = st.zz("the start point and frame")?;
             }
             let mut elements = Vec::with_capacity(n);
             let mut prev = [0i64; 3];
             for _ in 0..n {
                 let mut e = [0i64; 4];
-                for k in 0..3 {
-                    e[k] = prev[k].wrapping_add(c.zz("an element")?);
+                for (k, s) in [&mut *el0, &mut *el1, &mut *el2].into_iter().enumerate() {
+                    e[k] = prev[k].wrapping_add(s.zz("an element")?);
                     prev[k] = e[k];
                 }
-                e[3] = c.zz("a twist")?;
+                e[3] = el3.zz("a twist")?;
                 if e[0] < 0 || e[1] < 0 {
                     return Err("an element with negative length or curvature".into());
                 }
@@ -535,7 +584,7 @@ fn decode(c: &mut Cursor, storage: Storage, n_curve_data: usize) -> Result<Store
 pub struct ContainerWriter {
     out: AtomicFile,
     header: Header,
-    raw: Vec<u8>,
+    raw: [Vec<u8>; STREAMS],
     in_block: u32,
     curves: u64,
     crcs: crc32fast::Hasher,
@@ -566,7 +615,7 @@ impl ContainerWriter {
             out,
             bytes: head.len() as u64,
             header,
-            raw: Vec::new(),
+            raw: Default::default(),
             in_block: 0,
             curves: 0,
             crcs: crc32fast::Hasher::new(),
@@ -589,7 +638,8 @@ impl ContainerWriter {
         encode(&mut self.raw, c, self.header.storage).map_err(err)?;
         self.curves += 1;
         self.in_block += 1;
-        if self.in_block as usize >= BLOCK_CURVES || self.raw.len() >= 8 << 20 {
+        let size: usize = self.raw.iter().map(Vec::len).sum();
+        if self.in_block as usize >= BLOCK_CURVES || size >= 8 << 20 {
             self.flush_block()?;
         }
         Ok(())
@@ -599,22 +649,33 @@ impl ContainerWriter {
         if self.in_block == 0 {
             return Ok(());
         }
+        // The stream table (each stream's length), then the streams.
+        let mut raw =
+            Vec::with_capacity(4 * STREAMS + self.raw.iter().map(Vec::len).sum::<usize>());
+        for st in &self.raw {
+            raw.extend_from_slice(&(st.len() as u32).to_le_bytes());
+        }
+        for st in &self.raw {
+            raw.extend_from_slice(st);
+        }
         let mut z = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::best());
-        z.write_all(&self.raw).map_err(|e| self.out.err(e))?;
+        z.write_all(&raw).map_err(|e| self.out.err(e))?;
         let stored = z.finish().map_err(|e| self.out.err(e))?;
         let crc = crc32fast::hash(&stored);
         self.crcs.update(&crc.to_le_bytes());
         let mut head = Vec::with_capacity(24);
         head.extend_from_slice(&BLOCK_MAGIC);
         head.extend_from_slice(&self.in_block.to_le_bytes());
-        head.extend_from_slice(&(self.raw.len() as u32).to_le_bytes());
+        head.extend_from_slice(&(raw.len() as u32).to_le_bytes());
         head.extend_from_slice(&(stored.len() as u32).to_le_bytes());
         head.extend_from_slice(&[1, 0, 0, 0]); // encoding 1 = deflate
         head.extend_from_slice(&crc.to_le_bytes());
         self.out.write_all(&head).map_err(|e| self.out.err(e))?;
         self.out.write_all(&stored).map_err(|e| self.out.err(e))?;
         self.bytes += (head.len() + stored.len()) as u64;
-        self.raw.clear();
+        for st in &mut self.raw {
+            st.clear();
+        }
         self.in_block = 0;
         Ok(())
     }
@@ -639,7 +700,9 @@ pub struct ContainerReader {
     src: ByteSource,
     header: Header,
     block: Vec<u8>,
-    pos: usize,
+    /// Each stream's range in `block`, and the read position in it.
+    ranges: [(usize, usize); STREAMS],
+    pos: [usize; STREAMS],
     left_in_block: u32,
     block_index: u64,
     curve: u64,
@@ -701,7 +764,8 @@ impl ContainerReader {
             src,
             header,
             block: Vec::new(),
-            pos: 0,
+            ranges: [(0, 0); STREAMS],
+            pos: [0; STREAMS],
             left_in_block: 0,
             block_index: 0,
             curve: 0,
@@ -791,7 +855,24 @@ impl ContainerReader {
                 self.block.len()
             )));
         }
-        self.pos = 0;
+        // The stream table.
+        let mut at = 4 * STREAMS;
+        if self.block.len() < at {
+            return Err(self.err("block shorter than its stream table"));
+        }
+        for k in 0..STREAMS {
+            let b = &self.block[4 * k..4 * k + 4];
+            let len = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize;
+            if len > self.block.len() - at {
+                return Err(self.err("stream table overruns the block"));
+            }
+            self.ranges[k] = (at, at + len);
+            self.pos[k] = at;
+            at += len;
+        }
+        if at != self.block.len() {
+            return Err(self.err("stream table does not cover the block"));
+        }
         self.left_in_block = curves;
         self.block_index += 1;
         Ok(true)
@@ -799,20 +880,21 @@ impl ContainerReader {
 
     fn next_curve(&mut self) -> Result<Option<StoredCurve>, IoError> {
         if self.left_in_block == 0 {
-            if self.pos != self.block.len() {
+            if (0..STREAMS).any(|k| self.pos[k] != self.ranges[k].1) {
                 return Err(self.err("bytes left over after the block's last curve"));
             }
             if !self.next_block()? {
                 return Ok(None);
             }
         }
-        let mut c = Cursor {
-            b: &self.block,
-            pos: self.pos,
-        };
+        let block = &self.block;
+        let mut cs: [Cursor; STREAMS] = std::array::from_fn(|k| Cursor {
+            b: &block[..self.ranges[k].1],
+            pos: self.pos[k],
+        });
         let n_cd = self.header.source.curve_data_names.len();
-        let r = decode(&mut c, self.header.storage, n_cd);
-        let pos = c.pos;
+        let r = decode(&mut cs, self.header.storage, n_cd);
+        let pos: [usize; STREAMS] = std::array::from_fn(|k| cs[k].pos);
         let curve = r.map_err(|e| self.err(e))?;
         self.pos = pos;
         self.left_in_block -= 1;
