@@ -18,7 +18,12 @@
 //! are chosen to stay within `1.1 ×` the fit's own Fréchet distance.
 //!
 //! Curves that cannot be fitted are stored verbatim and reported: empty
-//! curves, one-point curves (or all points equal), and any fit failure.
+//! curves, one-point curves (or all points equal), and any fit failure. In
+//! compact storage a curve is also stored as its points (`f32`) when they
+//! take fewer bytes than its helices: sparse polylines at a tolerance
+//! below their corners' sagitta need about one element per point, and four
+//! numbers per element then cost more than three per point. So the
+//! container is never larger than the float32 polylines.
 
 use glam::DVec3;
 
@@ -27,7 +32,7 @@ use crate::adaptive::{
     ElementCount,
 };
 use crate::helix::PiecewiseHelix;
-use crate::io::container::{QuantChain, Shape, Storage};
+use crate::io::container::{encoded_size, QuantChain, Shape, Storage, StoredCurve};
 
 /// Options of [`compress_curve`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,6 +80,9 @@ pub struct CurveOutcome {
     pub within: bool,
     /// Why the curve is stored verbatim, if it is.
     pub verbatim: Option<String>,
+    /// Stored as its points because they take fewer bytes than its helices
+    /// (sparse polylines at tight tolerances): exact, and never larger.
+    pub points_cheaper: bool,
 }
 
 /// Compress one polyline.
@@ -89,6 +97,7 @@ pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome 
         elements: 0,
         within: true,
         verbatim: Some(why),
+        points_cheaper: false,
     };
     if points.is_empty() {
         return verbatim("empty curve".into());
@@ -130,6 +139,7 @@ pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome 
                 frechet,
                 elements,
                 verbatim: None,
+                points_cheaper: false,
             }
         }
         Storage::Compact => {
@@ -145,20 +155,50 @@ pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome 
                 let qc = QuantChain::quantize(&params, len_exp as i8, angle_exp as i8);
                 let decoded = PiecewiseHelix::from_params(&qc.dequantize());
                 if chain_within(&decoded, points, budget, opts.distance) {
+                    let shape = Shape::Quantized(qc);
+                    if cheaper_as_points(points, &shape) {
+                        return CurveOutcome {
+                            shape: Shape::Points(points.to_vec()),
+                            frechet: 0.0,
+                            elements: 0,
+                            within: true,
+                            verbatim: None,
+                            points_cheaper: true,
+                        };
+                    }
                     let frechet = chain_frechet(&decoded, points, budget, opts.distance);
                     return CurveOutcome {
                         // The test at `budget` (= the tolerance) passed.
                         within: true,
-                        shape: Shape::Quantized(qc),
+                        shape,
                         frechet,
                         elements,
                         verbatim: None,
+                        points_cheaper: false,
                     };
                 }
             }
             verbatim("stored verbatim: no quantisation grid met the tolerance".into())
         }
     }
+}
+
+/// Do the points (as `f32`, exact to the input's float32 data) take fewer
+/// bytes than `shape`? Sizes before deflate, which treats both alike.
+fn cheaper_as_points(points: &[DVec3], shape: &Shape) -> bool {
+    let size = |shape: Shape| {
+        encoded_size(
+            &StoredCurve {
+                id: None,
+                source_points: 0,
+                curve_data: Vec::new(),
+                shape,
+            },
+            Storage::Compact,
+        )
+        .unwrap_or(usize::MAX)
+    };
+    size(Shape::Points(points.to_vec())) < size(shape.clone())
 }
 
 fn round_f32(c: &crate::helix::ChainParams) -> crate::helix::ChainParams {
@@ -224,6 +264,33 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn sparse_corners_at_a_tight_tolerance_are_cheaper_as_points() {
+        // 12 points with sharp corners: at 1e-3 the helices need about an
+        // element per point, four numbers against three.
+        let pts: Vec<DVec3> = (0..12)
+            .map(|k| {
+                DVec3::new(
+                    k as f64 * 5.0,
+                    if k % 2 == 0 { 0.0 } else { 3.0 },
+                    0.1 * k as f64,
+                )
+            })
+            .collect();
+        let o = compress_curve(
+            &pts,
+            &CompressOptions::new(ElementCount::Tolerance(1e-3), Storage::Compact),
+        );
+        assert!(o.points_cheaper, "{:?}", o.shape);
+        assert_eq!(o.shape, Shape::Points(pts.clone()));
+        // A smooth curve is not.
+        let o = compress_curve(
+            &wavy(120),
+            &CompressOptions::new(ElementCount::Tolerance(0.1), Storage::Compact),
+        );
+        assert!(!o.points_cheaper && matches!(o.shape, Shape::Quantized(_)));
     }
 
     #[test]

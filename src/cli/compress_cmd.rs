@@ -41,6 +41,8 @@ pub struct CompressReport {
     pub over_tolerance: u64,
     /// Curves stored verbatim (empty, one point, unfittable).
     pub verbatim: u64,
+    /// Curves stored as their points because that is smaller.
+    pub points_cheaper: u64,
     pub seconds: f64,
     pub curves_per_second: f64,
 }
@@ -162,6 +164,9 @@ pub fn run(args: &CompressArgs) -> Result<()> {
                 sum_distance += o.frechet;
                 report.max_distance = report.max_distance.max(o.frechet);
             }
+            if o.points_cheaper {
+                report.points_cheaper += 1;
+            }
             if !o.within {
                 report.over_tolerance += 1;
             }
@@ -190,7 +195,8 @@ pub fn run(args: &CompressArgs) -> Result<()> {
     } else {
         eprintln!(
             "{} -> {}: {} curves, {} points -> {} elements; {} -> {} bytes (ratio {:.2}); \
-             {} distance mean {:.4} max {:.4}{}; {} verbatim, {} over tolerance; {:.0} curves/s",
+             {} distance mean {:.4} max {:.4}{}; {} verbatim, {} as points (smaller), {} over tolerance; \
+             {:.0} curves/s",
             report.input,
             report.output,
             report.curves,
@@ -206,6 +212,7 @@ pub fn run(args: &CompressArgs) -> Result<()> {
                 .map(|t| format!(" (tolerance {t})"))
                 .unwrap_or_default(),
             report.verbatim,
+            report.points_cheaper,
             report.over_tolerance,
             report.curves_per_second
         );

@@ -376,6 +376,14 @@ fn encode(out: &mut [Vec<u8>; STREAMS], c: &StoredCurve, storage: Storage) -> Re
     Ok(())
 }
 
+/// Bytes `c` takes in a block before deflate (its record in all streams),
+/// to compare ways of storing a curve.
+pub fn encoded_size(c: &StoredCurve, storage: Storage) -> Result<usize, String> {
+    let mut out: [Vec<u8>; STREAMS] = Default::default();
+    encode(&mut out, c, storage)?;
+    Ok(out.iter().map(Vec::len).sum())
+}
+
 /// A cursor over a decompressed block, with errors that say what was cut.
 struct Cursor<'a> {
     b: &'a [u8],
