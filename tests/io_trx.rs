@@ -218,8 +218,15 @@ fn tck_to_trx_to_tck_round_trip() {
     write(&t, Format::Trx, &kmeta, &trk);
     let (m, c) = read(&t);
     assert_eq!(c, trk);
-    assert_eq!(m.point_data_names, kmeta.point_data_names);
-    assert_eq!(m.curve_data_names, kmeta.curve_data_names);
+    // The .trk's `colors[0..3]` components become one `colors.3.float32`.
+    let renamed = |v: &[String]| -> Vec<String> {
+        v.iter()
+            .map(|n| n.replace('[', "_").replace(']', ""))
+            .collect()
+    };
+    assert_eq!(m.point_data_names, renamed(&kmeta.point_data_names));
+    assert_eq!(m.curve_data_names, renamed(&kmeta.curve_data_names));
+    assert_eq!(m.extra("trx.dpv.colors"), Some("3.float32"));
     assert_eq!(m.vox_to_world, kmeta.vox_to_world);
     assert_eq!(m.dimensions, kmeta.dimensions);
 }

@@ -1049,9 +1049,18 @@ fn plan_arrays(
             (k > 1 && i + k <= names.len() && (0..k).all(|c| names[i + c] == format!("{base}_{c}")))
                 .then_some(an)
         });
-        let (base, dtype, k) = match grouped {
-            Some(an) => (an.base, an.dtype, an.ncomp),
-            None => {
+        // `x[0]`, `x[1]`, … (the .trk reader's names for the components of
+        // one property) are one array whatever the source.
+        let bracketed = name.strip_suffix("[0]").and_then(|base| {
+            let k = (0..names.len() - i)
+                .take_while(|&c| names[i + c] == format!("{base}[{c}]"))
+                .count();
+            (k > 1).then(|| (base.to_string(), k))
+        });
+        let (base, dtype, k) = match (grouped, bracketed) {
+            (Some(an), _) => (an.base, an.dtype, an.ncomp),
+            (None, Some((base, k))) => (base, DType::F32, k),
+            (None, None) => {
                 let dtype = recorded(name)
                     .filter(|an| an.ncomp == 1)
                     .map_or(DType::F32, |an| an.dtype);
@@ -1391,10 +1400,20 @@ mod tests {
                 ("dpv/other.float32".to_string(), DType::F32, 1),
             ]
         );
-        // Not a TRX source: everything float32, one component.
+        // Not a TRX source: everything float32, one component…
         meta.format = Format::Vtk;
         let p = plan_arrays(Path::new("x.trx"), &meta, &names, "dpv").unwrap();
         assert_eq!(p.len(), 5);
         assert!(p.iter().all(|(_, d, k)| *d == DType::F32 && *k == 1));
+        // … except the .trk reader's `x[c]` components.
+        let names: Vec<String> = ["c[0]", "c[1]", "c[2]", "d[0]", "e[1]"]
+            .map(String::from)
+            .to_vec();
+        let p = plan_arrays(Path::new("x.trx"), &meta, &names, "dps").unwrap();
+        let entries: Vec<&str> = p.iter().map(|(e, _, _)| e.as_str()).collect();
+        assert_eq!(
+            entries,
+            ["dps/c.3.float32", "dps/d[0].float32", "dps/e[1].float32"]
+        );
     }
 }
