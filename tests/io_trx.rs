@@ -412,7 +412,9 @@ fn hand_made_bad_archives_say_why() {
         ("offsets.uint32".to_string(), u32s(&[0, 2, 5])),
         ("dpv/w.float32".to_string(), vec![0u8; 20]),
     ];
-    let cases: Vec<(&str, Vec<(String, Vec<u8>)>, &[&str], Option<u64>)> = vec![
+    // (what, entries, words the error must contain, the curve it names)
+    type Case<'a> = (&'a str, Vec<(String, Vec<u8>)>, &'a [&'a str], Option<u64>);
+    let cases: Vec<Case> = vec![
         (
             "missing header",
             with(&good, "header.json", None),
