@@ -283,7 +283,7 @@ pub struct DecompressArgs {
 pub struct InspectArgs {
     /// The file to inspect.
     pub input: PathBuf,
-    /// Its format (default: from the extension): tck, trk, vtk, hair, json, csv.
+    /// Its format (default: from the extension): tck, trk, trx, vtk, hair, json, csv.
     #[arg(long)]
     pub format: Option<String>,
     /// Machine-readable report on standard output.

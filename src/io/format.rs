@@ -14,6 +14,9 @@ pub enum Format {
     Trk,
     /// VTK legacy POLYDATA with LINES, ASCII or BINARY.
     Vtk,
+    /// TRX (tee-ar-ex): a zip archive or folder of `header.json`,
+    /// `positions`, `offsets` and per-vertex/per-streamline arrays; RAS+ mm.
+    Trx,
     /// Cem Yuksel's `.hair`.
     Hair,
     /// JSON `{"curves":[{"id":…,"points":[[x,y,z],…]},…]}`.
@@ -23,9 +26,10 @@ pub enum Format {
 }
 
 impl Format {
-    pub const ALL: [Format; 6] = [
+    pub const ALL: [Format; 7] = [
         Format::Tck,
         Format::Trk,
+        Format::Trx,
         Format::Vtk,
         Format::Hair,
         Format::Json,
@@ -37,6 +41,7 @@ impl Format {
         match self {
             Format::Tck => "tck",
             Format::Trk => "trk",
+            Format::Trx => "trx",
             Format::Vtk => "vtk",
             Format::Hair => "hair",
             Format::Json => "json",
@@ -69,6 +74,7 @@ impl Format {
         match self {
             Format::Tck => super::tck::open(path),
             Format::Trk => super::trk::open(path),
+            Format::Trx => super::trx::open(path),
             Format::Vtk => super::vtk::open(path),
             Format::Hair => super::hair::open(path),
             Format::Json => super::polyline::open_json(path),
@@ -84,6 +90,7 @@ impl Format {
         match self {
             Format::Tck => super::tck::create(path, meta),
             Format::Trk => super::trk::create(path, meta),
+            Format::Trx => super::trx::create(path, meta),
             Format::Vtk => super::vtk::create(path, meta),
             Format::Hair => super::hair::create(path, meta),
             Format::Json => super::polyline::create_json(path, meta),

@@ -1,5 +1,5 @@
 //! Reading and writing the curve files users have: tractography (MRtrix
-//! `.tck`, TrackVis `.trk`), VTK legacy polylines, Cem Yuksel's `.hair`,
+//! `.tck`, TrackVis `.trk`, TRX), VTK legacy polylines, Cem Yuksel's `.hair`,
 //! and plain JSON/CSV polylines.
 //!
 //! Every reader is a streaming iterator over [`Curve`]s, so files larger than
@@ -29,6 +29,7 @@ pub mod polyline;
 mod spool;
 pub mod tck;
 pub mod trk;
+pub mod trx;
 pub mod vtk;
 
 use std::path::{Path, PathBuf};
