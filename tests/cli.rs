@@ -411,3 +411,21 @@ fn integrate_answers_every_line() {
         .success());
     assert!(!strandfit(&["integrate", "-m", "1"], "").status.success());
 }
+
+/// `strandfit … | head`: a closed pipe ends the program quietly (SIGPIPE),
+/// not with a panic from println!.
+#[cfg(unix)]
+#[test]
+fn closed_stdout_pipe_is_not_a_panic() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_strandfit"))
+        .args(["inspect", "tests/data/fibres/dipy_fornix_tracks300.tck"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away at once
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -91,14 +91,14 @@ pub enum Command {
     /// length) from JSON Lines records {"start","tangent","normal","kappa0",
     /// "gamma","tau0","delta","length"}: end point and frame, optionally samples.
     Integrate(IntegrateArgs),
-    /// Compress curves (.tck, .trk, .vtk, .hair, .json, .csv) into a .sfh
+    /// Compress curves (.tck, .trk, .trx, .vtk, .hair, .json, .csv) into a .sfh
     /// container of piecewise helices: the fewest elements per curve within
     /// --tolerance, or --elements N, or --element-length S.
     Compress(CompressArgs),
-    /// Decompress a .sfh container back to polylines (.tck, .trk, .vtk,
+    /// Decompress a .sfh container back to polylines (.tck, .trk, .trx, .vtk,
     /// .hair, .json, .csv), in the source's coordinate convention.
     Decompress(DecompressArgs),
-    /// Summarise a curve file (.tck, .trk, .vtk, .hair, .json, .csv): header,
+    /// Summarise a curve file (.tck, .trk, .trx, .vtk, .hair, .json, .csv): header,
     /// counts, lengths, sizes and problems (empty or one-point curves,
     /// repeated points); stops at the first unreadable curve, naming it.
     Inspect(InspectArgs),
@@ -324,6 +324,15 @@ pub struct BenchArgs {
 
 /// Run the command line; returns the process exit code.
 pub fn main() -> ExitCode {
+    // Rust ignores SIGPIPE, so writing to a closed pipe (`| head`) is an
+    // error that println! turns into a panic. Restore the Unix default: the
+    // process ends silently, as `cat` would.
+    #[cfg(unix)]
+    // SAFETY: setting a signal disposition to SIG_DFL at start-up, before
+    // any thread exists, has no preconditions.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     if let Some(n) = cli.threads {
         if let Err(e) = rayon::ThreadPoolBuilder::new()
