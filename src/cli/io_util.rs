@@ -2,9 +2,11 @@
 
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result};
+
+use crate::io::AtomicFile;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -36,68 +38,37 @@ pub fn read_input(path: &Option<PathBuf>) -> Result<String> {
     Ok(s)
 }
 
-/// An output sink: standard output, or a temporary file next to the target
-/// that is renamed over it only by [`Output::commit`] — so a failed run never
-/// leaves a partial or truncated output file behind.
-pub struct Output {
-    target: Option<PathBuf>,
-    temp: Option<tempfile::NamedTempFile>,
-    writer: Box<dyn Write>,
+/// An output sink: standard output, or an [`AtomicFile`] (a temporary file
+/// next to the target, renamed over it only by [`Output::commit`]) — so a
+/// failed run never leaves a partial or truncated output file behind.
+pub enum Output {
+    Stdout(BufWriter<io::Stdout>),
+    File(AtomicFile),
 }
 
 impl Output {
     pub fn create(path: &Option<PathBuf>) -> Result<Output> {
-        match path {
-            Some(p) if p.as_os_str() != "-" => {
-                let dir = match p.parent() {
-                    Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-                    _ => PathBuf::from("."),
-                };
-                let temp = tempfile::Builder::new()
-                    .prefix(".strandfit-")
-                    .suffix(".tmp")
-                    .tempfile_in(&dir)
-                    .with_context(|| {
-                        format!("cannot create a temporary file in {}", dir.display())
-                    })?;
-                let file = temp
-                    .reopen()
-                    .context("cannot reopen the temporary output")?;
-                Ok(Output {
-                    target: Some(p.clone()),
-                    temp: Some(temp),
-                    writer: Box::new(BufWriter::with_capacity(1 << 20, file)),
-                })
-            }
-            _ => Ok(Output {
-                target: None,
-                temp: None,
-                writer: Box::new(BufWriter::new(io::stdout())),
-            }),
-        }
+        Ok(match path {
+            Some(p) if p.as_os_str() != "-" => Output::File(AtomicFile::create(p)?),
+            _ => Output::Stdout(BufWriter::new(io::stdout())),
+        })
     }
 
     pub fn writer(&mut self) -> &mut dyn Write {
-        &mut *self.writer
+        match self {
+            Output::Stdout(w) => w,
+            Output::File(f) => f,
+        }
     }
 
-    /// Flush, sync and move the temporary file into place.
-    pub fn commit(mut self) -> Result<()> {
-        self.writer.flush().context("cannot write output")?;
-        drop(self.writer);
-        if let (Some(temp), Some(target)) = (self.temp.take(), self.target.take()) {
-            temp.as_file().sync_all().context("cannot sync output")?;
-            persist(temp, &target)?;
+    /// Flush, and for a file sync and move it into place.
+    pub fn commit(self) -> Result<()> {
+        match self {
+            Output::Stdout(mut w) => w.flush().context("cannot write output")?,
+            Output::File(f) => f.commit()?,
         }
         Ok(())
     }
-}
-
-fn persist(temp: tempfile::NamedTempFile, target: &Path) -> Result<()> {
-    temp.persist(target)
-        .map_err(|e| e.error)
-        .with_context(|| format!("cannot move output into place at {}", target.display()))?;
-    Ok(())
 }
 
 /// How an item of a JSON document is named in messages: `spline "a"

@@ -917,17 +917,8 @@ impl Iterator for ContainerReader {
         if self.done {
             return None;
         }
-        match self.next_curve() {
-            Ok(Some(c)) => Some(Ok(c)),
-            Ok(None) => {
-                self.done = true;
-                None
-            }
-            Err(e) => {
-                self.done = true;
-                Some(Err(e))
-            }
-        }
+        let r = self.next_curve();
+        super::fuse(&mut self.done, r)
     }
 }
 

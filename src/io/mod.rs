@@ -182,6 +182,26 @@ pub trait CurveWriter {
     fn finish(self: Box<Self>) -> Result<(), IoError>;
 }
 
+/// The step of a reader's iterator: a curve, the end, or an error after
+/// which the iterator is done (`*done` set), so that a reader never goes on
+/// from a broken state.
+pub(crate) fn fuse<T>(
+    done: &mut bool,
+    r: Result<Option<T>, IoError>,
+) -> Option<Result<T, IoError>> {
+    match r {
+        Ok(Some(c)) => Some(Ok(c)),
+        Ok(None) => {
+            *done = true;
+            None
+        }
+        Err(e) => {
+            *done = true;
+            Some(Err(e))
+        }
+    }
+}
+
 /// Open `path` for reading as `format` (or by its extension, see
 /// [`Format::from_path`]).
 pub fn open_reader(path: &Path, format: Option<Format>) -> Result<Box<dyn CurveReader>, IoError> {

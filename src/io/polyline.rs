@@ -387,20 +387,10 @@ impl Iterator for CsvReader {
             return None;
         }
         let r = self.next_curve();
-        match r {
-            Ok(Some(c)) => {
-                self.index += 1;
-                Some(Ok(c))
-            }
-            Ok(None) => {
-                self.done = true;
-                None
-            }
-            Err(e) => {
-                self.done = true;
-                Some(Err(e))
-            }
+        if matches!(r, Ok(Some(_))) {
+            self.index += 1;
         }
+        super::fuse(&mut self.done, r)
     }
 }
 

@@ -437,17 +437,8 @@ impl Iterator for TckReader {
         if self.done {
             return None;
         }
-        match self.read_curve() {
-            Ok(Some(c)) => Some(Ok(c)),
-            Ok(None) => {
-                self.done = true;
-                None
-            }
-            Err(e) => {
-                self.done = true;
-                Some(Err(e))
-            }
-        }
+        let r = self.read_curve();
+        super::fuse(&mut self.done, r)
     }
 }
 
