@@ -8,8 +8,12 @@
 //! GPU kernel `shaders/frenet_integrate.wgsl` (twin:
 //! [`crate::twin::frenet_integrate`]) is checked against. The paper's own
 //! integrator (explicit Euler) is first order and drifts off the rotation
-//! group; see `shared/papers/ERRATA.md`, section 004.
+//! group; see `shared/papers/ERRATA.md`, section 004. [`solve`] finds the
+//! spiral between two point–tangent pairs (Levenberg–Marquardt on the end
+//! conditions).
 
 pub mod frenet;
+pub mod solve;
 
 pub use frenet::{FrenetEnd, FrenetError, FrenetProblem, FRAME_TOL};
+pub use solve::{solve_spiral, SolveError, SolveOptions, SpiralSolution};

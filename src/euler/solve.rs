@@ -1,0 +1,376 @@
+//! A 3D Euler spiral between two point–tangent pairs by Levenberg–Marquardt
+//! on the end conditions (the fast solver of issue 5; the paper's own
+//! coordinate descent, Algorithm 1, is to come beside it).
+//!
+//! Given `(x₀, T₀)` and `(x_f, T_f)`, find `(κ₀, γ, τ₀, δ, L)` so that the
+//! spiral from `x₀` with frame `[T₀, N₀, T₀ × N₀]` ends at `x_f` with tangent
+//! `T_f`. Residual (six components, Eq. 9 of paper 004 is its squared norm):
+//!
+//! ```text
+//! r = (x(L) − x_f, T(L) − T_f)
+//! ```
+//!
+//! As in the paper (Section 6), the problem is translated by `−x₀` and scaled
+//! by `D = max |x_f − x₀|` per axis, solved, and scaled back (Prop. 5.1:
+//! curvatures scale by `1/D`, their rates by `1/D²`, `L` by `D`). `N₀` is
+//! the in-plane normal `normalize(d − (d·T₀)T₀)`, `d = x_f − x₀`
+//! (ERRATA 004.2). Curves are integrated with the fourth-order scheme of
+//! [`frenet`](super::frenet) at a fixed step count, so residuals are smooth
+//! in the parameters; the Jacobian is by central differences.
+//!
+//! Initial guess: the circular arc in the plane of `T₀` and `d` from `x₀`
+//! with tangent `T₀` through `x_f` (`κ = 2 sin α/|d|`, `L = |d| α/sin α`,
+//! `α` the angle between `T₀` and `d`), `γ = τ₀ = δ = 0`. The planar
+//! clothoid initialisation of the paper will replace it.
+
+use glam::DVec3;
+
+use super::frenet::{FrenetError, FrenetProblem};
+
+/// Options of [`solve_spiral`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolveOptions {
+    /// Integration steps per candidate curve.
+    pub steps: usize,
+    pub max_iterations: usize,
+    /// Stop when `ε` (Eq. 9, in the scaled problem) falls below this.
+    pub tolerance: f64,
+    /// `N₀`; default (`None`): the in-plane normal of the paper's Step 1.
+    /// The five parameters and the two end conditions leave the start frame's
+    /// rotation about `T₀` free; the paper fixes it by the plane.
+    pub start_normal: Option<DVec3>,
+}
+
+impl Default for SolveOptions {
+    fn default() -> Self {
+        SolveOptions {
+            steps: 128,
+            max_iterations: 100,
+            tolerance: 1e-24,
+            start_normal: None,
+        }
+    }
+}
+
+/// The solved spiral, its error `ε` (Eq. 9, in the input's units) and the
+/// iterations used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpiralSolution {
+    pub problem: FrenetProblem,
+    pub error: f64,
+    pub iterations: usize,
+}
+
+/// Why no spiral was found.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    #[error("the end points coincide")]
+    Coincident,
+    #[error("an input is not finite, or a tangent is zero")]
+    BadInput,
+    #[error("integration: {0}")]
+    Frenet(#[from] FrenetError),
+}
+
+/// Residual of parameters `p = (κ₀, γ, τ₀, δ, L)` for the scaled problem
+/// (start at the origin, frame `f`, target `xf`, `tf`).
+fn residual(p: &[f64; 5], f: [DVec3; 3], xf: DVec3, tf: DVec3, steps: usize) -> [f64; 6] {
+    let pr = FrenetProblem {
+        start: DVec3::ZERO,
+        frame: f,
+        kappa0: p[0],
+        gamma: p[1],
+        tau0: p[2],
+        delta: p[3],
+        length: p[4].max(0.0),
+    };
+    let e = pr.integrate_unchecked(steps);
+    let dx = e.point - xf;
+    let dt = e.frame[0] - tf;
+    [dx.x, dx.y, dx.z, dt.x, dt.y, dt.z]
+}
+
+fn norm2(r: &[f64; 6]) -> f64 {
+    r.iter().map(|x| x * x).sum()
+}
+
+/// Solve `(A + λ diag A) Δ = −g` for the 5×5 normal equations (faer LU).
+fn lm_step(a: &[[f64; 5]; 5], g: &[f64; 5], lambda: f64) -> Option<[f64; 5]> {
+    use faer::linalg::solvers::Solve;
+    let m = faer::Mat::<f64>::from_fn(5, 5, |i, j| {
+        a[i][j]
+            + if i == j {
+                lambda * a[i][i].max(1e-12)
+            } else {
+                0.0
+            }
+    });
+    let rhs = faer::Mat::<f64>::from_fn(5, 1, |i, _| -g[i]);
+    let x = m.partial_piv_lu().solve(&rhs);
+    let d: [f64; 5] = std::array::from_fn(|i| x[(i, 0)]);
+    d.iter().all(|v| v.is_finite()).then_some(d)
+}
+
+/// The spiral from `(x0, t0)` to `(xf, tf)` (tangents need not be unit).
+pub fn solve_spiral(
+    x0: DVec3,
+    t0: DVec3,
+    xf: DVec3,
+    tf: DVec3,
+    opts: &SolveOptions,
+) -> Result<SpiralSolution, SolveError> {
+    if !(x0.is_finite() && t0.is_finite() && xf.is_finite() && tf.is_finite()) {
+        return Err(SolveError::BadInput);
+    }
+    let (t0, tf) = match (t0.try_normalize(), tf.try_normalize()) {
+        (Some(a), Some(b)) => (a, b),
+        _ => return Err(SolveError::BadInput),
+    };
+    let d = xf - x0;
+    let scale = d.abs().max_element();
+    if scale == 0.0 {
+        return Err(SolveError::Coincident);
+    }
+    let ds = d / scale;
+    // In-plane normal towards x_f's side; any perpendicular if d ∥ T₀.
+    let n0 = match opts.start_normal {
+        Some(n) => (n - n.dot(t0) * t0)
+            .try_normalize()
+            .ok_or(SolveError::BadInput)?,
+        None => (ds - ds.dot(t0) * t0)
+            .try_normalize()
+            .unwrap_or_else(|| t0.any_orthonormal_vector()),
+    };
+    let frame = [t0, n0, t0.cross(n0)];
+
+    // Circular-arc initial guess.
+    let dl = ds.length();
+    let alpha = t0.angle_between(ds);
+    let (kappa, length) = if alpha < 1e-9 {
+        (0.0, dl)
+    } else {
+        (2.0 * alpha.sin() / dl, dl * alpha / alpha.sin())
+    };
+    let mut p = [kappa, 0.0, 0.0, 0.0, length];
+    let steps = opts.steps.max(1);
+    let mut r = residual(&p, frame, ds, tf, steps);
+    let mut err = norm2(&r);
+    let mut lambda = 1e-3;
+    let mut iterations = 0;
+    while iterations < opts.max_iterations && err > opts.tolerance {
+        iterations += 1;
+        // Jacobian by central differences.
+        let mut jac = [[0.0; 5]; 6];
+        for k in 0..5 {
+            let h = 1e-6 * (1.0 + p[k].abs());
+            let (mut pp, mut pm) = (p, p);
+            pp[k] += h;
+            pm[k] -= h;
+            let (rp, rm) = (
+                residual(&pp, frame, ds, tf, steps),
+                residual(&pm, frame, ds, tf, steps),
+            );
+            for i in 0..6 {
+                jac[i][k] = (rp[i] - rm[i]) / (2.0 * h);
+            }
+        }
+        let mut a = [[0.0; 5]; 5];
+        let mut g = [0.0; 5];
+        for i in 0..5 {
+            for j in 0..5 {
+                a[i][j] = (0..6).map(|k| jac[k][i] * jac[k][j]).sum();
+            }
+            g[i] = (0..6).map(|k| jac[k][i] * r[k]).sum();
+        }
+        let mut improved = false;
+        for _ in 0..30 {
+            let Some(step) = lm_step(&a, &g, lambda) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let mut q = p;
+            for k in 0..5 {
+                q[k] += step[k];
+            }
+            q[4] = q[4].max(1e-3 * dl);
+            let rq = residual(&q, frame, ds, tf, steps);
+            let eq = norm2(&rq);
+            if eq < err {
+                p = q;
+                r = rq;
+                err = eq;
+                lambda = (lambda * 0.3).max(1e-15);
+                improved = true;
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved {
+            break; // at a (local) minimum to rounding
+        }
+    }
+    // Scale back (Prop. 5.1).
+    let problem = FrenetProblem {
+        start: x0,
+        frame,
+        kappa0: p[0] / scale,
+        gamma: p[1] / (scale * scale),
+        tau0: p[2] / scale,
+        delta: p[3] / (scale * scale),
+        length: p[4] * scale,
+    };
+    problem.validate()?;
+    let end = problem.integrate_unchecked(steps);
+    let error = (end.point - xf).length_squared() + (end.frame[0] - tf).length_squared();
+    Ok(SpiralSolution {
+        problem,
+        error,
+        iterations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_end(s: &SpiralSolution, xf: DVec3, tf: DVec3, tol: f64) {
+        let e = s.problem.integrate(1024).unwrap();
+        let scale = 1.0 + xf.length();
+        assert!(
+            e.point.distance(xf) < tol * scale,
+            "end {} vs {xf}",
+            e.point
+        );
+        assert!(
+            e.frame[0].distance(tf.normalize()) < tol,
+            "tangent {} vs {tf}",
+            e.frame[0]
+        );
+    }
+
+    #[test]
+    fn roundness_pairs_on_a_circle_give_the_circle() {
+        // Points on a circle of radius 3 with its tangents (Prop. 5.4).
+        let r = 3.0;
+        for theta in [0.3f64, 1.0, 2.0, 3.0, 4.5] {
+            let x0 = DVec3::new(r, 0.0, 0.0);
+            let t0 = DVec3::Y;
+            let xf = DVec3::new(r * theta.cos(), r * theta.sin(), 0.0);
+            let tf = DVec3::new(-theta.sin(), theta.cos(), 0.0);
+            let s = solve_spiral(x0, t0, xf, tf, &SolveOptions::default()).unwrap();
+            let p = s.problem;
+            assert!(
+                (p.kappa0 - 1.0 / r).abs() < 1e-9,
+                "θ = {theta}: κ₀ = {}",
+                p.kappa0
+            );
+            assert!(
+                p.gamma.abs() < 1e-9 && p.tau0.abs() < 1e-9 && p.delta.abs() < 1e-9,
+                "{p:?}"
+            );
+            // The circle's position is integrated by Simpson at 128 steps
+            // (error ≈ (θ/128)⁴ relative): L absorbs it.
+            assert!(
+                (p.length - r * theta).abs() < 1e-7 * r * theta,
+                "L = {}",
+                p.length
+            );
+            assert!(s.error < 1e-20, "ε = {}", s.error);
+        }
+    }
+
+    #[test]
+    fn extensibility_recovers_a_spiral_from_its_ends() {
+        // Completing between the ends of a spiral reproduces it (Prop. 5.3).
+        let truth = FrenetProblem::new(
+            DVec3::new(1.0, 2.0, -1.0),
+            DVec3::new(0.0, 0.6, 0.8),
+            DVec3::X,
+            0.8,
+            0.3,
+            0.4,
+            -0.2,
+            2.5,
+        );
+        let end = truth.integrate(4096).unwrap();
+        // With the truth's start normal (the end conditions leave it free).
+        let o = SolveOptions {
+            start_normal: Some(truth.frame[1]),
+            ..Default::default()
+        };
+        let s = solve_spiral(truth.start, truth.frame[0], end.point, end.frame[0], &o).unwrap();
+        check_end(&s, end.point, end.frame[0], 1e-8);
+        let p = s.problem;
+        for (a, b) in [
+            (p.kappa0, truth.kappa0),
+            (p.gamma, truth.gamma),
+            (p.tau0, truth.tau0),
+            (p.delta, truth.delta),
+            (p.length, truth.length),
+        ] {
+            assert!((a - b).abs() < 1e-6, "{a} vs {b}: {p:?}");
+        }
+    }
+
+    #[test]
+    fn invariant_to_rotation_translation_and_scale() {
+        let (x0, t0) = (DVec3::ZERO, DVec3::new(1.0, 0.2, 0.0));
+        let (xf, tf) = (DVec3::new(2.0, 1.0, 0.5), DVec3::new(0.1, 1.0, 0.3));
+        let base = solve_spiral(x0, t0, xf, tf, &SolveOptions::default()).unwrap();
+        let rot = glam::DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
+        let (s, shift) = (3.5, DVec3::new(-4.0, 1.0, 9.0));
+        let tr = |p: DVec3| rot * p * s + shift;
+        let other =
+            solve_spiral(tr(x0), rot * t0, tr(xf), rot * tf, &SolveOptions::default()).unwrap();
+        let (a, b) = (base.problem, other.problem);
+        assert!((b.kappa0 - a.kappa0 / s).abs() < 1e-8 * (1.0 + a.kappa0.abs()));
+        assert!((b.gamma - a.gamma / (s * s)).abs() < 1e-8 * (1.0 + a.gamma.abs()));
+        assert!((b.tau0 - a.tau0 / s).abs() < 1e-8 * (1.0 + a.tau0.abs()));
+        assert!((b.delta - a.delta / (s * s)).abs() < 1e-8 * (1.0 + a.delta.abs()));
+        assert!((b.length - a.length * s).abs() < 1e-8 * a.length * s);
+        check_end(&other, tr(xf), rot * tf, 1e-8);
+    }
+
+    #[test]
+    fn straight_and_bad_input() {
+        let s = solve_spiral(
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::X,
+            &SolveOptions::default(),
+        )
+        .unwrap();
+        assert!(s.problem.kappa0.abs() < 1e-12 && (s.problem.length - 2.0).abs() < 1e-12);
+        assert_eq!(
+            solve_spiral(
+                DVec3::ONE,
+                DVec3::X,
+                DVec3::ONE,
+                DVec3::Y,
+                &SolveOptions::default()
+            ),
+            Err(SolveError::Coincident)
+        );
+        assert_eq!(
+            solve_spiral(
+                DVec3::ZERO,
+                DVec3::ZERO,
+                DVec3::ONE,
+                DVec3::Y,
+                &SolveOptions::default()
+            ),
+            Err(SolveError::BadInput)
+        );
+        assert_eq!(
+            solve_spiral(
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::new(f64::NAN, 0.0, 0.0),
+                DVec3::Y,
+                &SolveOptions::default()
+            ),
+            Err(SolveError::BadInput)
+        );
+    }
+}
