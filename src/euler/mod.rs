@@ -13,7 +13,9 @@
 //! conditions).
 
 pub mod frenet;
+pub mod paper;
 pub mod solve;
 
 pub use frenet::{FrenetEnd, FrenetError, FrenetProblem, FRAME_TOL};
+pub use paper::{paper_spiral, PaperIntegrator, PaperOptions};
 pub use solve::{solve_spiral, SolveError, SolveOptions, SpiralSolution};

@@ -111,6 +111,80 @@ fn lm_step(a: &[[f64; 5]; 5], g: &[f64; 5], lambda: f64) -> Option<[f64; 5]> {
     d.iter().all(|v| v.is_finite()).then_some(d)
 }
 
+/// The problem translated to the origin and scaled by `D` (Section 6), with
+/// its start frame and the circular-arc initial guess.
+pub(crate) struct Scaled {
+    pub frame: [DVec3; 3],
+    /// `(x_f − x₀)/D`.
+    pub target: DVec3,
+    /// Unit `T_f`.
+    pub tangent: DVec3,
+    pub scale: f64,
+    /// `(κ₀, γ, τ₀, δ, L)` of the scaled problem.
+    pub initial: [f64; 5],
+}
+
+impl Scaled {
+    pub fn new(
+        x0: DVec3,
+        t0: DVec3,
+        xf: DVec3,
+        tf: DVec3,
+        start_normal: Option<DVec3>,
+    ) -> Result<Self, SolveError> {
+        if !(x0.is_finite() && t0.is_finite() && xf.is_finite() && tf.is_finite()) {
+            return Err(SolveError::BadInput);
+        }
+        let (t0, tf) = match (t0.try_normalize(), tf.try_normalize()) {
+            (Some(a), Some(b)) => (a, b),
+            _ => return Err(SolveError::BadInput),
+        };
+        let d = xf - x0;
+        let scale = d.abs().max_element();
+        if scale == 0.0 {
+            return Err(SolveError::Coincident);
+        }
+        let ds = d / scale;
+        // In-plane normal towards x_f's side; any perpendicular if d ∥ T₀.
+        let n0 = match start_normal {
+            Some(n) => (n - n.dot(t0) * t0)
+                .try_normalize()
+                .ok_or(SolveError::BadInput)?,
+            None => (ds - ds.dot(t0) * t0)
+                .try_normalize()
+                .unwrap_or_else(|| t0.any_orthonormal_vector()),
+        };
+        let dl = ds.length();
+        let alpha = t0.angle_between(ds);
+        let (kappa, length) = if alpha < 1e-9 {
+            (0.0, dl)
+        } else {
+            (2.0 * alpha.sin() / dl, dl * alpha / alpha.sin())
+        };
+        Ok(Scaled {
+            frame: [t0, n0, t0.cross(n0)],
+            target: ds,
+            tangent: tf,
+            scale,
+            initial: [kappa, 0.0, 0.0, 0.0, length],
+        })
+    }
+
+    /// The solution in the input's units (Prop. 5.1).
+    pub fn unscale(&self, x0: DVec3, p: &[f64; 5]) -> FrenetProblem {
+        let sc = self.scale;
+        FrenetProblem {
+            start: x0,
+            frame: self.frame,
+            kappa0: p[0] / sc,
+            gamma: p[1] / (sc * sc),
+            tau0: p[2] / sc,
+            delta: p[3] / (sc * sc),
+            length: p[4] * sc,
+        }
+    }
+}
+
 /// The spiral from `(x0, t0)` to `(xf, tf)` (tangents need not be unit).
 pub fn solve_spiral(
     x0: DVec3,
@@ -119,39 +193,15 @@ pub fn solve_spiral(
     tf: DVec3,
     opts: &SolveOptions,
 ) -> Result<SpiralSolution, SolveError> {
-    if !(x0.is_finite() && t0.is_finite() && xf.is_finite() && tf.is_finite()) {
-        return Err(SolveError::BadInput);
-    }
-    let (t0, tf) = match (t0.try_normalize(), tf.try_normalize()) {
-        (Some(a), Some(b)) => (a, b),
-        _ => return Err(SolveError::BadInput),
-    };
-    let d = xf - x0;
-    let scale = d.abs().max_element();
-    if scale == 0.0 {
-        return Err(SolveError::Coincident);
-    }
-    let ds = d / scale;
-    // In-plane normal towards x_f's side; any perpendicular if d ∥ T₀.
-    let n0 = match opts.start_normal {
-        Some(n) => (n - n.dot(t0) * t0)
-            .try_normalize()
-            .ok_or(SolveError::BadInput)?,
-        None => (ds - ds.dot(t0) * t0)
-            .try_normalize()
-            .unwrap_or_else(|| t0.any_orthonormal_vector()),
-    };
-    let frame = [t0, n0, t0.cross(n0)];
-
-    // Circular-arc initial guess.
+    let Scaled {
+        frame,
+        target: ds,
+        tangent: tf,
+        scale,
+        initial,
+    } = Scaled::new(x0, t0, xf, tf, opts.start_normal)?;
     let dl = ds.length();
-    let alpha = t0.angle_between(ds);
-    let (kappa, length) = if alpha < 1e-9 {
-        (0.0, dl)
-    } else {
-        (2.0 * alpha.sin() / dl, dl * alpha / alpha.sin())
-    };
-    let mut p = [kappa, 0.0, 0.0, 0.0, length];
+    let mut p = initial;
     let steps = opts.steps.max(1);
     let mut r = residual(&p, frame, ds, tf, steps);
     let mut err = norm2(&r);
@@ -210,15 +260,14 @@ pub fn solve_spiral(
         }
     }
     // Scale back (Prop. 5.1).
-    let problem = FrenetProblem {
-        start: x0,
+    let problem = Scaled {
         frame,
-        kappa0: p[0] / scale,
-        gamma: p[1] / (scale * scale),
-        tau0: p[2] / scale,
-        delta: p[3] / (scale * scale),
-        length: p[4] * scale,
-    };
+        target: ds,
+        tangent: tf,
+        scale,
+        initial,
+    }
+    .unscale(x0, &p);
     problem.validate()?;
     let end = problem.integrate_unchecked(steps);
     let error = (end.point - xf).length_squared() + (end.frame[0] - tf).length_squared();
