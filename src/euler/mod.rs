@@ -10,6 +10,8 @@
 //! integrator (explicit Euler) is first order and drifts off the rotation
 //! group; see `shared/papers/ERRATA.md`, section 004.
 
+pub mod clothoid;
 pub mod frenet;
 
+pub use clothoid::{clothoid_g1, Clothoid, ClothoidError};
 pub use frenet::{FrenetEnd, FrenetError, FrenetProblem, FRAME_TOL};
