@@ -356,7 +356,10 @@ pub fn clothoid_g1(
     let d = p1 - p0;
     let r = d.length();
     let scale = p0.abs().max_element().max(p1.abs().max_element());
-    if !(r > 4.0 * f64::EPSILON * scale) || !(r > 0.0) || !r.is_finite() {
+    if !r.is_finite() {
+        return Err(ClothoidError::NonFinite); // the chord overflows
+    }
+    if !(r > 4.0 * f64::EPSILON * scale) {
         return Err(ClothoidError::CoincidentPoints);
     }
     let phi = d.y.atan2(d.x);
@@ -397,10 +400,19 @@ pub fn clothoid_g1(
     })
 }
 
+#[cfg(test)]
+thread_local! {
+    /// How often (this thread) [`solve_a`] fell back to its bracketed safeguard.
+    static SAFEGUARD_USED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
 /// Root of `g` near `guess`: Newton, kept inside a sign-change bracket when
 /// Newton leaves it or stalls (bisection step).
 fn solve_a(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
-    let tol = 1e-15;
+    // Newton converges quadratically: once a step is below 1e-10 the next
+    // (polishing) step is at rounding level; asking for less than that makes
+    // it cycle between neighbouring floats.
+    let tol = 1e-10;
     // Plain Newton first (the paper: a few iterations from its guess).
     let mut a = guess;
     for _ in 0..30 {
@@ -417,7 +429,7 @@ fn solve_a(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
             // One more step to polish.
             let (g, dg) = g_and_dg(a, delta, phi0);
             let st = g / dg;
-            if st.is_finite() && st.abs() < 1e-12 {
+            if st.is_finite() && st.abs() < 1e-9 * a.abs().max(1.0) {
                 a -= st;
             }
             return Some(a);
@@ -426,14 +438,20 @@ fn solve_a(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
             break;
         }
     }
-    // Safeguard: find a sign change of g moving outward from the guess.
-    let (g0, _) = g_and_dg(guess, delta, phi0);
+    #[cfg(test)]
+    SAFEGUARD_USED.with(|c| c.set(c.get() + 1));
+    bracketed_root(guess, delta, phi0)
+}
+
+/// Safeguard: the sign change of `g` nearest `guess` (steps of 0.05
+/// outward, up to 8·2π away), then Newton kept inside it (bisection).
+fn bracketed_root(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
     let h = 0.05;
     let mut bracket = None;
     'outer: for i in 0..(8.0 * TAU / h) as usize {
         for dir in [1.0, -1.0] {
             let lo = guess + dir * h * i as f64;
-            let hi = lo + dir * h;
+            let hi = guess + dir * h * (i + 1) as f64; // shared with the next step
             let (gl, _) = g_and_dg(lo, delta, phi0);
             let (gh, _) = g_and_dg(hi, delta, phi0);
             if gl == 0.0 {
@@ -445,7 +463,6 @@ fn solve_a(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
             }
         }
     }
-    let _ = g0;
     let (mut lo, mut hi) = bracket?;
     let mut glo = g_and_dg(lo, delta, phi0).0;
     let mut a = 0.5 * (lo + hi);
@@ -466,7 +483,9 @@ fn solve_a(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
         } else {
             0.5 * (lo + hi)
         };
-        if (next - a).abs() <= tol * a.abs().max(1.0) || hi - lo <= tol * a.abs().max(1.0) {
+        if (next - a).abs() <= 1e-15 * a.abs().max(1.0)
+            || hi - lo <= 4.0 * f64::EPSILON * a.abs().max(1.0)
+        {
             return Some(next);
         }
         a = next;

@@ -336,3 +336,77 @@ fn bad_input_is_an_error() {
         }
     }
 }
+
+/// The whole angle domain: every (φ₀, φ₁) on a grid of (−π, π]² (ends
+/// included) is solved, and the clothoid meets both end conditions.
+#[test]
+fn angle_domain_grid_interpolates() {
+    let n = 60;
+    let mut worst: f64 = 0.0;
+    let mut failed = Vec::new();
+    for i in 0..=n {
+        for j in 0..=n {
+            let p0 = -PI + TAU * i as f64 / n as f64;
+            let p1 = -PI + TAU * j as f64 / n as f64;
+            let before = SAFEGUARD_USED.with(|c| c.get());
+            let res = clothoid_g1(DVec2::ZERO, p0, DVec2::X, p1);
+            if SAFEGUARD_USED.with(|c| c.get()) > before {
+                eprintln!(
+                    "safeguard at φ = ({p0:.4}, {p1:.4}) -> {:?}",
+                    res.map(|c| 0.5 * c.dkappa * c.length * c.length)
+                );
+            }
+            match res {
+                Ok(c) => {
+                    let e = (c.end() - DVec2::X)
+                        .length()
+                        .max(ang_diff(c.angle(c.length), p1));
+                    worst = worst.max(e);
+                    assert!(e < 1e-12, "φ = ({p0}, {p1}): residual {e:e}, {c:?}");
+                    // no extra loops: total |turning| below 4π
+                    let a = 0.5 * c.dkappa * c.length * c.length;
+                    assert!(a.abs() < 4.0 * TAU, "φ = ({p0}, {p1}): A = {a}");
+                }
+                Err(e) => failed.push((p0, p1, e)),
+            }
+        }
+    }
+    let safeguard = SAFEGUARD_USED.with(|c| c.get());
+    eprintln!(
+        "grid: worst residual {worst:e}; failures {failed:?}; safeguard used {safeguard} times"
+    );
+    assert_eq!(
+        safeguard, 0,
+        "Newton from the fitted guess should converge on the whole domain"
+    );
+    // Only the degenerate corner φ₀ = φ₁ = π (both tangents back along the chord; ±π map to π) may fail.
+    assert!(
+        failed
+            .iter()
+            .all(|&(a, b, _)| normalize_angle(a) == PI && normalize_angle(b) == PI),
+        "{failed:?}"
+    );
+}
+
+/// The bracketed safeguard finds the same root as Newton from nearby guesses.
+#[test]
+fn safeguard_finds_the_newton_root() {
+    for &(p0, p1) in &[
+        (0.3, 0.9),
+        (-2.5, 1.4),
+        (3.0, 3.0),
+        (-1.0, 1.0),
+        (2.9, -0.2),
+    ] {
+        let delta: f64 = p1 - p0;
+        let guess = 3.0 * (p0 + p1);
+        let newton = solve_a(guess, delta, p0).unwrap();
+        for off in [-0.4, 0.0, 0.33] {
+            let b = bracketed_root(newton + off, delta, p0).unwrap();
+            assert!(
+                (b - newton).abs() < 1e-12 * newton.abs().max(1.0),
+                "φ = ({p0}, {p1}), off {off}: {b} vs {newton}"
+            );
+        }
+    }
+}
