@@ -325,8 +325,17 @@ fn bad_input_is_an_error() {
         Err(ClothoidError::NonFinite)
     );
     assert_eq!(
-        clothoid_g1(p, 0.0, DVec2::new(1e308, -1e308), 0.0).is_err() || true,
-        true
+        clothoid_g1(
+            DVec2::new(-1e308, 1e308),
+            0.0,
+            DVec2::new(1e308, -1e308),
+            0.0
+        ),
+        Err(ClothoidError::NonFinite)
+    );
+    assert_eq!(
+        clothoid_g1(p, 0.0, p + DVec2::new(1e-17, 0.0), 0.0),
+        Err(ClothoidError::CoincidentPoints)
     );
     // Extreme but valid angles: both tangents pointing back along the chord.
     for &(a, b) in &[(PI, PI), (PI, -PI), (PI, 0.0), (-3.0, 3.0), (3.1, 3.1)] {
