@@ -37,11 +37,12 @@
 //! (`|b| ≤ |a|/2 + 2π`).
 //!
 //! **Root choice.** Newton from the paper's fitted guess converges (no
-//! safeguard needed) on a 61×61 grid covering `(φ₀, φ₁) ∈ [−π, π]²`,
-//! including `φ₀ = φ₁ = π`; a bracketed fallback (nearest sign change of `g`
-//! around the guess) is kept for safety. This is the root of the paper's
-//! uniqueness interval as far as tested (round trips of loop-free clothoids
-//! are recovered); the interval bound itself is not coded.
+//! safeguard needed) on a 61×61 grid (also checked once at 301×301) of
+//! `(φ₀, φ₁) ∈ [−π, π]²`, including `φ₀ = φ₁ = π`, and the roots it finds
+//! satisfy `0 ≤ A/(φ₀+φ₁) ≤ 3`. The solver accepts a root only inside that
+//! window (widened slightly, `root_window`); outside it, or if Newton
+//! fails, a bracketed search inside the window takes over. The window is
+//! measured, not the paper's proven uniqueness interval (not coded here).
 
 use glam::DVec2;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
@@ -398,7 +399,8 @@ pub fn clothoid_g1(
             + (CF[3] + xy * CF[4]) * (x2 + y2)
             + CF[5] * (x2 * x2 + y2 * y2));
 
-    let a = solve_a(guess, delta, phi0).ok_or(ClothoidError::NoConvergence)?;
+    let a = solve_a(guess, delta, phi0, root_window(phi0 + phi1))
+        .ok_or(ClothoidError::NoConvergence)?;
     let (x, _) = generalized_fresnel(2.0 * a, delta - a, phi0);
     let l = r / x[0];
     if !(l.is_finite() && l > 0.0) {
@@ -421,7 +423,16 @@ thread_local! {
 
 /// Root of `g` near `guess`: Newton, kept inside a sign-change bracket when
 /// Newton leaves it or stalls (bisection step).
-fn solve_a(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
+/// Where the wanted root lies: `A` has the sign of `φ₀ + φ₁` and
+/// `|A| ≤ 3|φ₀ + φ₁|` (measured on a 61×61 grid of `[−π, π]²`: the ratio
+/// `A/(φ₀+φ₁)` stays in `[0, 3.0]`; test `angle_domain_grid_interpolates`),
+/// widened by 3% and 0.05. Our stand-in for the paper's uniqueness interval.
+fn root_window(sum: f64) -> (f64, f64) {
+    let (a, b) = (0.0_f64, 3.1 * sum);
+    (a.min(b) - 0.05, a.max(b) + 0.05)
+}
+
+fn solve_a(guess: f64, delta: f64, phi0: f64, window: (f64, f64)) -> Option<f64> {
     // Newton converges quadratically: once a step is below 1e-10 the next
     // (polishing) step is at rounding level; asking for less than that makes
     // it cycle between neighbouring floats.
@@ -445,7 +456,10 @@ fn solve_a(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
             if st.is_finite() && st.abs() < 1e-9 * a.abs().max(1.0) {
                 a -= st;
             }
-            return Some(a);
+            if a >= window.0 && a <= window.1 {
+                return Some(a);
+            }
+            break; // a root outside the window: not the one wanted
         }
         if !a.is_finite() || (a - guess).abs() > 4.0 * TAU {
             break;
@@ -453,18 +467,32 @@ fn solve_a(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
     }
     #[cfg(test)]
     SAFEGUARD_USED.with(|c| c.set(c.get() + 1));
-    bracketed_root(guess, delta, phi0)
+    bracketed_root(guess, delta, phi0, window)
 }
 
-/// Safeguard: the sign change of `g` nearest `guess` (steps of 0.05
-/// outward, up to 8·2π away), then Newton kept inside it (bisection).
-fn bracketed_root(guess: f64, delta: f64, phi0: f64) -> Option<f64> {
+/// Safeguard: the sign change of `g` inside `window` nearest `guess`
+/// (clamped into the window; steps of 0.05 outward), then Newton kept
+/// inside it (bisection).
+fn bracketed_root(guess: f64, delta: f64, phi0: f64, window: (f64, f64)) -> Option<f64> {
+    let (wl, wh) = window;
+    if !(wl <= wh) {
+        return None;
+    }
+    let guess = guess.clamp(wl, wh);
     let h = 0.05;
     let mut bracket = None;
-    'outer: for i in 0..(8.0 * TAU / h) as usize {
+    let steps = ((wh - wl) / h).ceil() as usize + 1;
+    'outer: for i in 0..steps {
         for dir in [1.0, -1.0] {
             let lo = guess + dir * h * i as f64;
-            let hi = guess + dir * h * (i + 1) as f64; // shared with the next step
+            if lo < wl || lo > wh {
+                continue;
+            }
+            // shared with the next step; clipped to the window
+            let hi = (guess + dir * h * (i + 1) as f64).clamp(wl, wh);
+            if hi == lo {
+                continue;
+            }
             let (gl, _) = g_and_dg(lo, delta, phi0);
             let (gh, _) = g_and_dg(hi, delta, phi0);
             if gl == 0.0 {

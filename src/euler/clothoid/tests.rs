@@ -353,6 +353,7 @@ fn angle_domain_grid_interpolates() {
     let n = 60;
     let mut worst: f64 = 0.0;
     let mut failed = Vec::new();
+    let mut max_a: f64 = 0.0;
     for i in 0..=n {
         for j in 0..=n {
             let p0 = -PI + TAU * i as f64 / n as f64;
@@ -375,6 +376,16 @@ fn angle_domain_grid_interpolates() {
                     // no extra loops: total |turning| below 4π
                     let a = 0.5 * c.dkappa * c.length * c.length;
                     assert!(a.abs() < 4.0 * TAU, "φ = ({p0}, {p1}): A = {a}");
+                    // A has the sign of φ₀ + φ₁ (A = 0: circle arc or segment).
+                    let (n0, n1) = (normalize_angle(p0), normalize_angle(p1));
+                    assert!(a * (n0 + n1) >= -1e-12, "φ = ({p0}, {p1}): A = {a}");
+                    assert!(
+                        a.abs() <= 3.0 * (n0 + n1).abs() + 1e-9,
+                        "φ = ({p0}, {p1}): A = {a}"
+                    );
+                    if (n0 + n1).abs() > 1e-9 {
+                        max_a = max_a.max(a.abs() / (n0 + n1).abs());
+                    }
                 }
                 Err(e) => failed.push((p0, p1, e)),
             }
@@ -382,7 +393,7 @@ fn angle_domain_grid_interpolates() {
     }
     let safeguard = SAFEGUARD_USED.with(|c| c.get());
     eprintln!(
-        "grid: worst residual {worst:e}; failures {failed:?}; safeguard used {safeguard} times"
+        "grid: worst residual {worst:e}; failures {failed:?}; safeguard used {safeguard} times; max A/(φ₀+φ₁) {max_a}"
     );
     assert_eq!(
         safeguard, 0,
@@ -409,9 +420,10 @@ fn safeguard_finds_the_newton_root() {
     ] {
         let delta: f64 = p1 - p0;
         let guess = 3.0 * (p0 + p1);
-        let newton = solve_a(guess, delta, p0).unwrap();
-        for off in [-0.4, 0.0, 0.33] {
-            let b = bracketed_root(newton + off, delta, p0).unwrap();
+        let w = root_window(normalize_angle(p0) + normalize_angle(p1));
+        let newton = solve_a(guess, delta, p0, w).unwrap();
+        for off in [-0.4, 0.0, 0.33, 100.0] {
+            let b = bracketed_root(newton + off, delta, p0, w).unwrap();
             assert!(
                 (b - newton).abs() < 1e-12 * newton.abs().max(1.0),
                 "φ = ({p0}, {p1}), off {off}: {b} vs {newton}"
