@@ -287,7 +287,7 @@ pub struct Clothoid {
 impl Clothoid {
     /// Point at arc length `s`: `P₀ + s (X₀, Y₀)(κ′s², κ₀s, θ₀)`.
     pub fn eval(&self, s: f64) -> DVec2 {
-        let (x, y) = generalized_fresnel(self.dkappa * s * s, self.kappa0 * s, self.theta0);
+        let (x, y) = generalized_fresnel((self.dkappa * s) * s, self.kappa0 * s, self.theta0);
         self.start + s * DVec2::new(x[0], y[0])
     }
     /// Tangent angle `θ(s) = θ₀ + κ₀s + κ′s²/2`.
@@ -318,7 +318,8 @@ impl Clothoid {
 /// Why [`clothoid_g1`] found no clothoid.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum ClothoidError {
-    /// A coordinate or angle is NaN or infinite.
+    /// A coordinate or angle is NaN or infinite, or the chord or the
+    /// resulting curvatures overflow `f64`.
     #[error("non-finite clothoid G1 input")]
     NonFinite,
     /// The end points coincide (to rounding), so the chord has no direction.
@@ -368,7 +369,7 @@ pub fn clothoid_g1(
         return Err(ClothoidError::NonFinite);
     }
     let d = p1 - p0;
-    let r = d.length();
+    let r = d.x.hypot(d.y); // no under/overflow of the squares
     let scale = p0.abs().max_element().max(p1.abs().max_element());
     if !r.is_finite() {
         return Err(ClothoidError::NonFinite); // the chord overflows
@@ -406,11 +407,15 @@ pub fn clothoid_g1(
     if !(l.is_finite() && l > 0.0) {
         return Err(ClothoidError::NoConvergence);
     }
+    let (kappa0, dkappa) = ((delta - a) / l, 2.0 * a / l / l); // no L² overflow
+    if !(kappa0.is_finite() && dkappa.is_finite()) {
+        return Err(ClothoidError::NonFinite); // curvatures overflow (tiny chord)
+    }
     Ok(Clothoid {
         start: p0,
         theta0: phi + phi0,
-        kappa0: (delta - a) / l,
-        dkappa: 2.0 * a / (l * l),
+        kappa0,
+        dkappa,
         length: l,
     })
 }

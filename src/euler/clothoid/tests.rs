@@ -431,3 +431,33 @@ fn safeguard_finds_the_newton_root() {
         }
     }
 }
+
+/// Extreme but finite inputs never panic; successes meet the end conditions.
+#[test]
+fn extreme_inputs_do_not_panic() {
+    let mut rng = ChaCha8Rng::seed_from_u64(99);
+    for _ in 0..2000 {
+        let e0: f64 = rng.gen_range(-300.0..300.0);
+        let e1: f64 = rng.gen_range(-300.0..300.0);
+        let p0 = DVec2::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)) * 10f64.powf(e0);
+        let p1 = DVec2::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)) * 10f64.powf(e1);
+        let t0 = rng.gen_range(-1e6..1e6);
+        let t1 = rng.gen_range(-1e6..1e6);
+        if let Ok(c) = clothoid_g1(p0, t0, p1, t1) {
+            assert!(c.length > 0.0 && c.length.is_finite());
+            let r = (p1 - p0).length();
+            let end = c.end();
+            if end.is_finite() {
+                assert!(
+                    (end - p1).length() <= 1e-11 * r + 1e-15 * p0.length().max(p1.length()),
+                    "{c:?} {p1}"
+                );
+            }
+        }
+    }
+    let p = DVec2::ZERO;
+    assert_eq!(
+        clothoid_g1(p, 1.0, DVec2::new(1e-310, 0.0), -1.0),
+        Err(ClothoidError::NonFinite)
+    );
+}
