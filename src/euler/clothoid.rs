@@ -8,7 +8,7 @@
 //! ```
 //!
 //! with the generalised Fresnel integrals (Bertolazzi & Frego, "G1 fitting
-//! with clothoids", Math. Methods Appl. Sci. 38 (2015), Eq. (9))
+//! with clothoids", Math. Methods Appl. Sci. 38 (2015); equation numbers not checked against the paper)
 //!
 //! ```text
 //! X_k(a,b,c) = ∫₀¹ tᵏ cos(a t²/2 + b t + c) dt,   Y_k(a,b,c) = ∫₀¹ tᵏ sin(…) dt.
@@ -20,7 +20,7 @@
 //! **Fresnel integrals.** `C(x), S(x) = ∫₀ˣ cos/sin(πt²/2) dt` ([`fresnel_cs`])
 //! are summed as a power series for `|x| < 1.5` and from the Lentz continued
 //! fraction of the complementary error function beyond (Numerical Recipes
-//! §6.9 method, written here from the formulas). For `|a| ≥ 4` the
+//! Fresnel method, written here from the formulas). For `|a| ≥ 4` the
 //! generalised integrals complete the square and use `C, S`; their moments
 //! `k = 1, 2` follow from `∫ θ′ e^{iθ} = −i[e^{iθ}]` (exact recurrences).
 //! For `|a| < 4` (including `a = 0`) they are the series
@@ -214,7 +214,7 @@ const A_SERIES_WIDE: f64 = 12.0;
 
 /// Generalised Fresnel integrals and moments `X_k, Y_k` for `k = 0, 1, 2`:
 /// `X_k(a,b,c) = ∫₀¹ tᵏ cos(a t²/2 + b t + c) dt`, `Y_k` with `sin`
-/// (Bertolazzi & Frego, Eq. (9)).
+/// (Bertolazzi & Frego).
 pub fn generalized_fresnel(a: f64, b: f64, c: f64) -> ([f64; 3], [f64; 3]) {
     if a.abs() < A_SERIES || (a.abs() < A_SERIES_WIDE && b.abs() > 2.0 * a.abs()) {
         // Series in a: X_k + iY_k = e^{ic} Σₙ (ia/2)ⁿ/n! J_{k+2n}(b).
@@ -342,7 +342,7 @@ pub fn normalize_angle(x: f64) -> f64 {
     y
 }
 
-/// `g(A) = Y₀(2A, δ − A, φ₀)` and `g′(A) = X₂ − X₁` (Bertolazzi & Frego §3).
+/// `g(A) = Y₀(2A, δ − A, φ₀)` and `g′(A) = X₂ − X₁`.
 fn g_and_dg(a: f64, delta: f64, phi0: f64) -> (f64, f64) {
     let (x, y) = generalized_fresnel(2.0 * a, delta - a, phi0);
     (y[0], x[2] - x[1])
@@ -357,7 +357,7 @@ fn g_and_dg(a: f64, delta: f64, phi0: f64) -> (f64, f64) {
 /// the paper's fitted initial guess (`A ≈ 3(φ₀ + φ₁)` corrected by a
 /// polynomial in `φ₀/π, φ₁/π`), safeguarded by bisection on a sign-change
 /// bracket around the guess; then `L = r / X₀(2A, δ − A, φ₀)`,
-/// `κ′ = 2A/L²`, `κ₀ = (δ − A)/L` (Eq. (16)). The returned `theta0` is
+/// `κ′ = 2A/L²`, `κ₀ = (δ − A)/L`. The returned `theta0` is
 /// `φ + φ₀` (the input reduced mod 2π), and `angle(L) = φ + φ₁`.
 pub fn clothoid_g1(
     p0: DVec2,
