@@ -8,7 +8,7 @@
 //! ```
 //!
 //! with the generalised Fresnel integrals (Bertolazzi & Frego, "G1 fitting
-//! with clothoids", Math. Methods Appl. Sci. 38 (2015); equation numbers not checked against the paper)
+//! with clothoids", Math. Methods Appl. Sci. 38 (2015))
 //!
 //! ```text
 //! X_k(a,b,c) = ∫₀¹ tᵏ cos(a t²/2 + b t + c) dt,   Y_k(a,b,c) = ∫₀¹ tᵏ sin(…) dt.
