@@ -833,7 +833,11 @@ mod tests {
             let e = p.integrate(steps).unwrap();
             let scale = 1.0 + p.start.length() + p.length;
             // On SO(3), a chord no longer than the arc.
-            prop_assert!(orthonormality(&e.frame) < 4e-15);
+            // The integration adds at most a few ε to the start frame's own
+            // defect (a random frame built by Gram–Schmidt from nearly
+            // parallel vectors can start 6e-15 off; found by this test).
+            let (out, inp) = (orthonormality(&e.frame), orthonormality(&p.frame));
+            prop_assert!(out < 4e-15 + inp, "out {out:e}, start frame {inp:e}");
             prop_assert!((e.point - p.start).length() <= p.length * (1.0 + 1e-14));
             // Self-adjoint: the reversed spiral comes back.
             let back = p.reversed(&e).integrate(steps).unwrap();

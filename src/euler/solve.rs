@@ -18,10 +18,8 @@
 //! [`frenet`](super::frenet) at a fixed step count, so residuals are smooth
 //! in the parameters; the Jacobian is by central differences.
 //!
-//! Initial guess: the circular arc in the plane of `T₀` and `d` from `x₀`
-//! with tangent `T₀` through `x_f` (`κ = 2 sin α/|d|`, `L = |d| α/sin α`,
-//! `α` the angle between `T₀` and `d`), `γ = τ₀ = δ = 0`. The planar
-//! clothoid initialisation of the paper will replace it.
+//! Initial guess (the paper's Step 1): the planar clothoid G1 fit in the
+//! plane of `T₀` and `d` to `T_f`'s projection, `τ₀ = δ = 0`.
 
 use glam::DVec3;
 
@@ -154,19 +152,12 @@ impl Scaled {
                 .try_normalize()
                 .unwrap_or_else(|| t0.any_orthonormal_vector()),
         };
-        let dl = ds.length();
-        let alpha = t0.angle_between(ds);
-        let (kappa, length) = if alpha < 1e-9 {
-            (0.0, dl)
-        } else {
-            (2.0 * alpha.sin() / dl, dl * alpha / alpha.sin())
-        };
         Ok(Scaled {
             frame: [t0, n0, t0.cross(n0)],
             target: ds,
             tangent: tf,
             scale,
-            initial: [kappa, 0.0, 0.0, 0.0, length],
+            initial: planar_guess(t0, n0, ds, tf),
         })
     }
 
@@ -182,6 +173,38 @@ impl Scaled {
             delta: p[3] / (sc * sc),
             length: p[4] * sc,
         }
+    }
+}
+
+/// Step 1 of the paper: the planar clothoid in the plane of `T₀` and `d`
+/// (axes `T₀`, `N₀`) from the origin with angle 0 to `d` with the angle of
+/// `T_f`'s projection (Bertolazzi–Frego, [`clothoid`](super::clothoid));
+/// `τ₀ = δ = 0`. Falls back to the circular arc through `d` (tangent `T₀`
+/// at the start) when the projection vanishes or the clothoid fit fails.
+fn planar_guess(t0: DVec3, n0: DVec3, d: DVec3, tf: DVec3) -> [f64; 5] {
+    use glam::DVec2;
+    let p1 = DVec2::new(d.dot(t0), d.dot(n0));
+    let tproj = DVec2::new(tf.dot(t0), tf.dot(n0));
+    if tproj.length() > 1e-9 {
+        let theta1 = tproj.y.atan2(tproj.x);
+        if let Ok(c) = super::clothoid::clothoid_g1(DVec2::ZERO, 0.0, p1, theta1) {
+            if c.length > 0.0 && c.kappa0.is_finite() && c.dkappa.is_finite() {
+                return [c.kappa0, c.dkappa, 0.0, 0.0, c.length];
+            }
+        }
+    }
+    let dl = d.length();
+    let alpha = t0.angle_between(d);
+    if alpha < 1e-9 {
+        [0.0, 0.0, 0.0, 0.0, dl]
+    } else {
+        [
+            2.0 * alpha.sin() / dl,
+            0.0,
+            0.0,
+            0.0,
+            dl * alpha / alpha.sin(),
+        ]
     }
 }
 
