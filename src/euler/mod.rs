@@ -12,11 +12,13 @@
 //! spiral between two point–tangent pairs (Levenberg–Marquardt on the end
 //! conditions).
 
+pub mod batch;
 pub mod clothoid;
 pub mod frenet;
 pub mod paper;
 pub mod solve;
 
+pub use batch::solve_spirals;
 pub use clothoid::{clothoid_g1, Clothoid, ClothoidError};
 pub use frenet::{FrenetEnd, FrenetError, FrenetProblem, FRAME_TOL};
 pub use paper::{paper_spiral, PaperIntegrator, PaperOptions};

@@ -93,7 +93,7 @@ fn norm2(r: &[f64; 6]) -> f64 {
 }
 
 /// Solve `(A + λ diag A) Δ = −g` for the 5×5 normal equations (faer LU).
-fn lm_step(a: &[[f64; 5]; 5], g: &[f64; 5], lambda: f64) -> Option<[f64; 5]> {
+pub(crate) fn lm_step(a: &[[f64; 5]; 5], g: &[f64; 5], lambda: f64) -> Option<[f64; 5]> {
     use faer::linalg::solvers::Solve;
     let m = faer::Mat::<f64>::from_fn(5, 5, |i, j| {
         a[i][j]
