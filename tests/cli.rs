@@ -429,3 +429,36 @@ fn closed_stdout_pipe_is_not_a_panic() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn complete_fills_gaps_with_euler_spirals() {
+    let out = strandfit(&["complete", "--samples", "9", "examples/gaps.json"], "");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc = json(&out.stdout);
+    let pairs = doc["pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), 4);
+    // Roundness: a quarter of the unit circle.
+    let q = &pairs[0];
+    assert_eq!(q["id"], "quarter-circle");
+    assert!((q["kappa0"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{q}");
+    assert!(q["gamma"].as_f64().unwrap().abs() < 1e-9);
+    assert!((q["length"].as_f64().unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
+    assert_eq!(q["regular"], true);
+    // Samples run from p0 to p1.
+    let pts = points(&q["points"]);
+    assert_eq!(pts.len(), 9);
+    assert!(
+        pts[8].distance(strandfit::DVec3::new(0.0, 1.0, 0.0)) < 1e-9,
+        "{}",
+        pts[8]
+    );
+    // A non-planar pair is met too.
+    assert_eq!(pairs[2]["regular"], true, "{}", pairs[2]);
+    // A bad pair gets its own error; the batch goes on.
+    let e = pairs[3]["error"].as_str().unwrap();
+    assert!(e.contains("coincident") && e.contains("pairs[3]"), "{e}");
+}

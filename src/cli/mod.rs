@@ -1,7 +1,9 @@
 //! The `strandfit` command line: `helix`, `fit`, `sample`, `evaluate`,
-//! `integrate`, `compress`, `decompress`, `inspect`, `convert`, `bench`.
+//! `integrate`, `complete`, `compress`, `decompress`, `inspect`, `convert`,
+//! `bench`.
 
 mod bench_cmd;
+mod complete_cmd;
 mod compress_cmd;
 mod convert_cmd;
 mod decompress_cmd;
@@ -104,6 +106,9 @@ pub enum Command {
     Inspect(InspectArgs),
     /// Convert curves between file formats (streamed, in world coordinates).
     Convert(ConvertArgs),
+    /// Fill the gap between point–tangent pairs ({"pairs":[{"id","p0","t0",
+    /// "p1","t1"}]}) with 3D Euler spirals, batched on the chosen backend.
+    Complete(CompleteArgs),
     /// Measure whole-fit throughput on synthetic splines (elements per second).
     Bench(BenchArgs),
 }
@@ -279,6 +284,27 @@ pub struct DecompressArgs {
     pub to: Option<String>,
 }
 
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum CompleteMethod {
+    /// 3D Euler spirals (curvature and torsion linear in arc length).
+    Euler,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct CompleteArgs {
+    /// Input JSON file ("-" or absent: standard input).
+    pub input: Option<std::path::PathBuf>,
+    /// Output JSON file (absent: standard output). Written atomically.
+    #[arg(short, long)]
+    pub output: Option<std::path::PathBuf>,
+    /// Construction (ATPH curves are not built yet).
+    #[arg(long, value_enum, default_value_t = CompleteMethod::Euler)]
+    pub method: CompleteMethod,
+    /// Also write M points per curve, ends included (0: none).
+    #[arg(long, default_value_t = 0)]
+    pub samples: usize,
+}
+
 #[derive(clap::Args, Debug)]
 pub struct InspectArgs {
     /// The file to inspect.
@@ -349,6 +375,7 @@ pub fn main() -> ExitCode {
         Command::Sample(a) => cli.backend().and_then(|b| sample_cmd::run(a, &b)),
         Command::Evaluate(a) => cli.backend().and_then(|b| evaluate_cmd::run(a, &b)),
         Command::Integrate(a) => cli.backend().and_then(|b| integrate_cmd::run(a, &b)),
+        Command::Complete(a) => cli.backend().and_then(|b| complete_cmd::run(a, &b)),
         Command::Compress(a) => compress_cmd::run(a),
         Command::Decompress(a) => decompress_cmd::run(a),
         Command::Inspect(a) => inspect_cmd::run(a),
