@@ -13,7 +13,9 @@
 use glam::DVec3;
 
 use super::frenet::{FrenetEnd, FrenetProblem};
-use super::solve::{lm_step, Scaled, SolveError, SolveOptions, SpiralSolution};
+use super::solve::{
+    lm_step, norm2, normal_equations, Scaled, SolveError, SolveOptions, SpiralSolution,
+};
 use crate::backend::Backend;
 use crate::gpu::GpuError;
 
@@ -31,33 +33,11 @@ struct State {
     done: bool,
 }
 
-fn problem(sc: &Scaled, p: &[f64; 5]) -> FrenetProblem {
-    FrenetProblem {
-        start: DVec3::ZERO,
-        frame: sc.frame,
-        kappa0: p[0],
-        gamma: p[1],
-        tau0: p[2],
-        delta: p[3],
-        length: p[4].max(0.0),
-    }
-}
-
-fn residual(sc: &Scaled, e: &FrenetEnd) -> [f64; 6] {
-    let dx = e.point - sc.target;
-    let dt = e.frame[0] - sc.tangent;
-    [dx.x, dx.y, dx.z, dt.x, dt.y, dt.z]
-}
-
-fn norm2(r: &[f64; 6]) -> f64 {
-    r.iter().map(|x| x * x).sum()
-}
-
 /// A failed integration (a candidate the validator refuses) counts as an
 /// infinitely bad residual, so the step is rejected.
 fn end_residual(sc: &Scaled, e: &Result<FrenetEnd, super::FrenetError>) -> [f64; 6] {
     match e {
-        Ok(e) => residual(sc, e),
+        Ok(e) => sc.residual(e),
         Err(_) => [f64::INFINITY; 6],
     }
 }
@@ -93,7 +73,7 @@ pub fn solve_spirals(
         .iter()
         .map(|&i| {
             let s = states[i].as_ref().expect("live");
-            problem(&s.sc, &s.p)
+            s.sc.problem(&s.p)
         })
         .collect();
     let ends = backend.integrate(&probs, steps)?;
@@ -121,7 +101,7 @@ pub fn solve_spirals(
                 for sign in [1.0, -1.0] {
                     let mut q = s.p;
                     q[k] += sign * h;
-                    probs.push(problem(&s.sc, &q));
+                    probs.push(s.sc.problem(&q));
                 }
             }
         }
@@ -139,14 +119,7 @@ pub fn solve_spirals(
                     jac[row][k] = (rp[row] - rm[row]) / (2.0 * hs[5 * a + k]);
                 }
             }
-            let mut am = [[0.0; 5]; 5];
-            let mut g = [0.0; 5];
-            for r in 0..5 {
-                for c in 0..5 {
-                    am[r][c] = (0..6).map(|k| jac[k][r] * jac[k][c]).sum();
-                }
-                g[r] = (0..6).map(|k| jac[k][r] * s.r[k]).sum();
-            }
+            let (am, g) = normal_equations(&jac, &s.r);
             let mut q = s.p;
             if let Some(step) = lm_step(&am, &g, s.lambda) {
                 for k in 0..5 {
@@ -154,7 +127,7 @@ pub fn solve_spirals(
                 }
             }
             q[4] = q[4].max(1e-3 * s.sc.target.length());
-            trials.push(problem(&s.sc, &q));
+            trials.push(s.sc.problem(&q));
             trial_p.push(q);
         }
         let ends = backend.integrate(&trials, steps)?;
@@ -181,18 +154,9 @@ pub fn solve_spirals(
     Ok(states
         .into_iter()
         .zip(pairs)
-        .map(|(st, &(_, _, xf, tf))| {
+        .map(|(st, &(_, _, xf, _))| {
             let s = st?;
-            let problem = s.sc.unscale(s.x0, &s.p);
-            problem.validate()?;
-            let end = problem.integrate_unchecked(steps);
-            let tfu = tf.normalize();
-            let error = (end.point - xf).length_squared() + (end.frame[0] - tfu).length_squared();
-            Ok(SpiralSolution {
-                problem,
-                error,
-                iterations: s.iterations,
-            })
+            s.sc.solution(s.x0, xf, &s.p, steps, s.iterations)
         })
         .collect())
 }

@@ -19,8 +19,7 @@
 
 use glam::DVec3;
 
-use super::frenet::FrenetProblem;
-use super::solve::{Scaled, SolveError, SpiralSolution};
+use super::solve::{norm2, Scaled, SolveError, SpiralSolution};
 
 /// How Algorithm 1 integrates its candidate curves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -54,23 +53,13 @@ impl Default for PaperOptions {
 
 /// `ε` (Eq. 9) of parameters `p = (κ₀, γ, τ₀, δ, L)` in the scaled problem.
 fn epsilon(p: &[f64; 5], sc: &Scaled, integ: PaperIntegrator) -> f64 {
-    let pr = FrenetProblem {
-        start: DVec3::ZERO,
-        frame: sc.frame,
-        kappa0: p[0],
-        gamma: p[1],
-        tau0: p[2],
-        delta: p[3],
-        length: p[4].max(0.0),
-    };
+    let pr = sc.problem(p);
     let end = match integ {
         PaperIntegrator::ExplicitEuler(samples) => pr.integrate_explicit_euler(samples.max(2) - 1),
         PaperIntegrator::FourthOrder(steps) => Ok(pr.integrate_unchecked(steps.max(1))),
     };
     match end {
-        Ok(e) => {
-            (e.point - sc.target).length_squared() + (e.frame[0] - sc.tangent).length_squared()
-        }
+        Ok(e) => norm2(&sc.residual(&e)),
         Err(_) => f64::INFINITY,
     }
 }
@@ -147,21 +136,14 @@ pub fn paper_spiral(
             _ => delta *= 0.75,
         }
     }
-    let problem = sc.unscale(x0, &p);
-    let end = problem.integrate_unchecked(1024);
-    let tfu = tf.normalize();
-    let error = (end.point - xf).length_squared() + (end.frame[0] - tfu).length_squared();
-    Ok(SpiralSolution {
-        problem,
-        error,
-        iterations,
-    })
+    sc.solution(x0, xf, &p, 1024, iterations)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::euler::solve::{solve_spiral, SolveOptions};
+    use crate::euler::FrenetProblem;
 
     /// Problems from the ends of known spirals with the in-plane normal.
     fn problems() -> Vec<(DVec3, DVec3, DVec3, DVec3)> {

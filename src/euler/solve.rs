@@ -23,7 +23,7 @@
 
 use glam::DVec3;
 
-use super::frenet::{FrenetError, FrenetProblem};
+use super::frenet::{FrenetEnd, FrenetError, FrenetProblem};
 
 /// Options of [`solve_spiral`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,26 +70,22 @@ pub enum SolveError {
     Frenet(#[from] FrenetError),
 }
 
-/// Residual of parameters `p = (κ₀, γ, τ₀, δ, L)` for the scaled problem
-/// (start at the origin, frame `f`, target `xf`, `tf`).
-fn residual(p: &[f64; 5], f: [DVec3; 3], xf: DVec3, tf: DVec3, steps: usize) -> [f64; 6] {
-    let pr = FrenetProblem {
-        start: DVec3::ZERO,
-        frame: f,
-        kappa0: p[0],
-        gamma: p[1],
-        tau0: p[2],
-        delta: p[3],
-        length: p[4].max(0.0),
-    };
-    let e = pr.integrate_unchecked(steps);
-    let dx = e.point - xf;
-    let dt = e.frame[0] - tf;
-    [dx.x, dx.y, dx.z, dt.x, dt.y, dt.z]
+/// `|r|²`: Eq. 9's `ε` for a residual.
+pub(crate) fn norm2(r: &[f64; 6]) -> f64 {
+    r.iter().map(|x| x * x).sum()
 }
 
-fn norm2(r: &[f64; 6]) -> f64 {
-    r.iter().map(|x| x * x).sum()
+/// The Gauss–Newton normal equations `(JᵀJ, Jᵀr)` of a 6×5 Jacobian.
+pub(crate) fn normal_equations(jac: &[[f64; 5]; 6], r: &[f64; 6]) -> ([[f64; 5]; 5], [f64; 5]) {
+    let mut a = [[0.0; 5]; 5];
+    let mut g = [0.0; 5];
+    for i in 0..5 {
+        for j in 0..5 {
+            a[i][j] = (0..6).map(|k| jac[k][i] * jac[k][j]).sum();
+        }
+        g[i] = (0..6).map(|k| jac[k][i] * r[k]).sum();
+    }
+    (a, g)
 }
 
 /// Solve `(A + λ diag A) Δ = −g` for the 5×5 normal equations (faer LU).
@@ -161,6 +157,54 @@ impl Scaled {
         })
     }
 
+    /// The scaled problem of parameters `p = (κ₀, γ, τ₀, δ, L)`, from the
+    /// origin with the start frame (`L` clamped at 0).
+    pub fn problem(&self, p: &[f64; 5]) -> FrenetProblem {
+        FrenetProblem {
+            start: DVec3::ZERO,
+            frame: self.frame,
+            kappa0: p[0],
+            gamma: p[1],
+            tau0: p[2],
+            delta: p[3],
+            length: p[4].max(0.0),
+        }
+    }
+
+    /// `r = (x(L) − x_f, T(L) − T_f)` of an integrated scaled problem.
+    pub fn residual(&self, e: &FrenetEnd) -> [f64; 6] {
+        let dx = e.point - self.target;
+        let dt = e.frame[0] - self.tangent;
+        [dx.x, dx.y, dx.z, dt.x, dt.y, dt.z]
+    }
+
+    /// The residual of `p`, integrated in `steps` steps.
+    fn residual_of(&self, p: &[f64; 5], steps: usize) -> [f64; 6] {
+        self.residual(&self.problem(p).integrate_unchecked(steps))
+    }
+
+    /// The solution in the input's units, validated, with its Eq. 9 error
+    /// against `x_f` re-integrated in `steps` steps.
+    pub fn solution(
+        &self,
+        x0: DVec3,
+        xf: DVec3,
+        p: &[f64; 5],
+        steps: usize,
+        iterations: usize,
+    ) -> Result<SpiralSolution, SolveError> {
+        let problem = self.unscale(x0, p);
+        problem.validate()?;
+        let end = problem.integrate_unchecked(steps);
+        let error =
+            (end.point - xf).length_squared() + (end.frame[0] - self.tangent).length_squared();
+        Ok(SpiralSolution {
+            problem,
+            error,
+            iterations,
+        })
+    }
+
     /// The solution in the input's units (Prop. 5.1).
     pub fn unscale(&self, x0: DVec3, p: &[f64; 5]) -> FrenetProblem {
         let sc = self.scale;
@@ -216,17 +260,11 @@ pub fn solve_spiral(
     tf: DVec3,
     opts: &SolveOptions,
 ) -> Result<SpiralSolution, SolveError> {
-    let Scaled {
-        frame,
-        target: ds,
-        tangent: tf,
-        scale,
-        initial,
-    } = Scaled::new(x0, t0, xf, tf, opts.start_normal)?;
-    let dl = ds.length();
-    let mut p = initial;
+    let sc = Scaled::new(x0, t0, xf, tf, opts.start_normal)?;
+    let dl = sc.target.length();
+    let mut p = sc.initial;
     let steps = opts.steps.max(1);
-    let mut r = residual(&p, frame, ds, tf, steps);
+    let mut r = sc.residual_of(&p, steps);
     let mut err = norm2(&r);
     let mut lambda = 1e-3;
     let mut iterations = 0;
@@ -239,22 +277,12 @@ pub fn solve_spiral(
             let (mut pp, mut pm) = (p, p);
             pp[k] += h;
             pm[k] -= h;
-            let (rp, rm) = (
-                residual(&pp, frame, ds, tf, steps),
-                residual(&pm, frame, ds, tf, steps),
-            );
+            let (rp, rm) = (sc.residual_of(&pp, steps), sc.residual_of(&pm, steps));
             for i in 0..6 {
                 jac[i][k] = (rp[i] - rm[i]) / (2.0 * h);
             }
         }
-        let mut a = [[0.0; 5]; 5];
-        let mut g = [0.0; 5];
-        for i in 0..5 {
-            for j in 0..5 {
-                a[i][j] = (0..6).map(|k| jac[k][i] * jac[k][j]).sum();
-            }
-            g[i] = (0..6).map(|k| jac[k][i] * r[k]).sum();
-        }
+        let (a, g) = normal_equations(&jac, &r);
         let mut improved = false;
         for _ in 0..30 {
             let Some(step) = lm_step(&a, &g, lambda) else {
@@ -266,7 +294,7 @@ pub fn solve_spiral(
                 q[k] += step[k];
             }
             q[4] = q[4].max(1e-3 * dl);
-            let rq = residual(&q, frame, ds, tf, steps);
+            let rq = sc.residual_of(&q, steps);
             let eq = norm2(&rq);
             if eq < err {
                 p = q;
@@ -282,23 +310,7 @@ pub fn solve_spiral(
             break; // at a (local) minimum to rounding
         }
     }
-    // Scale back (Prop. 5.1).
-    let problem = Scaled {
-        frame,
-        target: ds,
-        tangent: tf,
-        scale,
-        initial,
-    }
-    .unscale(x0, &p);
-    problem.validate()?;
-    let end = problem.integrate_unchecked(steps);
-    let error = (end.point - xf).length_squared() + (end.frame[0] - tf).length_squared();
-    Ok(SpiralSolution {
-        problem,
-        error,
-        iterations,
-    })
+    sc.solution(x0, xf, &p, steps, iterations)
 }
 
 #[cfg(test)]
