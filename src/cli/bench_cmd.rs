@@ -76,7 +76,8 @@ fn time_runs<T>(
         times.push((start.elapsed().as_secs_f64(), t));
         last = Some(std::hint::black_box(r));
     }
-    Ok((times, last.expect("repeat >= 1")))
+    let last = last.ok_or_else(|| anyhow::anyhow!("--repeat must be at least 1"))?;
+    Ok((times, last))
 }
 
 pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {

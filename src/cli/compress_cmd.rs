@@ -14,7 +14,7 @@ use super::inspect_cmd::parse_format;
 use super::{CompressArgs, DistanceArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
 use crate::compress::{compress_curve, CompressOptions};
-use crate::io::container::{ContainerWriter, Header, Shape, SourceMeta, Storage, StoredCurve};
+use crate::io::container::{ContainerWriter, Header, SourceMeta, Storage, StoredCurve};
 use crate::io::{open_reader, Curve};
 
 /// Curves fitted per parallel batch (bounds memory; keeps order).
@@ -218,45 +218,4 @@ pub fn run(args: &CompressArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// The chain of a stored curve, or its verbatim points, as points: `m`
-/// samples equally spaced in arc length, or at `step` apart (both ends
-/// included).
-pub fn shape_points(
-    shape: &Shape,
-    m: Option<usize>,
-    step: Option<f64>,
-    source_points: u64,
-) -> Vec<glam::DVec3> {
-    match shape {
-        Shape::Empty => Vec::new(),
-        Shape::Points(p) => p.clone(),
-        Shape::Chain(c) => sample_chain(
-            &crate::helix::PiecewiseHelix::from_params(c),
-            m,
-            step,
-            source_points,
-        ),
-        Shape::Quantized(q) => sample_chain(
-            &crate::helix::PiecewiseHelix::from_params(&q.dequantize()),
-            m,
-            step,
-            source_points,
-        ),
-    }
-}
-
-fn sample_chain(
-    chain: &crate::helix::PiecewiseHelix,
-    m: Option<usize>,
-    step: Option<f64>,
-    source_points: u64,
-) -> Vec<glam::DVec3> {
-    let m = match (m, step) {
-        (Some(m), _) => m,
-        (None, Some(s)) => ((chain.length() / s).ceil() as usize + 1).min(1 << 24),
-        (None, None) => (source_points as usize).clamp(2, 1 << 24),
-    };
-    chain.sample(m.max(2))
 }

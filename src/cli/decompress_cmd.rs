@@ -4,10 +4,9 @@
 
 use anyhow::{bail, Result};
 
-use super::compress_cmd::shape_points;
 use super::inspect_cmd::parse_format;
 use super::DecompressArgs;
-use crate::io::container::ContainerReader;
+use crate::io::container::{ContainerReader, Shape};
 use crate::io::{create_writer, Curve};
 
 pub fn run(args: &DecompressArgs) -> Result<()> {
@@ -42,4 +41,45 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
         args.output.display()
     );
     Ok(())
+}
+
+/// The chain of a stored curve, or its verbatim points, as points: `m`
+/// samples equally spaced in arc length, or at `step` apart (both ends
+/// included).
+fn shape_points(
+    shape: &Shape,
+    m: Option<usize>,
+    step: Option<f64>,
+    source_points: u64,
+) -> Vec<glam::DVec3> {
+    match shape {
+        Shape::Empty => Vec::new(),
+        Shape::Points(p) => p.clone(),
+        Shape::Chain(c) => sample_chain(
+            &crate::helix::PiecewiseHelix::from_params(c),
+            m,
+            step,
+            source_points,
+        ),
+        Shape::Quantized(q) => sample_chain(
+            &crate::helix::PiecewiseHelix::from_params(&q.dequantize()),
+            m,
+            step,
+            source_points,
+        ),
+    }
+}
+
+fn sample_chain(
+    chain: &crate::helix::PiecewiseHelix,
+    m: Option<usize>,
+    step: Option<f64>,
+    source_points: u64,
+) -> Vec<glam::DVec3> {
+    let m = match (m, step) {
+        (Some(m), _) => m,
+        (None, Some(s)) => ((chain.length() / s).ceil() as usize + 1).min(1 << 24),
+        (None, None) => (source_points as usize).clamp(2, 1 << 24),
+    };
+    chain.sample(m.max(2))
 }

@@ -441,8 +441,9 @@ impl<'a> Cursor<'a> {
     fn real(&mut self, storage: Storage, what: &str) -> Result<f64, String> {
         let x = match storage {
             Storage::F64 => {
-                let b = self.take(8, what)?;
-                f64::from_le_bytes(b.try_into().expect("8 bytes"))
+                let mut a = [0u8; 8];
+                a.copy_from_slice(self.take(8, what)?);
+                f64::from_le_bytes(a)
             }
             _ => self.f32(what)? as f64,
         };

@@ -295,16 +295,11 @@ impl Iterator for HairReader {
             return None;
         }
         let i = self.next;
-        match self.read_strand(i) {
-            Ok(c) => {
-                self.next += 1;
-                Some(Ok(c))
-            }
-            Err(e) => {
-                self.done = true;
-                Some(Err(e.curve(i)))
-            }
+        let r = self.read_strand(i).map(Some).map_err(|e| e.curve(i));
+        if r.is_ok() {
+            self.next += 1;
         }
+        super::fuse(&mut self.done, r)
     }
 }
 

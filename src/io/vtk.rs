@@ -1027,16 +1027,11 @@ impl Iterator for VtkReader {
             return None;
         }
         let i = self.next;
-        match self.read_curve(i) {
-            Ok(c) => {
-                self.next += 1;
-                Some(Ok(c))
-            }
-            Err(e) => {
-                self.done = true;
-                Some(Err(e.curve(i)))
-            }
+        let r = self.read_curve(i).map(Some).map_err(|e| e.curve(i));
+        if r.is_ok() {
+            self.next += 1;
         }
+        super::fuse(&mut self.done, r)
     }
 }
 

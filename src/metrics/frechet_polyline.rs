@@ -152,20 +152,34 @@ fn within(
 /// relative (plus `1e-300` absolute): the returned value `F̃` satisfies
 /// `F ≤ F̃ ≤ F(1 + rel_tol)`. Errors: empty or non-finite input.
 pub fn frechet_polyline(p: &[DVec3], q: &[DVec3], rel_tol: f64) -> Result<f64, MetricsError> {
+    let (mut l, mut r) = (Vec::new(), Vec::new());
+    smallest_passing(p, q, rel_tol, |eps| within(p, q, eps, &mut l, &mut r))
+}
+
+/// The smallest `ε` for which the monotone test `passes` holds, by
+/// bisection to `rel_tol` (an upper bound `≤ (1 + rel_tol)·exact`) between
+/// the end points' distance (a lower bound of both distances here) and the
+/// discrete Fréchet distance of the vertices (an upper bound of both: it
+/// couples every vertex in order).
+fn smallest_passing(
+    p: &[DVec3],
+    q: &[DVec3],
+    rel_tol: f64,
+    mut passes: impl FnMut(f64) -> bool,
+) -> Result<f64, MetricsError> {
     check(p)?;
     check(q)?;
     let mut lo = p[0]
         .distance(q[0])
         .max(p[p.len() - 1].distance(q[q.len() - 1]));
     let mut hi = super::discrete_frechet(p, q)?;
-    let (mut l, mut r) = (Vec::new(), Vec::new());
-    if within(p, q, lo, &mut l, &mut r) {
+    if passes(lo) {
         return Ok(lo);
     }
     let rel_tol = rel_tol.max(4.0 * f64::EPSILON);
     while hi - lo > rel_tol * hi && hi > 1e-300 {
         let mid = 0.5 * (lo + hi);
-        if within(p, q, mid, &mut l, &mut r) {
+        if passes(mid) {
             hi = mid;
         } else {
             lo = mid;
@@ -233,27 +247,7 @@ fn ordered(p: &[DVec3], q: &[DVec3], eps: f64) -> bool {
 /// The smallest `eps` for which [`ordered_within`] holds, to `rel_tol`
 /// (returns an upper bound `≤ (1 + rel_tol)·exact`).
 pub fn ordered_distance(p: &[DVec3], q: &[DVec3], rel_tol: f64) -> Result<f64, MetricsError> {
-    check(p)?;
-    check(q)?;
-    // Bounds: the end points; and the discrete Fréchet distance, which
-    // couples every vertex of p in order with a vertex of q.
-    let mut lo = p[0]
-        .distance(q[0])
-        .max(p[p.len() - 1].distance(q[q.len() - 1]));
-    let mut hi = super::discrete_frechet(p, q)?;
-    if ordered(p, q, lo) {
-        return Ok(lo);
-    }
-    let rel_tol = rel_tol.max(4.0 * f64::EPSILON);
-    while hi - lo > rel_tol * hi && hi > 1e-300 {
-        let mid = 0.5 * (lo + hi);
-        if ordered(p, q, mid) {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    Ok(hi)
+    smallest_passing(p, q, rel_tol, |eps| ordered(p, q, eps))
 }
 
 #[cfg(test)]
