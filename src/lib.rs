@@ -25,6 +25,7 @@
 )]
 
 pub mod adaptive;
+pub mod atph;
 pub mod backend;
 pub mod cli;
 pub mod compress;
