@@ -462,3 +462,66 @@ fn complete_fills_gaps_with_euler_spirals() {
     let e = pairs[3]["error"].as_str().unwrap();
     assert!(e.contains("coincident") && e.contains("pairs[3]"), "{e}");
 }
+
+#[test]
+fn complete_with_atph_curves() {
+    let out = strandfit(
+        &["complete", "--method", "atph", "--samples", "9", "examples/gaps.json"],
+        "",
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let doc = json(&out.stdout);
+    let pairs = doc["pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), 4);
+    // The quarter circle: a planar field (the equator), linear ρ = π/2,
+    // every sample on the unit circle, from p0 to p1.
+    let q = &pairs[0];
+    assert_eq!(q["id"], "quarter-circle");
+    for r in q["rho"].as_array().unwrap() {
+        assert!((r.as_f64().unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-14, "{q}");
+    }
+    assert_eq!((q["regular"].clone(), q["forward"].clone()), (true.into(), true.into()));
+    let pts = points(&q["points"]);
+    assert_eq!(pts.len(), 9);
+    assert!(pts.iter().all(|p| (p.length() - 1.0).abs() < 1e-14));
+    assert!(pts[8].distance(strandfit::DVec3::Y) < 1e-15);
+    // An S curve needs an inflection, which a linear azimuth cannot make in
+    // the plane: its own error, naming the pair.
+    let e = pairs[1]["error"].as_str().unwrap();
+    assert!(e.contains("\"s-curve\"") && e.contains("singular"), "{e}");
+    // The twisted pair is met (error ~ 0) and its regularity reported.
+    let t = &pairs[2];
+    assert!(t["error"].as_f64().unwrap() < 1e-24, "{t}");
+    assert_eq!(t["rho"].as_array().unwrap().len(), 3);
+    assert!(t["regular"].is_boolean());
+    assert!(pairs[3]["error"].as_str().unwrap().contains("coincide"));
+}
+
+#[test]
+fn complete_atph_with_prescribed_lengths() {
+    // Fig. 5 of paper 002 with L = 6 (regular), and a pair of its own
+    // length overriding --length.
+    let input = r#"{"pairs":[
+        {"id":"fig5","p0":[0,0,0],"t0":[1,0,0],"p1":[1.5,4,2],"t1":[-3,2,3]},
+        {"id":"own","p0":[0,0,0],"t0":[1,0,0],"p1":[1,0,1],"t1":[0,0,1],"length":1.7}]}"#;
+    let out = strandfit(&["complete", "--method", "atph", "--length", "6"], input);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let doc = json(&out.stdout);
+    let f = &doc["pairs"][0];
+    assert_eq!(f["rho"].as_array().unwrap().len(), 4, "{f}");
+    assert!((f["length"].as_f64().unwrap() - 6.0).abs() < 1e-12, "{f}");
+    assert_eq!(f["forward"], true);
+    let o = &doc["pairs"][1];
+    assert!((o["length"].as_f64().unwrap() - 1.7).abs() < 1e-12, "{o}");
+    // --length is for ATPH only, and must be a positive number.
+    let out = strandfit(&["complete", "--length", "6"], input);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--method atph"));
+    let out = strandfit(&["complete", "--method", "atph", "--length=-1"], input);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("positive"));
+    // A per-pair length with the Euler method is that pair's error.
+    let out = strandfit(&["complete"], input);
+    let doc = json(&out.stdout);
+    assert!(doc["pairs"][1]["error"].as_str().unwrap().contains("atph"));
+}

@@ -1,15 +1,24 @@
-//! `strandfit complete --method euler IN.json -o OUT.json`: the curve that
-//! fills the gap between each pair of point–tangent conditions, batched on
-//! the chosen backend (`euler::batch`: every candidate curve of an LM round
-//! in one `frenet_integrate` dispatch on the GPU). ATPH curves (the other
-//! method of the issue) are not built yet, so `--method` takes `euler` only.
+//! `strandfit complete --method euler|atph [--length L] IN.json -o OUT.json`:
+//! the curve that fills the gap between each pair of point–tangent
+//! conditions.
+//!
+//! * `euler`: 3D Euler spirals, batched on the chosen backend
+//!   (`euler::batch`: every candidate curve of an LM round in one
+//!   `frenet_integrate` dispatch on the GPU).
+//! * `atph`: ATPH curves (`atph::batch`), a closed form and a 3×3 (4×4 with
+//!   a prescribed length) solve per pair, in parallel on the CPU whatever
+//!   the backend (see `atph::batch` for why).
+//!
+//! Every pair gets its own result or its own error; the batch never stops
+//! on a bad pair.
 
 use anyhow::{bail, Context, Result};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::io_util::{self, input_name, read_input, Output};
-use super::CompleteArgs;
+use super::{CompleteArgs, CompleteMethod};
+use crate::atph::{interpolate_pairs, AtphCurve, Sign};
 use crate::backend::Backend;
 use crate::euler::{solve_spirals, SolveOptions};
 
@@ -25,6 +34,8 @@ struct PairIn {
     t0: [f64; 3],
     p1: [f64; 3],
     t1: [f64; 3],
+    /// ATPH only: this pair's prescribed arc length.
+    length: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -54,6 +65,27 @@ enum Outcome {
         #[serde(skip_serializing_if = "Option::is_none")]
         points: Option<Vec<[f64; 3]>>,
     },
+    Atph {
+        /// Tangent field θ(ξ) = a1 ξ + a0, φ(ξ) = b1 ξ + b0 (Eq. 2.1 of
+        /// paper 002), in the input's coordinates.
+        a0: f64,
+        a1: f64,
+        b0: f64,
+        b1: f64,
+        /// Bernstein coefficients of ρ (degree 2, or 3 with a prescribed
+        /// length; one less for a planar field; 0 for a straight segment).
+        rho: Vec<f64>,
+        /// Arc length ∫|ρ|.
+        length: f64,
+        /// |r(1) − p1|² + |T(1) − t1|², as Eq. 9 of paper 004.
+        error: f64,
+        /// ρ ≠ 0 on [0, 1] (Proposition 1): no singular point.
+        regular: bool,
+        /// ρ > 0: the curve runs along t0 and t1, not against them.
+        forward: bool,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        points: Option<Vec<[f64; 3]>>,
+    },
     Failed {
         error: String,
     },
@@ -63,18 +95,103 @@ pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
     if matches!(args.samples, 1) {
         bail!("--samples must be 0 (none) or at least 2");
     }
+    if let Some(l) = args.length {
+        if args.method != CompleteMethod::Atph {
+            bail!("--length applies to --method atph (Euler spirals take no prescribed length)");
+        }
+        if !(l > 0.0 && l.is_finite()) {
+            bail!("--length must be positive and finite, got {l}");
+        }
+    }
     let name = input_name(&args.input);
     let text = read_input(&args.input)?;
     let input: Input = serde_json::from_str(&text).with_context(|| {
         format!("{name}: expected {{\"pairs\":[{{\"id\",\"p0\",\"t0\",\"p1\",\"t1\"}}]}}")
     })?;
     drop(text);
-    let v = |a: [f64; 3]| DVec3::from(a);
-    let pairs: Vec<_> = input
+    let outcomes = match args.method {
+        CompleteMethod::Euler => euler(&input.pairs, args, backend)?,
+        CompleteMethod::Atph => {
+            if !matches!(backend, Backend::Cpu) {
+                eprintln!("note: ATPH completion runs on the CPU (closed form; see README, Backends)");
+            }
+            atph(&input.pairs, args)
+        }
+    };
+    let out_pairs: Vec<PairOut> = input
         .pairs
         .iter()
-        .map(|p| (v(p.p0), v(p.t0), v(p.p1), v(p.t1)))
+        .zip(outcomes)
+        .enumerate()
+        .map(|(i, (p, r))| PairOut {
+            id: p.id.clone().unwrap_or(serde_json::Value::from(i)),
+            result: r.unwrap_or_else(|e| Outcome::Failed {
+                error: format!(
+                    "{}: {e}",
+                    io_util::label(
+                        "pair",
+                        "pairs",
+                        i,
+                        p.id.as_ref().unwrap_or(&serde_json::Value::Null)
+                    )
+                ),
+            }),
+        })
         .collect();
+    #[derive(Serialize)]
+    struct Doc {
+        pairs: Vec<PairOut>,
+    }
+    let mut out = Output::create(&args.output)?;
+    serde_json::to_writer(out.writer(), &Doc { pairs: out_pairs })
+        .context("cannot write output")?;
+    out.writer().write_all(b"\n")?;
+    out.commit()
+}
+
+fn vectors(p: &PairIn) -> (DVec3, DVec3, DVec3, DVec3) {
+    let v = |a: [f64; 3]| DVec3::from(a);
+    (v(p.p0), v(p.t0), v(p.p1), v(p.t1))
+}
+
+/// ATPH curves, one per pair, with the pair's or the command's length.
+fn atph(input: &[PairIn], args: &CompleteArgs) -> Vec<Result<Outcome, String>> {
+    let pairs: Vec<_> = input.iter().map(vectors).collect();
+    let lengths: Vec<Option<f64>> = input.iter().map(|p| p.length.or(args.length)).collect();
+    let curves = interpolate_pairs(&pairs, Some(&lengths));
+    curves
+        .into_iter()
+        .zip(&pairs)
+        .map(|(r, &(_, _, p1, t1))| {
+            let c: AtphCurve = r.map_err(|e| e.to_string())?;
+            let t1 = t1.normalize();
+            let error =
+                c.position(1.0).distance_squared(p1) + c.tangent.at(1.0).distance_squared(t1);
+            let sign = c.speed_sign();
+            Ok(Outcome::Atph {
+                a0: c.tangent.a0,
+                a1: c.tangent.a1,
+                b0: c.tangent.b0,
+                b1: c.tangent.b1,
+                rho: c.rho.coefficients().to_vec(),
+                length: c.length(),
+                error,
+                regular: sign != Sign::Vanishes,
+                forward: sign == Sign::Positive,
+                points: (args.samples >= 2)
+                    .then(|| c.sample(args.samples).iter().map(|p| p.to_array()).collect()),
+            })
+        })
+        .collect()
+}
+
+/// Euler spirals, batched on the backend.
+fn euler(
+    input: &[PairIn],
+    args: &CompleteArgs,
+    backend: &Backend,
+) -> Result<Vec<Result<Outcome, String>>> {
+    let pairs: Vec<_> = input.iter().map(vectors).collect();
     let opts = SolveOptions::default();
     let solved = solve_spirals(&pairs, &opts, backend)?;
     let sampled: Vec<Option<Vec<[f64; 3]>>> = if args.samples >= 2 {
@@ -105,48 +222,27 @@ pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
     } else {
         vec![None; solved.len()]
     };
-    let out_pairs: Vec<PairOut> = input
-        .pairs
-        .iter()
-        .zip(solved)
+    Ok(solved
+        .into_iter()
         .zip(sampled)
-        .enumerate()
-        .map(|(i, ((p, r), pts))| PairOut {
-            id: p.id.clone().unwrap_or(serde_json::Value::from(i)),
-            result: match r {
-                Ok(s) => Outcome::Spiral {
-                    kappa0: s.problem.kappa0,
-                    gamma: s.problem.gamma,
-                    tau0: s.problem.tau0,
-                    delta: s.problem.delta,
-                    length: s.problem.length,
-                    normal: s.problem.frame[1].to_array(),
-                    error: s.error,
-                    iterations: s.iterations,
-                    regular: s.error < 1e-12,
-                    points: pts,
-                },
-                Err(e) => Outcome::Failed {
-                    error: format!(
-                        "{}: {e}",
-                        io_util::label(
-                            "pair",
-                            "pairs",
-                            i,
-                            p.id.as_ref().unwrap_or(&serde_json::Value::Null)
-                        )
-                    ),
-                },
-            },
+        .zip(input)
+        .map(|((r, pts), p)| {
+            if p.length.is_some() {
+                return Err("a prescribed \"length\" applies to --method atph".to_string());
+            }
+            let s = r.map_err(|e| e.to_string())?;
+            Ok(Outcome::Spiral {
+                kappa0: s.problem.kappa0,
+                gamma: s.problem.gamma,
+                tau0: s.problem.tau0,
+                delta: s.problem.delta,
+                length: s.problem.length,
+                normal: s.problem.frame[1].to_array(),
+                error: s.error,
+                iterations: s.iterations,
+                regular: s.error < 1e-12,
+                points: pts,
+            })
         })
-        .collect();
-    #[derive(Serialize)]
-    struct Doc {
-        pairs: Vec<PairOut>,
-    }
-    let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &Doc { pairs: out_pairs })
-        .context("cannot write output")?;
-    out.writer().write_all(b"\n")?;
-    out.commit()
+        .collect())
 }

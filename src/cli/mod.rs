@@ -107,7 +107,8 @@ pub enum Command {
     /// Convert curves between file formats (streamed, in world coordinates).
     Convert(ConvertArgs),
     /// Fill the gap between point–tangent pairs ({"pairs":[{"id","p0","t0",
-    /// "p1","t1"}]}) with 3D Euler spirals, batched on the chosen backend.
+    /// "p1","t1"}]}) with 3D Euler spirals (batched on the chosen backend) or
+    /// ATPH curves (closed form, optionally of a prescribed arc length).
     Complete(CompleteArgs),
     /// Measure whole-fit throughput on synthetic splines (elements per second).
     Bench(BenchArgs),
@@ -288,6 +289,9 @@ pub struct DecompressArgs {
 pub enum CompleteMethod {
     /// 3D Euler spirals (curvature and torsion linear in arc length).
     Euler,
+    /// Algebraic–trigonometric PH curves (polynomial speed; closed form; an
+    /// arc length can be prescribed).
+    Atph,
 }
 
 #[derive(clap::Args, Debug)]
@@ -297,9 +301,13 @@ pub struct CompleteArgs {
     /// Output JSON file (absent: standard output). Written atomically.
     #[arg(short, long)]
     pub output: Option<std::path::PathBuf>,
-    /// Construction (ATPH curves are not built yet).
+    /// Construction.
     #[arg(long, value_enum, default_value_t = CompleteMethod::Euler)]
     pub method: CompleteMethod,
+    /// ATPH only: prescribe this arc length for every pair (a pair's own
+    /// "length" in the input takes precedence).
+    #[arg(long)]
+    pub length: Option<f64>,
     /// Also write M points per curve, ends included (0: none).
     #[arg(long, default_value_t = 0)]
     pub samples: usize,
