@@ -43,3 +43,26 @@ pub fn synthetic_splines(count: usize, segments: usize) -> Vec<BezierSpline> {
         })
         .collect()
 }
+
+/// Deterministic point–tangent pairs `(P₁, T₁, P₂, T₂)` for completion
+/// benchmarks: the ends of arcs of the wandering helices above, each arc
+/// turning by 0.2 to 1.2 rad — gaps like those between fibre fragments.
+pub fn synthetic_hermite_pairs(count: usize) -> Vec<(DVec3, DVec3, DVec3, DVec3)> {
+    (0..count)
+        .map(|c| {
+            let phase = c as f64 * 0.618_033_988_75;
+            let pos = |u: f64| {
+                let r = 1.0 + 0.3 * (0.7 * u + phase).sin();
+                DVec3::new(
+                    r * (2.0 * u + phase).cos(),
+                    r * (2.0 * u + phase).sin(),
+                    0.8 * u + 0.2 * (1.3 * u).sin(),
+                )
+            };
+            let tangent = |u: f64| ((pos(u + 1e-6) - pos(u - 1e-6)) / 2e-6).normalize();
+            let u0 = (c as f64 * 0.414_213_562_37).fract() * 6.0;
+            let u1 = u0 + 0.1 + 0.5 * (c as f64 * 0.732_050_807_57).fract();
+            (pos(u0), tangent(u0), pos(u1), tangent(u1))
+        })
+        .collect()
+}

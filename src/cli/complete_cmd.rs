@@ -113,7 +113,9 @@ pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
         CompleteMethod::Euler => euler(&input.pairs, args, backend)?,
         CompleteMethod::Atph => {
             if !matches!(backend, Backend::Cpu) {
-                eprintln!("note: ATPH completion runs on the CPU (closed form; see README, Backends)");
+                eprintln!(
+                    "note: ATPH completion runs on the CPU (closed form; see README, Backends)"
+                );
             }
             atph(&input.pairs, args)
         }
@@ -178,8 +180,12 @@ fn atph(input: &[PairIn], args: &CompleteArgs) -> Vec<Result<Outcome, String>> {
                 error,
                 regular: sign != Sign::Vanishes,
                 forward: sign == Sign::Positive,
-                points: (args.samples >= 2)
-                    .then(|| c.sample(args.samples).iter().map(|p| p.to_array()).collect()),
+                points: (args.samples >= 2).then(|| {
+                    c.sample(args.samples)
+                        .iter()
+                        .map(|p| p.to_array())
+                        .collect()
+                }),
             })
         })
         .collect()
