@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 use crate::euler::{FrenetEnd, FrenetError, FrenetProblem};
 use crate::fit::{fit_splines, relaxed_pairs, FitError, FitOptions, FitScratch};
+use crate::gpu::atph::AtphGpu;
 use crate::gpu::frenet::{FrenetGpu, SpiralSamples};
 use crate::gpu::ghosh::GhoshGpu;
 use crate::gpu::helix_eval::HelixEvalGpu;
@@ -61,6 +62,7 @@ pub struct GpuEngine {
     helix_eval: OnceLock<HelixEvalGpu>,
     frenet: OnceLock<FrenetGpu>,
     spline_sample: OnceLock<SplineSampleGpu>,
+    atph: OnceLock<AtphGpu>,
 }
 
 impl GpuEngine {
@@ -82,6 +84,7 @@ impl GpuEngine {
             helix_eval: OnceLock::new(),
             frenet: OnceLock::new(),
             spline_sample: OnceLock::new(),
+            atph: OnceLock::new(),
         })
     }
 
@@ -110,6 +113,15 @@ impl GpuEngine {
         }
         let k = SplineSampleGpu::new(&self.ctx, self.precision)?;
         Ok(self.spline_sample.get_or_init(|| k))
+    }
+
+    /// The ATPH Hermite kernel (compiled once).
+    pub fn atph(&self) -> Result<&AtphGpu, GpuError> {
+        if let Some(k) = self.atph.get() {
+            return Ok(k);
+        }
+        let k = AtphGpu::new(&self.ctx, self.precision)?;
+        Ok(self.atph.get_or_init(|| k))
     }
 
     /// The Frenet–Serret kernel (compiled once).
@@ -390,6 +402,31 @@ impl Backend {
                 steps_per_interval,
                 &mut Timings::default(),
             ),
+        }
+    }
+
+    /// ATPH G1 Hermite interpolation of every pair (paper 002), with the
+    /// prescribed arc length where `lengths` gives one; a pair that cannot
+    /// be solved gets its own error. GPU: spatial solves in one kernel run
+    /// (planar and straight cases on the host, see [`crate::gpu::atph`]).
+    pub fn interpolate_atph(
+        &self,
+        pairs: &[crate::atph::HermitePair],
+        lengths: Option<&[Option<f64>]>,
+    ) -> Result<Vec<Result<crate::atph::AtphCurve, crate::atph::AtphError>>, GpuError> {
+        self.interpolate_atph_timed(pairs, lengths, &mut Timings::default())
+    }
+
+    /// [`Backend::interpolate_atph`] reporting where the GPU time went.
+    pub fn interpolate_atph_timed(
+        &self,
+        pairs: &[crate::atph::HermitePair],
+        lengths: Option<&[Option<f64>]>,
+        timings: &mut Timings,
+    ) -> Result<Vec<Result<crate::atph::AtphCurve, crate::atph::AtphError>>, GpuError> {
+        match self {
+            Backend::Cpu => Ok(crate::atph::interpolate_pairs(pairs, lengths)),
+            Backend::Gpu(g) => g.atph()?.interpolate(&g.ctx, pairs, lengths, timings),
         }
     }
 }

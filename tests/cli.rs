@@ -466,10 +466,21 @@ fn complete_fills_gaps_with_euler_spirals() {
 #[test]
 fn complete_with_atph_curves() {
     let out = strandfit(
-        &["complete", "--method", "atph", "--samples", "9", "examples/gaps.json"],
+        &[
+            "complete",
+            "--method",
+            "atph",
+            "--samples",
+            "9",
+            "examples/gaps.json",
+        ],
         "",
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let doc = json(&out.stdout);
     let pairs = doc["pairs"].as_array().unwrap();
     assert_eq!(pairs.len(), 4);
@@ -478,9 +489,15 @@ fn complete_with_atph_curves() {
     let q = &pairs[0];
     assert_eq!(q["id"], "quarter-circle");
     for r in q["rho"].as_array().unwrap() {
-        assert!((r.as_f64().unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-14, "{q}");
+        assert!(
+            (r.as_f64().unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-14,
+            "{q}"
+        );
     }
-    assert_eq!((q["regular"].clone(), q["forward"].clone()), (true.into(), true.into()));
+    assert_eq!(
+        (q["regular"].clone(), q["forward"].clone()),
+        (true.into(), true.into())
+    );
     let pts = points(&q["points"]);
     assert_eq!(pts.len(), 9);
     assert!(pts.iter().all(|p| (p.length() - 1.0).abs() < 1e-14));
@@ -505,7 +522,11 @@ fn complete_atph_with_prescribed_lengths() {
         {"id":"fig5","p0":[0,0,0],"t0":[1,0,0],"p1":[1.5,4,2],"t1":[-3,2,3]},
         {"id":"own","p0":[0,0,0],"t0":[1,0,0],"p1":[1,0,1],"t1":[0,0,1],"length":1.7}]}"#;
     let out = strandfit(&["complete", "--method", "atph", "--length", "6"], input);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let doc = json(&out.stdout);
     let f = &doc["pairs"][0];
     assert_eq!(f["rho"].as_array().unwrap().len(), 4, "{f}");

@@ -1,9 +1,6 @@
-//! Many Hermite problems at once, in parallel on the CPU (rayon).
-//!
-//! ATPH interpolation is a closed form plus a 3×3 (4×4) solve, about a
-//! microsecond per pair; it runs on the CPU on every backend: WGSL has no
-//! `f64` trigonometry, and the `f32` closed forms lose `|ωξ|⁻⁴`-amplified
-//! digits exactly where the series takes over. See README, "Backends".
+//! Many Hermite problems at once, in parallel on the CPU (rayon): the CPU
+//! backend of [`crate::backend::Backend::interpolate_atph`] (the GPU one is
+//! [`crate::gpu::atph`]).
 
 use glam::DVec3;
 use rayon::prelude::*;

@@ -57,13 +57,7 @@ pub enum AtphError {
 /// G1 Hermite interpolation (Section 3): the ATPH curve from `p1` along `t1`
 /// to `p2` along `t2`, quadratic `ρ` for a spatial field.
 pub fn interpolate(p1: DVec3, t1: DVec3, p2: DVec3, t2: DVec3) -> Result<AtphCurve, AtphError> {
-    let (t1, t2) = unit_tangents(p1, t1, p2, t2)?;
-    interpolate_field(
-        p1,
-        p2,
-        SphericalTangent::interpolating(t1, t2, p2 - p1),
-        None,
-    )
+    interpolate_field(p1, p2, tangent_field(p1, t1, p2, t2)?, None)
 }
 
 /// G1 Hermite interpolation with prescribed arc length `length`
@@ -76,22 +70,50 @@ pub fn interpolate_with_length(
     t2: DVec3,
     length: f64,
 ) -> Result<AtphCurve, AtphError> {
-    let (t1, t2) = unit_tangents(p1, t1, p2, t2)?;
-    interpolate_field(
-        p1,
-        p2,
-        SphericalTangent::interpolating(t1, t2, p2 - p1),
-        Some(length),
-    )
+    interpolate_field(p1, p2, tangent_field(p1, t1, p2, t2)?, Some(length))
 }
 
-fn unit_tangents(p1: DVec3, t1: DVec3, p2: DVec3, t2: DVec3) -> Result<(DVec3, DVec3), AtphError> {
+/// Step 1 (Section 3.1): the tangent field of the data, after checking
+/// that they are finite and the tangents nonzero.
+pub fn tangent_field(
+    p1: DVec3,
+    t1: DVec3,
+    p2: DVec3,
+    t2: DVec3,
+) -> Result<SphericalTangent, AtphError> {
     if !(p1.is_finite() && p2.is_finite() && t1.is_finite() && t2.is_finite()) {
         return Err(AtphError::BadInput);
     }
     match (t1.try_normalize(), t2.try_normalize()) {
-        (Some(a), Some(b)) => Ok((a, b)),
+        (Some(a), Some(b)) => Ok(SphericalTangent::interpolating(a, b, p2 - p1)),
         _ => Err(AtphError::BadInput),
+    }
+}
+
+/// The checks on the ends and the length every construction makes first;
+/// returns `|P₂ − P₁|`.
+pub fn check_ends(p1: DVec3, p2: DVec3, length: Option<f64>) -> Result<f64, AtphError> {
+    let c = (p2 - p1).length();
+    if !c.is_finite() {
+        return Err(AtphError::BadInput);
+    }
+    if c == 0.0 {
+        return Err(AtphError::Coincident);
+    }
+    if let Some(l) = length {
+        if !(l > 0.0 && l.is_finite()) {
+            return Err(AtphError::BadLength(l));
+        }
+    }
+    Ok(c)
+}
+
+/// Name of the system solved for a spatial field (in errors).
+pub fn spatial_system(length: Option<f64>) -> &'static str {
+    if length.is_some() {
+        "(4.1)"
+    } else {
+        "(3.1)"
     }
 }
 
@@ -104,18 +126,7 @@ pub fn interpolate_field(
     length: Option<f64>,
 ) -> Result<AtphCurve, AtphError> {
     let chord = p2 - p1;
-    let c = chord.length();
-    if !c.is_finite() {
-        return Err(AtphError::BadInput);
-    }
-    if c == 0.0 {
-        return Err(AtphError::Coincident);
-    }
-    if let Some(l) = length {
-        if !(l > 0.0 && l.is_finite()) {
-            return Err(AtphError::BadLength(l));
-        }
-    }
+    let c = check_ends(p1, p2, length)?;
     let coefficients: Vec<f64> = match field.kind() {
         FieldKind::Constant => {
             let t = field.at(0.0);
@@ -168,14 +179,14 @@ pub fn interpolate_field(
                 None => {
                     let col = columns::<3>(&v, 2);
                     let a = std::array::from_fn(|i| std::array::from_fn(|j| col[j][i]));
-                    solve_small(a, chord.to_array(), "(3.1)")?.to_vec()
+                    solve_small(a, chord.to_array(), spatial_system(None))?.to_vec()
                 }
                 Some(l) => {
                     let col = columns::<4>(&v, 3);
                     let a: [[f64; 4]; 4] = std::array::from_fn(|i| {
                         std::array::from_fn(|j| if i < 3 { col[j][i] } else { 0.25 })
                     });
-                    solve_small(a, [chord.x, chord.y, chord.z, l], "(4.1)")?.to_vec()
+                    solve_small(a, [chord.x, chord.y, chord.z, l], spatial_system(length))?.to_vec()
                 }
             }
         }

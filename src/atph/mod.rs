@@ -32,6 +32,9 @@ pub mod tangent;
 pub use batch::{interpolate_pairs, HermitePair};
 pub use bernstein::{Bernstein, Sign};
 pub use curve::AtphCurve;
-pub use hermite::{interpolate, interpolate_field, interpolate_with_length, AtphError};
+pub use hermite::{
+    check_ends, interpolate, interpolate_field, interpolate_with_length, tangent_field, AtphError,
+    SINGULAR_TOL,
+};
 pub use spline::{AtphSpline, SplineError};
 pub use tangent::{FieldKind, SphericalTangent};

@@ -5,9 +5,9 @@
 //! * `euler`: 3D Euler spirals, batched on the chosen backend
 //!   (`euler::batch`: every candidate curve of an LM round in one
 //!   `frenet_integrate` dispatch on the GPU).
-//! * `atph`: ATPH curves (`atph::batch`), a closed form and a 3×3 (4×4 with
-//!   a prescribed length) solve per pair, in parallel on the CPU whatever
-//!   the backend (see `atph::batch` for why).
+//! * `atph`: ATPH curves, a closed form and a 3×3 (4×4 with a prescribed
+//!   length) solve per pair: `atph::batch` on the CPU, one `atph_hermite`
+//!   kernel run for all spatial pairs on the GPU (`gpu::atph`).
 //!
 //! Every pair gets its own result or its own error; the batch never stops
 //! on a bad pair.
@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use super::io_util::{self, input_name, read_input, Output};
 use super::{CompleteArgs, CompleteMethod};
-use crate::atph::{interpolate_pairs, AtphCurve, Sign};
+use crate::atph::{AtphCurve, Sign};
 use crate::backend::Backend;
 use crate::euler::{solve_spirals, SolveOptions};
 
@@ -111,14 +111,7 @@ pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
     drop(text);
     let outcomes = match args.method {
         CompleteMethod::Euler => euler(&input.pairs, args, backend)?,
-        CompleteMethod::Atph => {
-            if !matches!(backend, Backend::Cpu) {
-                eprintln!(
-                    "note: ATPH completion runs on the CPU (closed form; see README, Backends)"
-                );
-            }
-            atph(&input.pairs, args)
-        }
+        CompleteMethod::Atph => atph(&input.pairs, args, backend)?,
     };
     let out_pairs: Vec<PairOut> = input
         .pairs
@@ -157,11 +150,15 @@ fn vectors(p: &PairIn) -> (DVec3, DVec3, DVec3, DVec3) {
 }
 
 /// ATPH curves, one per pair, with the pair's or the command's length.
-fn atph(input: &[PairIn], args: &CompleteArgs) -> Vec<Result<Outcome, String>> {
+fn atph(
+    input: &[PairIn],
+    args: &CompleteArgs,
+    backend: &Backend,
+) -> Result<Vec<Result<Outcome, String>>> {
     let pairs: Vec<_> = input.iter().map(vectors).collect();
     let lengths: Vec<Option<f64>> = input.iter().map(|p| p.length.or(args.length)).collect();
-    let curves = interpolate_pairs(&pairs, Some(&lengths));
-    curves
+    let curves = backend.interpolate_atph(&pairs, Some(&lengths))?;
+    Ok(curves
         .into_iter()
         .zip(&pairs)
         .map(|(r, &(_, _, p1, t1))| {
@@ -188,7 +185,7 @@ fn atph(input: &[PairIn], args: &CompleteArgs) -> Vec<Result<Outcome, String>> {
                 }),
             })
         })
-        .collect()
+        .collect())
 }
 
 /// Euler spirals, batched on the backend.

@@ -17,7 +17,9 @@
 //! | `shaders/helix_eval.wgsl`   | [`helix_eval`]          |
 //! | `shaders/frenet_integrate.wgsl` | [`frenet_integrate`] |
 //! | `shaders/spline_sample.wgsl` | [`spline_sample`]      |
+//! | `shaders/atph_hermite.wgsl` | [`atph_hermite`]        |
 
+pub mod atph_hermite;
 pub mod frenet_integrate;
 pub mod ghosh_bisect;
 pub mod helix_eval;
