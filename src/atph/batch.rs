@@ -72,10 +72,7 @@ mod tests {
         let arcs = crate::synthetic::synthetic_hermite_pairs(10_000);
         let forward = |r: &[Result<AtphCurve, AtphError>]| {
             r.iter()
-                .filter(|c| {
-                    c.as_ref()
-                        .map_or(false, |c| c.speed_sign() == Sign::Positive)
-                })
+                .filter(|c| c.as_ref().is_ok_and(|c| c.speed_sign() == Sign::Positive))
                 .count()
         };
         let on_arcs = forward(&interpolate_pairs(&arcs, None));
