@@ -35,6 +35,7 @@ pub mod gpu;
 pub mod helix;
 pub mod io;
 pub mod metrics;
+pub mod rrmf;
 pub mod sampled;
 pub mod spline;
 pub mod synthetic;

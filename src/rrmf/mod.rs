@@ -1,0 +1,15 @@
+//! Rigid-body motions along G1 splines of RRMF quintics of class I with a
+//! rational rotation-minimising frame (paper 001, Giannelli, Sacco, Sestini
+//! & Šír). Corrections to the paper: `shared/papers/ERRATA.md`, section 001.
+//!
+//! * [`quat`]: quaternions, the ⋆ and □ operators, square roots w.r.t. `𝐢`;
+//! * [`quintic`]: PH quintics from a quadratic pre-image (Section 2.1);
+//! * [`rmf`]: the rational rotation-minimising frame `ℬ = 𝒜𝒲` (Prop. 2.7).
+
+pub mod quat;
+pub mod quintic;
+pub mod rmf;
+
+pub use quat::Quat;
+pub use quintic::PhQuintic;
+pub use rmf::{RmfError, RrmfQuintic};
