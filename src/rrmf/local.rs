@@ -129,6 +129,22 @@ fn g_functional(cfg: &Config) -> f64 {
         .sum()
 }
 
+/// The unit PH displacement `𝐒_γ(φ₂) = 𝐈_γ/|𝐈_γ|` (4.26) for end tangents
+/// `u_i`, `u_f` (unit), in world coordinates: what the spline's tangent
+/// selection (5.4) tests through condition (4.30) at `φ₂ = 2π/3`. `None`
+/// for parallel tangents or a vanishing `𝐈_γ`.
+pub fn unit_displacement(u_i: DVec3, u_f: DVec3, phi2: f64) -> Option<DVec3> {
+    // Any rotation taking u_i to 𝐢 will do: the construction is covariant
+    // under rotations about 𝐢 (Remark 3.6).
+    let rot = DQuat::from_rotation_arc(u_i, I);
+    let s4 = rot * u_f;
+    let b = bisector(I, s4)?;
+    neg_cross(I, s4)?;
+    let cfg = configure(Quat::pure(b), I, s4, phi2)?;
+    let d = cfg.displacement.try_normalize()?;
+    Some(rot.inverse() * d)
+}
+
 /// Solve the local problem (module docs).
 pub fn interpolate_local(
     p_i: DVec3,

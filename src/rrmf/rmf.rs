@@ -340,24 +340,14 @@ impl RrmfQuintic {
                 c[k] += wts[i] * B4[i][k];
             }
         }
-        if !(c[4].abs() > 0.0) || !c.iter().all(|v| v.is_finite()) {
+        let scale = wts.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if !(scale > 0.0) || !c.iter().all(|v| v.is_finite()) {
             return Err(RmfError::Degenerate);
         }
-        let roots = quartic_roots(&c).map(|z| polish_bernstein(&wts, z));
-        // One root of each conjugate pair: the two with the largest |Im|
-        // that are not conjugates of each other.
-        let mut upper: Vec<C64> = roots
-            .iter()
-            .map(|z| if z.im < 0.0 { z.conj() } else { *z })
-            .collect();
-        upper.sort_by(|a, b| b.im.total_cmp(&a.im));
-        // Pairs come twice (z and z̄ fold onto one); keep the two distinct.
-        let z1 = upper[0];
-        let z2 = *upper[1..]
-            .iter()
-            .max_by(|a, b| a.sub(z1).abs().total_cmp(&b.sub(z1).abs()))
-            .unwrap_or(&upper[1]);
-        if z1.im.abs() < 1e-14 * (1.0 + z1.abs()) || z2.im.abs() < 1e-14 * (1.0 + z2.abs()) {
+        let min_speed = (0..=64)
+            .map(|k| curve.speed(k as f64 / 64.0))
+            .fold(f64::INFINITY, f64::min);
+        if !(min_speed > 1e-12 * scale) {
             return Err(RmfError::Degenerate);
         }
         let target = |t: f64| {
@@ -365,35 +355,61 @@ impl RrmfQuintic {
             let da = curve.pre_image_derivative(t);
             (da * Quat::pure(I) * a.conj()).s / a.norm2()
         };
-        let mut best: Option<(f64, [C64; 3])> = None;
-        for (s1, s2) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
-            let r1 = C64::new(z1.re, s1 * z1.im);
-            let r2 = C64::new(z2.re, s2 * z2.im);
-            // w(t) = (t − r1)(t − r2) = r1r2 − (r1 + r2) t + t².
-            let m = [
-                r1.mul(r2),
-                C64::new(0.0, 0.0).sub(r1.add(r2)),
-                C64::new(1.0, 0.0),
-            ];
-            let mut res = 0.0f64;
-            for t in [0.0, 0.5, 1.0] {
-                let w = m[0]
-                    .add(m[1].mul(C64::new(t, 0.0)))
-                    .add(C64::new(t * t, 0.0));
-                let dw = m[1].add(C64::new(2.0 * t, 0.0));
-                let psi_dot = dw.div(w).im;
-                let want = target(t);
-                res = res.max((psi_dot - want).abs() / (1.0 + want.abs()));
+        let one = C64::new(1.0, 0.0);
+        // Start: the root pairing that best meets the condition, or w = 1
+        // when σ has lower degree (roots at infinity: a straight segment,
+        // constant speed).
+        let start = if c[4].abs() > 1e-9 * scale {
+            let roots = quartic_roots(&c).map(|z| polish_bernstein(&wts, z));
+            // One root of each conjugate pair: fold onto the upper half
+            // plane (pairs then come twice) and keep two distinct ones.
+            let mut upper: Vec<C64> = roots
+                .iter()
+                .map(|z| if z.im < 0.0 { z.conj() } else { *z })
+                .collect();
+            upper.sort_by(|a, b| b.im.total_cmp(&a.im));
+            let z1 = upper[0];
+            let z2 = *upper[1..]
+                .iter()
+                .max_by(|a, b| a.sub(z1).abs().total_cmp(&b.sub(z1).abs()))
+                .unwrap_or(&upper[1]);
+            let mut best: Option<(f64, [C64; 3])> = None;
+            for (s1, s2) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+                let r1 = C64::new(z1.re, s1 * z1.im);
+                let r2 = C64::new(z2.re, s2 * z2.im);
+                // w(t) = (t − r1)(t − r2) = r1r2 − (r1 + r2) t + t².
+                let m = [r1.mul(r2), C64::default().sub(r1.add(r2)), one];
+                let mut res = 0.0f64;
+                for t in [0.0, 0.5, 1.0] {
+                    let w = m[0]
+                        .add(m[1].mul(C64::new(t, 0.0)))
+                        .add(C64::new(t * t, 0.0));
+                    let dw = m[1].add(C64::new(2.0 * t, 0.0));
+                    let want = target(t);
+                    res = res.max((dw.div(w).im - want).abs() / (1.0 + want.abs()));
+                }
+                if res.is_finite() && best.map_or(true, |(r, _)| res < r) {
+                    best = Some((res, m));
+                }
             }
-            if best.map_or(true, |(r, _)| res < r) {
-                best = Some((res, m));
-            }
+            best.map_or([one, C64::default(), C64::default()], |(_, m)| m)
+        } else {
+            [one, C64::default(), C64::default()]
+        };
+        let m = refine_phase(&curve, refine(&curve, start));
+        // The condition must now hold to rounding; a pre-image that is not
+        // class I leaves a residual no quadratic w can remove.
+        let mut res = 0.0f64;
+        for k in 0..=16 {
+            let t = C64::new(k as f64 / 16.0, 0.0);
+            let w = m[0].add(m[1].mul(t)).add(m[2].mul(t).mul(t));
+            let dw = m[1].add(m[2].mul(t).mul(C64::new(2.0, 0.0)));
+            let want = target(t.re);
+            res = res.max((dw.div(w).im - want).abs() / (1.0 + want.abs()));
         }
-        let (res, m) = best.unwrap_or((f64::INFINITY, [C64::default(); 3]));
-        if !(res < 1e-8) {
+        if !(res < 1e-9) {
             return Err(RmfError::NotRrmf(res));
         }
-        let m = refine_phase(&curve, refine(&curve, m));
         // Monomial → Bernstein (quadratic): b₀ = m₀, b₁ = m₀ + m₁/2,
         // b₂ = m₀ + m₁ + m₂; then scale by conj(w(0))/|w(0)|² so 𝒲(0) = 1.
         let half = C64::new(0.5, 0.0);
