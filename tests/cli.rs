@@ -546,3 +546,106 @@ fn complete_atph_with_prescribed_lengths() {
     let doc = json(&out.stdout);
     assert!(doc["pairs"][1]["error"].as_str().unwrap().contains("atph"));
 }
+
+#[test]
+fn motion_through_a_point_stream() {
+    let dir = tempfile::tempdir().unwrap();
+    let vtk = dir.path().join("motion.vtk");
+    let out = strandfit(
+        &[
+            "motion",
+            "--samples",
+            "9",
+            "examples/motion.json",
+            "--vtk",
+            vtk.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc = json(&out.stdout);
+    assert_eq!(doc["id"], "example-5.6");
+    let segs = doc["segments"].as_array().unwrap();
+    assert_eq!(segs.len(), 5);
+    // Each quintic runs from its data point to the next (control points
+    // r0 and r5), and consecutive ones join.
+    let data = [
+        [0.0, 0.0, 0.0],
+        [-5.0, 5.0, 2.0],
+        [0.0, 10.0, -2.0],
+        [8.0, 12.0, 5.0],
+        [15.0, 2.0, 3.0],
+        [2.0, 0.0, 7.0],
+    ];
+    for (k, s) in segs.iter().enumerate() {
+        let cp = points(&s["control_points"]);
+        assert_eq!(cp.len(), 6);
+        assert!(cp[0].distance(strandfit::DVec3::from(data[k])) < 1e-9);
+        assert!(
+            cp[5].distance(strandfit::DVec3::from(data[k + 1])) < 1e-9,
+            "{}",
+            cp[5]
+        );
+        assert_eq!(s["pre_image"].as_array().unwrap().len(), 3);
+    }
+    // Samples: orthonormal right-handed frames, f1 the path's direction.
+    let samples = doc["samples"].as_array().unwrap();
+    assert_eq!(samples.len(), 9);
+    for s in samples {
+        let (f1, f2, f3) = (v3(&s["f1"]), v3(&s["f2"]), v3(&s["f3"]));
+        assert!((f1.length() - 1.0).abs() < 1e-12 && f1.dot(f2).abs() < 1e-12);
+        assert!((f1.cross(f2) - f3).length() < 1e-12);
+    }
+    // The VTK export reads back with the frame arrays as point data.
+    let inspect = strandfit(&["inspect", "--json", vtk.to_str().unwrap()], "");
+    assert!(
+        inspect.status.success(),
+        "{}",
+        String::from_utf8_lossy(&inspect.stderr)
+    );
+    let report = String::from_utf8_lossy(&inspect.stdout);
+    assert!(report.contains("f1") && report.contains("f3"), "{report}");
+}
+
+#[test]
+fn motion_batches_json_lines_and_names_bad_streams() {
+    let out = strandfit(&["motion", "examples/motions.jsonl"], "");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 4);
+    // Example 5.5 of the paper: Algorithm 1 inserts p_m (c = 1/8).
+    let ins = &lines[0]["inserted"][0];
+    assert_eq!(ins["after"], 1);
+    let pm = v3(&ins["point"]);
+    assert!(
+        pm.distance(strandfit::DVec3::new(-2.29636, 8.60499, 2.18027)) < 2e-5,
+        "{pm}"
+    );
+    // A given frame is kept: the first segment starts along its u.
+    assert_eq!(lines[2]["id"], "example-5.7");
+    let e = lines[3]["error"].as_str().unwrap();
+    assert!(
+        e.contains("line 4") && e.contains("points 1 and 2 coincide"),
+        "{e}"
+    );
+    // A frame that is not orthonormal, and a document that is not a stream.
+    let bad = r#"{"points":[[0,0,0],[1,1,0],[2,0,1]],"frame":[[1,0,0],[1,1,0],[0,0,1]]}"#;
+    let out = strandfit(&["motion"], bad);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("orthonormal"));
+    let out = strandfit(&["motion"], "[1,2,3]");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("<stdin>"));
+}

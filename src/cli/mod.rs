@@ -1,6 +1,6 @@
 //! The `strandfit` command line: `helix`, `fit`, `sample`, `evaluate`,
-//! `integrate`, `complete`, `compress`, `decompress`, `inspect`, `convert`,
-//! `bench`.
+//! `integrate`, `complete`, `motion`, `compress`, `decompress`, `inspect`,
+//! `convert`, `bench`.
 
 mod bench_cmd;
 mod complete_cmd;
@@ -13,6 +13,7 @@ mod helix_cmd;
 mod inspect_cmd;
 mod integrate_cmd;
 mod io_util;
+mod motion_cmd;
 mod sample_cmd;
 
 use std::path::PathBuf;
@@ -110,6 +111,10 @@ pub enum Command {
     /// "p1","t1"}]}) with 3D Euler spirals (batched on the chosen backend) or
     /// ATPH curves (closed form, optionally of a prescribed arc length).
     Complete(CompleteArgs),
+    /// Rigid-body motion through a point stream ({"points":[[x,y,z],…],
+    /// "frame":[u,v,w],"c":0.125}): a G1 spline of RRMF quintics with a
+    /// rational rotation-minimising frame; JSON Lines for many streams.
+    Motion(MotionArgs),
     /// Measure whole-fit throughput on synthetic splines (elements per second).
     Bench(BenchArgs),
 }
@@ -314,6 +319,28 @@ pub struct CompleteArgs {
 }
 
 #[derive(clap::Args, Debug)]
+pub struct MotionArgs {
+    /// Input: one JSON stream, or JSON Lines (one stream per line) with
+    /// --lines or a .jsonl/.ndjson name ("-" or absent: standard input).
+    pub input: Option<PathBuf>,
+    /// Output JSON (JSON Lines for JSON Lines input; absent: standard
+    /// output). Written atomically.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Also write M samples (position, f1, f2, f3) per stream, equally
+    /// spaced in the chord-length parameter, ends included (0: none).
+    #[arg(long, default_value_t = 0)]
+    pub samples: usize,
+    /// Read and write JSON Lines, one stream per line.
+    #[arg(long)]
+    pub lines: bool,
+    /// Also write the paths with their frames as a legacy VTK POLYDATA file
+    /// (for ParaView): --samples points per stream, or 20 per segment.
+    #[arg(long)]
+    pub vtk: Option<PathBuf>,
+}
+
+#[derive(clap::Args, Debug)]
 pub struct InspectArgs {
     /// The file to inspect.
     pub input: PathBuf,
@@ -384,6 +411,7 @@ pub fn main() -> ExitCode {
         Command::Evaluate(a) => cli.backend().and_then(|b| evaluate_cmd::run(a, &b)),
         Command::Integrate(a) => cli.backend().and_then(|b| integrate_cmd::run(a, &b)),
         Command::Complete(a) => cli.backend().and_then(|b| complete_cmd::run(a, &b)),
+        Command::Motion(a) => motion_cmd::run(a),
         Command::Compress(a) => compress_cmd::run(a),
         Command::Decompress(a) => decompress_cmd::run(a),
         Command::Inspect(a) => inspect_cmd::run(a),

@@ -31,6 +31,7 @@ pub mod tck;
 pub mod trk;
 pub mod trx;
 pub mod vtk;
+pub mod vtk_frames;
 
 use std::path::{Path, PathBuf};
 

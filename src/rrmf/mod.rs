@@ -18,4 +18,4 @@ pub use local::{interpolate_local, LocalError, LocalSolution};
 pub use quat::Quat;
 pub use quintic::PhQuintic;
 pub use rmf::{RmfError, RrmfQuintic};
-pub use spline::{default_frame, minaj2_references, MotionError, RrmfSpline};
+pub use spline::{default_frame, minaj2_references, validate_points, MotionError, RrmfSpline};

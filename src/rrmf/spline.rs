@@ -222,12 +222,7 @@ impl RrmfSpline {
         if !(c > 0.0 && c <= 1.0) {
             return Err(MotionError::BadC(c));
         }
-        if let Some(i) = points.iter().position(|p| !p.is_finite()) {
-            return Err(MotionError::NotFinite(i));
-        }
-        if let Some(i) = points.windows(2).position(|w| w[0] == w[1]) {
-            return Err(MotionError::Repeated(i));
-        }
+        validate_points(points)?;
         let mut frame = frame;
         let mut segments = Vec::with_capacity(points.len() - 1);
         let mut inserted = Vec::new();
@@ -323,6 +318,21 @@ impl RrmfSpline {
             })
             .collect()
     }
+}
+
+/// The checks on a point stream every motion starts with: at least two
+/// points, all finite, no point repeated next to itself.
+pub fn validate_points(points: &[DVec3]) -> Result<(), MotionError> {
+    if points.len() < 2 {
+        return Err(MotionError::TooFew(points.len()));
+    }
+    if let Some(i) = points.iter().position(|p| !p.is_finite()) {
+        return Err(MotionError::NotFinite(i));
+    }
+    if let Some(i) = points.windows(2).position(|w| w[0] == w[1]) {
+        return Err(MotionError::Repeated(i));
+    }
+    Ok(())
 }
 
 /// The default initial frame: `𝐮₀` along `first_reference`, `𝐯₀` any unit
