@@ -65,6 +65,12 @@ pub struct LocalSolution {
     pub phi2: f64,
     /// `γ`, the angle between `𝐮ᵢ` and `𝐮_f`.
     pub gamma: f64,
+    /// `g(φ₂)` of Section 4.3 (angular length of the spherical control
+    /// polygon) for the chosen root.
+    pub g: f64,
+    /// For `γ < 2π/5`, the other root `φ₂` and its `g` (not chosen: its
+    /// `g` is larger).
+    pub other_root: Option<(f64, f64)>,
 }
 
 /// Pieces of the construction in the canonical frame for one `φ₂`.
@@ -261,6 +267,7 @@ pub fn interpolate_local(
         Some(if fa.abs() < fb.abs() { a } else { b })
     };
     let two_pi_5 = 0.4 * PI;
+    let mut other_root = None;
     let phi = if (du_l - b).length() <= INPUT_TOL {
         // 𝐒_γ(0) = 𝐛 (Proposition 4.1).
         Some(0.0)
@@ -279,11 +286,13 @@ pub fn interpolate_local(
                 };
                 match (first, second) {
                     (Some(a), Some(c)) => {
-                        let ga = cfg_at(a).map(|k| g_functional(&k));
-                        let gc = cfg_at(c).map(|k| g_functional(&k));
+                        let ga = cfg_at(a).map_or(f64::INFINITY, |k| g_functional(&k));
+                        let gc = cfg_at(c).map_or(f64::INFINITY, |k| g_functional(&k));
                         if gc < ga {
+                            other_root = Some((side * a, ga));
                             Some(c)
                         } else {
+                            other_root = Some((side * c, gc));
                             Some(a)
                         }
                     }
@@ -310,6 +319,8 @@ pub fn interpolate_local(
         theta1: cfg.theta1,
         phi2: side * phi,
         gamma,
+        g: g_functional(&cfg),
+        other_root,
     })
 }
 
@@ -381,18 +392,52 @@ mod tests {
     fn regimes_of_gamma() {
         let p_i = DVec3::new(1.0, 2.0, 3.0);
         let frame = frame_from(DVec3::new(1.0, 0.2, -0.1), DVec3::Z);
-        // Turning 𝐮ᵢ about 𝚫𝐮 by larger angles gives larger γ.
-        for (dp, turn) in [
-            (DVec3::new(2.0, 1.0, 0.5), 0.3),
-            (DVec3::new(2.0, 1.0, 0.5), 1.0),
-            (DVec3::new(2.0, 1.0, 0.5), 2.5),
-            (DVec3::new(-1.0, 2.0, 0.5), 1.5),
-            (DVec3::new(1.0, -0.3, 2.0), -2.0),
-        ] {
-            let (p_f, u_f) = data(p_i, frame, dp, turn);
-            let sol = interpolate_local(p_i, frame, p_f, u_f).unwrap();
+        let (mut below, mut at, mut above, mut two_roots) = (0, 0, 0, 0);
+        let cases = [0.2f64, 0.35 * PI, 0.4 * PI, 0.6 * PI, 0.9 * PI];
+        for (tau, gamma, sign) in [0.3f64, 0.45, 0.64, 0.7, 0.8, 1.2]
+            .iter()
+            .flat_map(|&t| cases.iter().flat_map(move |&g| [(t, g, 1.0), (t, g, -1.0)]))
+        {
+            let dp = 2.5 * (tau.cos() * frame[0] + tau.sin() * frame[1]);
+            // γ from the turn β about 𝚫𝐮: cos γ = cos²τ + sin²τ cos β.
+            let c = (gamma.cos() - tau.cos().powi(2)) / tau.sin().powi(2);
+            if !(-1.0..=1.0).contains(&c) {
+                continue; // beyond γ_max of (5.2): no turn reaches it
+            }
+            let turn = c.acos();
+            let (p_f, u_f) = data(p_i, frame, dp, sign * turn);
+            let Ok(sol) = interpolate_local(p_i, frame, p_f, u_f) else {
+                // Only γ ≤ 2π/5 may fail, when (4.30) does not hold.
+                assert!(gamma <= 0.4 * PI + 1e-9, "{gamma}");
+                continue;
+            };
+            assert!((sol.gamma - gamma).abs() < 1e-9, "{} {gamma}", sol.gamma);
             check(&sol, p_i, frame, p_f, u_f);
+            if (gamma - 0.4 * PI).abs() < 1e-12 {
+                at += 1;
+                // [0, 2π/3] only (Section 4.3).
+                assert!(sol.phi2.abs() <= 2.0 * FRAC_PI_3 + 1e-12);
+            } else if gamma < 0.4 * PI {
+                below += 1;
+                // Two roots, one in each bracket; the kept one has the
+                // smaller g, and the other interpolates too.
+                if let Some((phi, g)) = sol.other_root {
+                    two_roots += 1;
+                    assert!(sol.g <= g, "{} > {g}", sol.g);
+                    assert!(
+                        (phi.abs() - 2.0 * FRAC_PI_3).signum()
+                            != (sol.phi2.abs() - 2.0 * FRAC_PI_3).signum()
+                    );
+                }
+            } else {
+                above += 1;
+                assert!(sol.other_root.is_none());
+            }
         }
+        assert!(
+            below >= 1 && at >= 1 && above >= 1 && two_roots >= 1,
+            "{below} {at} {above} {two_roots}"
+        );
     }
 
     #[test]

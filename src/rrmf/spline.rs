@@ -529,6 +529,32 @@ mod tests {
     }
 
     #[test]
+    fn rotating_and_translating_the_stream_moves_the_motion_rigidly() {
+        let p = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(-5.0, 5.0, 2.0),
+            DVec3::new(0.0, 10.0, -2.0),
+            DVec3::new(8.0, 12.0, 5.0),
+            DVec3::new(15.0, 2.0, 3.0),
+        ];
+        let r = minaj2_references(&p);
+        let f = default_frame(r[0]).unwrap();
+        let a = RrmfSpline::build(&p, &r, f, 0.125).unwrap();
+        let rot = DQuat::from_axis_angle(DVec3::new(0.3, -1.0, 0.5).normalize(), 2.1);
+        let shift = DVec3::new(100.0, -7.0, 3.0);
+        let q: Vec<DVec3> = p.iter().map(|v| rot * *v + shift).collect();
+        let rq = minaj2_references(&q);
+        let b = RrmfSpline::build(&q, &rq, f.map(|v| rot * v), 0.125).unwrap();
+        assert_eq!(a.segments.len(), b.segments.len());
+        for ((pa, fa), (pb, fb)) in a.sample(101).into_iter().zip(b.sample(101)) {
+            assert!((rot * pa + shift - pb).length() < 1e-9, "{pa} {pb}");
+            for k in 0..3 {
+                assert!((rot * fa[k] - fb[k]).length() < 1e-9);
+            }
+        }
+    }
+
+    #[test]
     fn bad_streams_name_the_problem() {
         let p = [DVec3::ZERO, DVec3::X, DVec3::X, DVec3::Y];
         let r = vec![DVec3::X; 4];
