@@ -37,6 +37,7 @@ pub mod io;
 pub mod metrics;
 pub mod rrmf;
 pub mod sampled;
+pub mod sketch;
 pub mod spline;
 pub mod synthetic;
 pub mod twin;

@@ -1,0 +1,132 @@
+//! The projected helix of Section 4 (paper 003): the helix of radius `a`
+//! and pitch `b` about the `y` axis, through the origin,
+//! `H_Prim(t) = (a(cos t − 1), bt, a sin t)`, turned by `c` about the `x`
+//! axis,
+//!
+//! ```text
+//! H_3D,R(t) = (a(cos t − 1), bt cos c − a sin c sin t, bt sin c + a cos c sin t),
+//! ```
+//!
+//! and its orthogonal projection on `z = 0`, `H(t)` = the first two
+//! coordinates. Only the rotation about `x` changes the projection's shape
+//! (a rotation about `y` shifts `t`, one about `z` turns the plane).
+
+use glam::{DVec2, DVec3};
+
+/// `(a, b, c)`: radius `a ≥ 0`, pitch `b ≥ 0`, tilt `c` about the `x` axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProjectedHelix {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+}
+
+impl ProjectedHelix {
+    pub fn new(a: f64, b: f64, c: f64) -> Self {
+        ProjectedHelix { a, b, c }
+    }
+
+    /// `H_3D,R(t)`.
+    pub fn point_3d(&self, t: f64) -> DVec3 {
+        let (st, ct) = t.sin_cos();
+        let (sc, cc) = self.c.sin_cos();
+        DVec3::new(
+            self.a * (ct - 1.0),
+            self.b * t * cc - self.a * sc * st,
+            self.b * t * sc + self.a * cc * st,
+        )
+    }
+
+    /// `H_3D,R′(t)`.
+    pub fn derivative_3d(&self, t: f64) -> DVec3 {
+        let (st, ct) = t.sin_cos();
+        let (sc, cc) = self.c.sin_cos();
+        DVec3::new(
+            -self.a * st,
+            self.b * cc - self.a * sc * ct,
+            self.b * sc + self.a * cc * ct,
+        )
+    }
+
+    /// `H(t)`, the projection on `z = 0`.
+    pub fn point(&self, t: f64) -> DVec2 {
+        let p = self.point_3d(t);
+        DVec2::new(p.x, p.y)
+    }
+
+    /// `H′(t) = (−a sin t, b cos c − a sin c cos t)`.
+    pub fn derivative(&self, t: f64) -> DVec2 {
+        let (st, ct) = t.sin_cos();
+        let (sc, cc) = self.c.sin_cos();
+        DVec2::new(-self.a * st, self.b * cc - self.a * sc * ct)
+    }
+
+    /// `H″(t) = (−a cos t, a sin c sin t)`.
+    pub fn second_derivative(&self, t: f64) -> DVec2 {
+        let (st, ct) = t.sin_cos();
+        DVec2::new(-self.a * ct, self.a * self.c.sin() * st)
+    }
+
+    /// The unit tangent `T̂_H(t)` (Section 4.3); `None` at a cusp of the
+    /// projection (`H′ = 0`).
+    pub fn unit_tangent(&self, t: f64) -> Option<DVec2> {
+        self.derivative(t).try_normalize()
+    }
+
+    /// `κ_H(t) = |a(b cos c cos t − a sin c)| / (a² sin²t + (b cos c −
+    /// a sin c cos t)²)^{3/2}` (Section 4.2); infinite at a cusp.
+    pub fn curvature(&self, t: f64) -> f64 {
+        let (st, ct) = t.sin_cos();
+        let (sc, cc) = self.c.sin_cos();
+        let (a, b) = (self.a, self.b);
+        let num = (a * (b * cc * ct - a * sc)).abs();
+        let q = a * a * st * st + (b * cc - a * sc * ct).powi(2);
+        num / (q * q.sqrt())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn it_is_a_helix_turned_about_x() {
+        let h = ProjectedHelix::new(1.3, 0.4, 0.7);
+        let rot = glam::DQuat::from_rotation_x(0.7);
+        for k in 0..20 {
+            let t = -3.0 + 0.3 * k as f64;
+            let prim = DVec3::new(1.3 * (t.cos() - 1.0), 0.4 * t, 1.3 * t.sin());
+            assert!((rot * prim - h.point_3d(t)).length() < 1e-14);
+            // Constant curvature a/(a² + b²) and speed √(a² + b²) in 3D.
+            assert!((h.derivative_3d(t).length() - (1.3f64.powi(2) + 0.16).sqrt()).abs() < 1e-14);
+            // Derivatives against finite differences.
+            let e = 1e-6;
+            let d = (h.point(t + e) - h.point(t - e)) / (2.0 * e);
+            assert!((d - h.derivative(t)).length() < 1e-8);
+            let dd = (h.derivative(t + e) - h.derivative(t - e)) / (2.0 * e);
+            assert!((dd - h.second_derivative(t)).length() < 1e-8);
+            // κ of (4.2) equals the plane-curve curvature |x′y″ − y′x″|/|H′|³.
+            let (d1, d2) = (h.derivative(t), h.second_derivative(t));
+            let k_num = d1.perp_dot(d2).abs() / d1.length().powi(3);
+            assert!((h.curvature(t) - k_num).abs() < 1e-12 * k_num.max(1.0));
+        }
+    }
+
+    proptest! {
+        /// Proposition 1: κ_H is largest at t = 0 or t = π (mod 2π).
+        #[test]
+        fn proposition_1_curvature_is_maximal_at_multiples_of_pi(
+            a in 0.05f64..3.0, b in 0.0f64..3.0, c in -PI..PI,
+        ) {
+            let h = ProjectedHelix::new(a, b, c);
+            let at_ends = h.curvature(0.0).max(h.curvature(PI));
+            for k in 0..=4000 {
+                let t = -PI + 2.0 * PI * k as f64 / 4000.0;
+                let kt = h.curvature(t);
+                prop_assert!(kt <= at_ends * (1.0 + 1e-9), "t = {t}: {kt} > {at_ends}");
+            }
+        }
+    }
+}
