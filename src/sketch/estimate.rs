@@ -135,7 +135,7 @@ mod tests {
             let want = DVec2::new(-a.sin(), a.cos());
             // The one-sided windows (3 end vertices each side) extrapolate,
             // so they are less accurate than the interior ones.
-            let end = i < 3 || i >= 57;
+            let end = !(3..57).contains(&i);
             let (kt, tt) = if end { (0.03, 0.01) } else { (0.015, 2e-3) };
             assert!((k - 0.5).abs() < kt, "{i}: {k}");
             assert!((*t - want).length() < tt, "{i}");
@@ -146,7 +146,7 @@ mod tests {
             .map(|k| 2.0 * DVec2::new((0.02 * k as f64).cos(), (0.02 * k as f64).sin()))
             .collect();
         for (i, (_, k)) in tangents_and_curvatures(&pts, 3).iter().enumerate() {
-            let tol = if i < 3 || i >= 197 { 2e-3 } else { 3e-4 };
+            let tol = if (3..197).contains(&i) { 3e-4 } else { 2e-3 };
             assert!((k - 0.5).abs() < tol, "{i}: {k}");
         }
     }
