@@ -1,6 +1,8 @@
 //! Throughput of each stage of the floating tangents fit, in helix elements
 //! per second: sampling, relaxation (dense LU vs tridiagonal), interpolation,
-//! and the whole fit (single-threaded per curve and rayon over curves).
+//! and the whole fit (single-threaded per curve and rayon over curves); the
+//! backends; Frenet–Serret integration and spline sampling; and Euler-spiral
+//! completion (completions per second).
 //!
 //! `cargo bench --bench fit` (add `-- <filter>` to pick a group).
 
@@ -243,6 +245,50 @@ fn spline_sample(c: &mut Criterion) {
     g.finish();
 }
 
+/// Euler-spiral completion, in completions (pairs) per second: the default
+/// Levenberg–Marquardt solver through `solve_spirals` on the CPU backend
+/// (per-pair solves on all cores) and on the GPU backend in `f64` (lockstep,
+/// every candidate curve of a round in one dispatch per step count;
+/// skipped, with a note, without an f64 adapter), on 1,000 random pairs
+/// within one revolution; and the paper's Algorithm 1 (`paper_spiral`, its
+/// defaults: explicit Euler at 100 samples) on the first 20 of them, on all
+/// cores (rayon over pairs), for comparison.
+fn completion(c: &mut Criterion) {
+    use rayon::prelude::*;
+    use strandfit::backend::{Backend, BackendChoice, PrecisionChoice};
+    use strandfit::euler::{paper_spiral, solve_spirals, PaperOptions, SolveOptions};
+    use strandfit::synthetic::{random_spirals, spiral_end_pairs};
+    let pairs = spiral_end_pairs(&random_spirals(1000, 1));
+    let opts = SolveOptions::default();
+    let mut g = c.benchmark_group("completion");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(pairs.len() as u64));
+    g.bench_function(BenchmarkId::new("euler_lm", "cpu"), |b| {
+        b.iter(|| black_box(solve_spirals(&pairs, &opts, &Backend::Cpu).expect("cpu")))
+    });
+    match Backend::open(BackendChoice::Gpu, PrecisionChoice::F64) {
+        Ok(gpu) => {
+            g.bench_function(BenchmarkId::new("euler_lm", "gpu_f64"), |b| {
+                b.iter(|| black_box(solve_spirals(&pairs, &opts, &gpu).expect("gpu")))
+            });
+        }
+        Err(e) => eprintln!("completion bench: gpu_f64 skipped: {e}"),
+    }
+    let few = &pairs[..20];
+    let paper = PaperOptions::default();
+    g.throughput(Throughput::Elements(few.len() as u64));
+    g.bench_function(BenchmarkId::new("paper_alg1", "cpu"), |b| {
+        b.iter(|| {
+            let out: Vec<_> = few
+                .par_iter()
+                .map(|&(x0, t0, xf, tf)| paper_spiral(x0, t0, xf, tf, &paper))
+                .collect();
+            black_box(out)
+        })
+    });
+    g.finish();
+}
+
 criterion_group!(
     benches,
     sampling,
@@ -251,6 +297,7 @@ criterion_group!(
     whole_fit,
     backends,
     frenet,
-    spline_sample
+    spline_sample,
+    completion
 );
 criterion_main!(benches);

@@ -2,6 +2,8 @@
 
 use glam::DVec3;
 
+use crate::euler::batch::Pair;
+use crate::euler::FrenetProblem;
 use crate::spline::{BezierSpline, SplineError};
 
 /// Cubic Hermite spline through `segments + 1` samples of `pos` on
@@ -63,6 +65,110 @@ pub fn synthetic_hermite_pairs(count: usize) -> Vec<(DVec3, DVec3, DVec3, DVec3)
             let u0 = (c as f64 * 0.414_213_562_37).fract() * 6.0;
             let u1 = u0 + 0.1 + 0.5 * (c as f64 * 0.732_050_807_57).fract();
             (pos(u0), tangent(u0), pos(u1), tangent(u1))
+        })
+        .collect()
+}
+
+/// SplitMix64: a small deterministic generator for the synthetic inputs
+/// (the library does not depend on `rand`).
+struct SplitMix64(u64);
+
+impl SplitMix64 {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `[a, b)`.
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        let u = (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+        a + (b - a) * u
+    }
+
+    /// Uniform on the unit sphere (rejection from the shell
+    /// `0.2 < |v| < 1`, so that normalising is well conditioned).
+    fn unit_vector(&mut self) -> DVec3 {
+        loop {
+            let v = DVec3::new(
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+            );
+            let l = v.length();
+            if l > 0.2 && l < 1.0 {
+                return v / l;
+            }
+        }
+    }
+}
+
+/// Total turning of the tangent, `∫₀ᴸ |κ| ds`, of a spiral (`κ` linear, so
+/// in closed form, split at the inflection if `κ` changes sign).
+pub fn spiral_turning(p: &FrenetProblem) -> f64 {
+    let (k0, k1) = (p.kappa0, p.curvature(p.length));
+    if k0 * k1 >= 0.0 {
+        0.5 * (k0.abs() + k1.abs()) * p.length
+    } else {
+        (k0 * k0 + k1 * k1) / (2.0 * p.gamma.abs())
+    }
+}
+
+/// Deterministic random 3D Euler spirals whose tangent turns by at most one
+/// revolution (`∫|κ| ds ≤ 2π`), for completion tests and benchmarks:
+///
+/// * start `x₀` uniform in `[−5, 5]³`, tangent `T₀` uniform on the sphere,
+///   normal `N₀` perpendicular to it at a uniform angle;
+/// * in the dimensionless rates of the whole length, uniform:
+///   `κ₀L ∈ [0, 2π)`, `γL² ∈ [−2π, 2π)` (curvature at the start and its
+///   change over the curve), `τ₀L ∈ [−π, π)`, `δL² ∈ [−π, π)` (twist);
+///   then `L ∈ [0.5, 3)` (`κ₀ ≥ 0` loses nothing: `N₀` takes every
+///   direction);
+/// * a draw whose turning ([`spiral_turning`]) exceeds `2π` is rejected and
+///   drawn again (12% are). The turning of those kept is spread over the
+///   whole revolution (median 2.7 rad, 10% above 5.3). `κ` may change sign
+///   (an inflection, 29% of the spirals): such pairs are kept, they occur
+///   in real gaps.
+pub fn random_spirals(count: usize, seed: u64) -> Vec<FrenetProblem> {
+    use std::f64::consts::{PI, TAU};
+    let mut rng = SplitMix64(seed);
+    let mut out = Vec::with_capacity(count);
+    while out.len() < count {
+        let start = DVec3::new(
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+        );
+        let t = rng.unit_vector();
+        let phi = rng.range(0.0, TAU);
+        let e1 = t.any_orthonormal_vector();
+        let n = phi.cos() * e1 + phi.sin() * t.cross(e1);
+        // Dimensionless rates (turning and twist over the whole length),
+        // then the length.
+        let (k0, g) = (rng.range(0.0, TAU), rng.range(-TAU, TAU));
+        let (t0, d) = (rng.range(-PI, PI), rng.range(-PI, PI));
+        let l = rng.range(0.5, 3.0);
+        let p = FrenetProblem::new(start, t, n, k0 / l, g / (l * l), t0 / l, d / (l * l), l);
+        if spiral_turning(&p) <= TAU {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// The completion problems of spirals: `(x₀, T₀, x(L), T(L))`, the end by
+/// 1024 integration steps (on all cores). The pair is the input to solve;
+/// how close it is to the generating spiral's exact end (about `1e-12`
+/// relative) does not matter.
+pub fn spiral_end_pairs(spirals: &[FrenetProblem]) -> Vec<Pair> {
+    use rayon::prelude::*;
+    spirals
+        .par_iter()
+        .map(|p| {
+            let e = p.integrate_unchecked(1024);
+            (p.start, p.frame[0], e.point, e.frame[0])
         })
         .collect()
 }

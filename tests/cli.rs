@@ -441,12 +441,14 @@ fn complete_fills_gaps_with_euler_spirals() {
     let doc = json(&out.stdout);
     let pairs = doc["pairs"].as_array().unwrap();
     assert_eq!(pairs.len(), 4);
-    // Roundness: a quarter of the unit circle.
+    // Roundness: a quarter of the unit circle. The solve stops at the step
+    // count whose truncation error is below 1e-7 of |p1 − p0| (here the
+    // first, 32); κ₀ and L absorb Simpson's position error there (2e-9).
     let q = &pairs[0];
     assert_eq!(q["id"], "quarter-circle");
-    assert!((q["kappa0"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{q}");
+    assert!((q["kappa0"].as_f64().unwrap() - 1.0).abs() < 1e-8, "{q}");
     assert!(q["gamma"].as_f64().unwrap().abs() < 1e-9);
-    assert!((q["length"].as_f64().unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
+    assert!((q["length"].as_f64().unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-8);
     assert_eq!(q["regular"], true);
     // Samples run from p0 to p1.
     let pts = points(&q["points"]);

@@ -1,18 +1,20 @@
 //! `strandfit bench`: throughput on synthetic splines, on the chosen backend:
 //! Ghosh interpolation alone and the whole fit (elements/s), arc-length
 //! sampling of the splines and evaluation of the fitted chains (points/s),
-//! and Frenet–Serret integration (spirals/s), with the GPU time of each
-//! split into prepare / upload / wait / readback.
+//! Frenet–Serret integration (spirals/s), with the GPU time of each split
+//! into prepare / upload / wait / readback, and Euler-spiral completion
+//! (completions/s: the default solver on the chosen backend, the paper's
+//! Algorithm 1 on a few pairs on the CPU).
 
 use std::time::Instant;
 
 use super::BenchArgs;
 use crate::backend::Backend;
-use crate::euler::FrenetProblem;
+use crate::euler::{paper_spiral, solve_spirals, FrenetProblem, PaperOptions, SolveOptions};
 use crate::fit::{relaxed_pairs, FitOptions, FitScratch};
 use crate::gpu::Timings;
 use crate::helix::HermitePair;
-use crate::synthetic::synthetic_splines;
+use crate::synthetic::{random_spirals, spiral_end_pairs, synthetic_splines};
 use anyhow::Result;
 
 /// Steps per spiral in the Frenet–Serret benchmark.
@@ -37,6 +39,9 @@ fn synthetic_spirals(n: usize) -> Vec<FrenetProblem> {
         })
         .collect()
 }
+
+/// Pairs the paper's Algorithm 1 is timed on (it is slow).
+const PAPER_PAIRS: usize = 20;
 
 /// Points per element in the decompression benchmark.
 const EVAL_POINTS_PER_ELEMENT: usize = 8;
@@ -164,6 +169,48 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         &format!("frenet integration ({FRENET_STEPS} steps)"),
         problems.len() as f64,
         "spirals",
+        &mut times,
+    );
+
+    // Euler-spiral completion between point–tangent pairs (one pair per
+    // curve, from random spirals within one revolution): the default solver
+    // on the chosen backend, and the paper's Algorithm 1 on a few of the
+    // pairs on the CPU (all cores, rayon over pairs), for comparison.
+    let pairs = spiral_end_pairs(&random_spirals(args.curves, 1));
+    let opts = SolveOptions::default();
+    let _ = solve_spirals(&pairs[..pairs.len().min(16)], &opts, backend)?; // warm-up, compile
+    let (mut times, solved) =
+        time_runs(args.repeat, |_| Ok(solve_spirals(&pairs, &opts, backend)?))?;
+    let missed = solved
+        .iter()
+        .filter(|r| {
+            r.as_ref()
+                .map_or(true, |s| s.error > crate::euler::CONVERGED)
+        })
+        .count();
+    drop(solved);
+    report(
+        "euler completion (LM)",
+        pairs.len() as f64,
+        "completions",
+        &mut times,
+    );
+    if missed > 0 {
+        println!("  ({missed} pairs did not converge)");
+    }
+    let few = &pairs[..pairs.len().min(PAPER_PAIRS)];
+    let paper = PaperOptions::default();
+    let (mut times, _) = time_runs(args.repeat, |_| {
+        use rayon::prelude::*;
+        Ok(few
+            .par_iter()
+            .map(|&(x0, t0, xf, tf)| paper_spiral(x0, t0, xf, tf, &paper))
+            .collect::<Vec<_>>())
+    })?;
+    report(
+        &format!("euler completion (paper Alg. 1, cpu, {} pairs)", few.len()),
+        few.len() as f64,
+        "completions",
         &mut times,
     );
     Ok(())

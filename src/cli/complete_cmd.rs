@@ -203,14 +203,17 @@ fn euler(
             .filter_map(|r| r.as_ref().ok())
             .map(|s| s.problem)
             .collect();
+        // As many steps in all as the solve used (the most any pair
+        // needed after its truncation check), so the last sample is the
+        // solved end to within the truncation tolerance.
+        let steps = solved
+            .iter()
+            .filter_map(|r| r.as_ref().ok())
+            .map(|s| s.steps)
+            .max()
+            .unwrap_or(opts.steps);
         let mut it = backend
-            // As many steps in all as the solve used, so the last sample is
-            // the solved end.
-            .integrate_samples(
-                &problems,
-                args.samples,
-                opts.steps.div_ceil(args.samples - 1),
-            )?
+            .integrate_samples(&problems, args.samples, steps.div_ceil(args.samples - 1))?
             .into_iter();
         solved
             .iter()

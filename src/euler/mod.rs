@@ -18,8 +18,10 @@ pub mod frenet;
 pub mod paper;
 pub mod solve;
 
-pub use batch::solve_spirals;
+pub use batch::{solve_spirals, solve_spirals_lockstep, Pair};
 pub use clothoid::{clothoid_g1, Clothoid, ClothoidError};
 pub use frenet::{FrenetEnd, FrenetError, FrenetProblem, FRAME_TOL};
 pub use paper::{paper_spiral, PaperIntegrator, PaperOptions};
-pub use solve::{solve_spiral, SolveError, SolveOptions, SpiralSolution};
+pub use solve::{
+    solve_spiral, Restart, SolveError, SolveOptions, SpiralSolution, CONVERGED, DEFAULT_RESTARTS,
+};
