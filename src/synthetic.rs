@@ -69,6 +69,47 @@ pub fn synthetic_hermite_pairs(count: usize) -> Vec<(DVec3, DVec3, DVec3, DVec3)
         .collect()
 }
 
+/// A local motion problem of paper 001, Section 4: start point, start frame
+/// `(u, v, w)`, displacement to the end point and end tangent.
+pub type LocalMotion = (DVec3, [DVec3; 3], DVec3, DVec3);
+
+/// Deterministic local motion problems satisfying (4.1): the end tangent is
+/// the start tangent turned about the chord by 0.3–2.8 rad.
+pub fn synthetic_local_motions(count: usize) -> Vec<LocalMotion> {
+    (0..count)
+        .map(|k| {
+            let a = k as f64 * 0.618_033_988_75;
+            let u = DVec3::new(a.cos(), a.sin(), 0.3 * (2.0 * a).sin()).normalize();
+            let frame = crate::rrmf::default_frame(u).unwrap_or([DVec3::X, DVec3::Y, DVec3::Z]);
+            let dp = DVec3::new(
+                1.0 + (1.7 * a).sin(),
+                (1.3 * a).cos(),
+                0.5 * (0.7 * a).sin(),
+            );
+            let turn = 0.3 + 2.5 * (a * 0.414).fract();
+            let u_f = glam::DQuat::from_axis_angle(dp.normalize(), turn) * u;
+            (DVec3::ZERO, frame, dp, u_f)
+        })
+        .collect()
+}
+
+/// `count` point streams of `len` points along wandering helices, spaced
+/// like the samples of a hair strand or a probe path.
+pub fn synthetic_streams(count: usize, len: usize) -> Vec<Vec<DVec3>> {
+    (0..count)
+        .map(|c| {
+            let ph = c as f64 * 0.618_033_988_75;
+            (0..len)
+                .map(|k| {
+                    let u = k as f64 * 0.45;
+                    let r = 1.0 + 0.3 * (0.7 * u + ph).sin();
+                    DVec3::new(r * (2.0 * u + ph).cos(), r * (2.0 * u + ph).sin(), 0.8 * u)
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// SplitMix64: a small deterministic generator for the synthetic inputs
 /// (the library does not depend on `rand`).
 struct SplitMix64(u64);

@@ -4,7 +4,9 @@
 //! Frenet–Serret integration (spirals/s), with the GPU time of each split
 //! into prepare / upload / wait / readback, and Euler-spiral completion
 //! (completions/s: the default solver on the chosen backend, the paper's
-//! Algorithm 1 on a few pairs on the CPU).
+//! Algorithm 1 on a few pairs on the CPU), ATPH Hermite interpolation
+//! (interpolations/s, on the backend) and RRMF motions on the CPU (local
+//! interpolations/s, whole-spline points/s).
 
 use std::time::Instant;
 
@@ -14,7 +16,12 @@ use crate::euler::{paper_spiral, solve_spirals, FrenetProblem, PaperOptions, Sol
 use crate::fit::{relaxed_pairs, FitOptions, FitScratch};
 use crate::gpu::Timings;
 use crate::helix::HermitePair;
-use crate::synthetic::{random_spirals, spiral_end_pairs, synthetic_splines};
+use crate::rrmf::{default_frame, interpolate_local, minaj2_references, RrmfSpline};
+use crate::synthetic::{
+    random_spirals, spiral_end_pairs, synthetic_hermite_pairs, synthetic_local_motions,
+    synthetic_splines, synthetic_streams,
+};
+use rayon::prelude::*;
 use anyhow::Result;
 
 /// Steps per spiral in the Frenet–Serret benchmark.
@@ -42,6 +49,10 @@ fn synthetic_spirals(n: usize) -> Vec<FrenetProblem> {
 
 /// Pairs the paper's Algorithm 1 is timed on (it is slow).
 const PAPER_PAIRS: usize = 20;
+
+/// Points per stream and samples per stream in the motion benchmark.
+const MOTION_STREAM_POINTS: usize = 30;
+const MOTION_SAMPLES: usize = 200;
 
 /// Points per element in the decompression benchmark.
 const EVAL_POINTS_PER_ELEMENT: usize = 8;
@@ -201,7 +212,6 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     let few = &pairs[..pairs.len().min(PAPER_PAIRS)];
     let paper = PaperOptions::default();
     let (mut times, _) = time_runs(args.repeat, |_| {
-        use rayon::prelude::*;
         Ok(few
             .par_iter()
             .map(|&(x0, t0, xf, tf)| paper_spiral(x0, t0, xf, tf, &paper))
@@ -211,6 +221,64 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         &format!("euler completion (paper Alg. 1, cpu, {} pairs)", few.len()),
         few.len() as f64,
         "completions",
+        &mut times,
+    );
+    
+    // ATPH Hermite interpolation (paper 002) on the backend: one pair per
+    // element, the ends of arcs of wandering helices.
+    let atph_pairs = synthetic_hermite_pairs(args.curves * args.elements);
+    let _ = backend.interpolate_atph(&atph_pairs[..atph_pairs.len().min(1024)], None)?; // warm-up, compile
+    let (mut times, solved) = time_runs(args.repeat, |t| {
+        Ok(backend.interpolate_atph_timed(&atph_pairs, None, t)?)
+    })?;
+    let failed = solved.iter().filter(|r| r.is_err()).count();
+    drop(solved);
+    report(
+        "atph interpolation",
+        atph_pairs.len() as f64,
+        "interpolations",
+        &mut times,
+    );
+    if failed > 0 {
+        println!("  ({failed} pairs could not be interpolated)");
+    }
+    drop(atph_pairs);
+
+    // RRMF motions (paper 001), on the CPU with rayon whatever the backend:
+    // local G1 Hermite interpolations with a one-sided frame (the rational
+    // RMF included), and whole splines through 30-point streams sampled at
+    // MOTION_SAMPLES points.
+    let local = synthetic_local_motions(args.curves);
+    let (mut times, _) = time_runs(args.repeat, |_| {
+        Ok(local
+            .par_iter()
+            .filter(|p| interpolate_local(p.0, p.1, p.2, p.3).is_ok())
+            .count())
+    })?;
+    report(
+        "rrmf local interpolation (cpu)",
+        local.len() as f64,
+        "interpolations",
+        &mut times,
+    );
+    let streams = synthetic_streams(args.curves.div_ceil(100), MOTION_STREAM_POINTS);
+    let (mut times, _) = time_runs(args.repeat, |_| {
+        streams
+            .par_iter()
+            .map(|p| {
+                let r = minaj2_references(p);
+                let frame = default_frame(r[0]).ok_or_else(|| anyhow::anyhow!("zero reference"))?;
+                let m = RrmfSpline::build(p, &r, frame, 0.125)?;
+                Ok(m.sample(MOTION_SAMPLES).len())
+            })
+            .sum::<Result<usize>>()
+    })?;
+    report(
+        &format!(
+            "rrmf spline ({MOTION_STREAM_POINTS}-point streams, build + {MOTION_SAMPLES} samples, cpu)"
+        ),
+        (streams.len() * MOTION_SAMPLES) as f64,
+        "points",
         &mut times,
     );
     Ok(())
