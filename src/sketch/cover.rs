@@ -1,0 +1,429 @@
+//! Covering the sketch with projected helices (Sections 6.1–6.4).
+//!
+//! One helix, around the vertex `v_s` of largest curvature (Proposition 1
+//! puts `t = 0` there):
+//! 1. **Alignment (6.1).** The helix frame at `t = 0` has its `y` axis along
+//!    `T̂_H(0)` and the curve bending towards `−x` (`H″(0) = (−a, 0)`); the
+//!    sketch is put in that frame by the translation to `v_s`, the rotation
+//!    taking `T̂_{v_s}` to `+y`, and a reflection if the sketch turns right
+//!    at `v_s`.
+//! 2. **Two-vertex fit (6.2).** For each of the `2·NMAX` neighbours `v_n`,
+//!    `(a, b, c)` minimising
+//!    `E = β_D ‖v_n − H(α)‖²/‖v_n‖² + (1 − β_D) ‖T̂_{v_n} − T̂_H(α)‖²`
+//!    by Nelder–Mead, `α = ±π/4` (the sign of the side of `v_n`). The paper
+//!    leaves `β_D` open and its point term has units; dividing by `‖v_n‖²`
+//!    makes the fit scale-free, `β_D = ½`. Helices whose tangent at `t = 0`
+//!    points along `−y` are rejected (a penalty), as are `a, b < 0` (the
+//!    search runs on `|a|`, `|b|`).
+//! 3. **Coverage (6.3).** Walk from `v_s` both ways while each vertex is
+//!    within `E_max` of the curve (its closest point, followed from the
+//!    previous vertex's parameter). The paper compares the *squared*
+//!    distance with a length (0.1 % of the curve length); we compare the
+//!    distance, which is what a threshold in length units means. The
+//!    candidate covering most vertices wins.
+//!
+//! Beyond the paper, the winner is then refined by least squares on the
+//! vertices it covers ([`refine`](super::refine), placement included) and
+//! the walk resumed from its ends, until the coverage stops growing: the
+//! two-vertex fit fixes `t = 0` at a vertex, which is exact only where the
+//! sketch's curvature maximum falls on a vertex.
+//!
+//! **Several helices (6.4).** The parts left on either side are covered
+//! recursively (each from its own largest-curvature vertex), each new helix
+//! sharing the junction vertex with its neighbour. A leftover of fewer than
+//! [`MIN_VERTICES`] vertices is absorbed by the helix next to it.
+
+use std::f64::consts::FRAC_PI_4;
+
+use glam::DVec2;
+
+use super::nelder_mead::{minimize, NelderMeadOptions};
+use super::placed::PlacedHelix;
+use super::refine::{refine, Objective, Piece};
+use super::ProjectedHelix;
+
+/// The smallest number of vertices a helix is fitted to.
+pub const MIN_VERTICES: usize = 4;
+
+/// `β_D` of Section 6.2.
+const BETA_D: f64 = 0.5;
+
+/// Refinement rounds (refine, then extend) per candidate helix, and the
+/// iteration cap of each refinement.
+const GROW_ROUNDS: usize = 8;
+const GROW_ITERATIONS: usize = 100;
+
+/// Restarts of a refinement that leaves a vertex farther than
+/// `HOP_BELOW · E_max`, from these multiples of the radius.
+const HOP_BELOW: f64 = 1e-3;
+const HOP_SCALES: [f64; 4] = [0.6, 0.8, 1.25, 1.6];
+
+/// Starting tilts `c` of the two-vertex fits.
+const START_TILTS: [f64; 3] = [0.0, 0.9, -0.9];
+
+/// Candidates of the two-vertex fit that are refined and grown.
+const REFINED_CANDIDATES: usize = 3;
+
+/// Options of the covering.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoverOptions {
+    /// `E_max`, in the sketch's units.
+    pub emax: f64,
+    /// `NMAX`: neighbours of the seed tried on each side.
+    pub nmax: usize,
+    /// Vertices at either end of the sketch not taken as seeds.
+    pub end_guard: usize,
+}
+
+/// Parameter of the vertex after `t` along the walk direction `dir` (±1):
+/// a Gauss–Newton guess from the previous foot, then Newton.
+fn next_parameter(h: &PlacedHelix, v: DVec2, t: f64) -> f64 {
+    let d1 = h.derivative(t);
+    let speed2 = d1.length_squared();
+    let guess = if speed2 > 0.0 {
+        t + ((v - h.point(t)).dot(d1) / speed2).clamp(-1.0, 1.0)
+    } else {
+        t
+    };
+    h.closest_parameter(v, guess)
+}
+
+/// Walk from vertex `from` (parameter `t_from`) in direction `dir` within
+/// `[lo, hi]` while vertices stay within `emax` and parameters keep
+/// moving the same way (`t` runs along the sketch if `orient > 0`,
+/// against it otherwise). The accepted parameters, in walk order.
+#[allow(clippy::too_many_arguments)]
+fn walk(
+    h: &PlacedHelix,
+    points: &[DVec2],
+    from: usize,
+    t_from: f64,
+    dir: isize,
+    orient: f64,
+    (lo, hi): (usize, usize),
+    emax: f64,
+) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut t = t_from;
+    let mut i = from as isize + dir;
+    while i >= lo as isize && i <= hi as isize {
+        let v = points[i as usize];
+        let tn = next_parameter(h, v, t);
+        if (tn - t) * dir as f64 * orient <= 0.0 || (h.point(tn) - v).length() > emax {
+            break;
+        }
+        out.push(tn);
+        t = tn;
+        i += dir;
+    }
+    out
+}
+
+/// The piece `h` covers around vertex `s` (parameter `ts`).
+fn coverage(
+    h: &PlacedHelix,
+    points: &[DVec2],
+    s: usize,
+    ts: f64,
+    range: (usize, usize),
+    emax: f64,
+) -> Piece {
+    // Does t run along the sketch here?
+    let ahead = points[(s + 1).min(range.1)] - points[s.saturating_sub(1).max(range.0)];
+    let orient = if h.derivative(ts).dot(ahead) < 0.0 { -1.0 } else { 1.0 };
+    let back = walk(h, points, s, ts, -1, orient, range, emax);
+    let fwd = walk(h, points, s, ts, 1, orient, range, emax);
+    let mut params: Vec<f64> = back.iter().rev().copied().collect();
+    params.push(ts);
+    params.extend(&fwd);
+    Piece {
+        helix: *h,
+        first: s - back.len(),
+        last: s + fwd.len(),
+        ts: params,
+        mirror: false,
+    }
+}
+
+/// Extend `piece` by walking on from both of its ends.
+fn extend(piece: &mut Piece, points: &[DVec2], range: (usize, usize), emax: f64) -> bool {
+    let h = piece.helix;
+    let orient = piece.orientation();
+    let back = walk(&h, points, piece.first, piece.ts[0], -1, orient, range, emax);
+    let fwd = walk(&h, points, piece.last, piece.ts[piece.ts.len() - 1], 1, orient, range, emax);
+    if back.is_empty() && fwd.is_empty() {
+        return false;
+    }
+    let mut ts: Vec<f64> = back.iter().rev().copied().collect();
+    ts.extend(&piece.ts);
+    ts.extend(&fwd);
+    piece.first -= back.len();
+    piece.last += fwd.len();
+    piece.ts = ts;
+    true
+}
+
+/// Sections 6.1–6.3 on vertices `[lo, hi]`, then refinement and growth.
+fn fit_one(
+    points: &[DVec2],
+    geometry: &[(DVec2, f64)],
+    (lo, hi): (usize, usize),
+    opts: &CoverOptions,
+) -> Piece {
+    // The seed: the largest curvature, away from the sketch's ends where
+    // the estimator's window is one-sided (and the ends of a drawn stroke
+    // hook) unless the range has nothing else.
+    let n = points.len();
+    let inner = (lo.max(opts.end_guard)..=hi.min(n.saturating_sub(1 + opts.end_guard)))
+        .max_by(|&i, &j| geometry[i].1.abs().total_cmp(&geometry[j].1.abs()));
+    let s = inner
+        .or_else(|| (lo..=hi).max_by(|&i, &j| geometry[i].1.abs().total_cmp(&geometry[j].1.abs())))
+        .unwrap_or(lo);
+    let (tangent, kappa) = geometry[s];
+    // 6.1: R(θ) takes +y to T̂_{v_s}; reflect if the sketch turns right.
+    let base = PlacedHelix {
+        helix: ProjectedHelix::new(0.0, 0.0, 0.0),
+        theta: (-tangent.x).atan2(tangent.y),
+        origin: points[s],
+        reflect: kappa < 0.0,
+    };
+    let nm = NelderMeadOptions {
+        max_evals: 400,
+        ftol: 1e-12,
+        xtol: 1e-9,
+    };
+    let mut candidates: Vec<(usize, f64, Piece)> = Vec::new();
+    let first_n = s.saturating_sub(opts.nmax).max(lo);
+    let last_n = (s + opts.nmax).min(hi);
+    for n in first_n..=last_n {
+        if n == s {
+            continue;
+        }
+        let v = base.to_local(points[n]);
+        let tn = base.to_local(points[s] + geometry[n].0);
+        let alpha = if n > s { FRAC_PI_4 } else { -FRAC_PI_4 };
+        let scale2 = v.length_squared();
+        if !(scale2 > 0.0) {
+            continue;
+        }
+        // Start from c = 0, where H(α) = (a(cos α − 1), bα).
+        let floor = 0.05 * scale2.sqrt();
+        let a0 = (v.x / (alpha.cos() - 1.0)).max(floor);
+        let b0 = (v.y / alpha).max(floor);
+        let e = |x: &[f64; 3]| {
+            let h = ProjectedHelix::new(x[0].abs(), x[1].abs(), x[2]);
+            // Along the sketch, t runs one way or the other: compare
+            // tangents up to that sign (fixed at t = 0 by T̂_H(0) = ±y).
+            let lead = h.derivative(0.0).y.signum();
+            let tangent = h.unit_tangent(alpha).unwrap_or(DVec2::ZERO) * lead;
+            BETA_D * (v - h.point(alpha * lead)).length_squared() / scale2
+                + (1.0 - BETA_D) * (tn - tangent).length_squared()
+        };
+        // Several starting tilts: the two-vertex problem has several
+        // minima (a loop or not at the seed, the axis towards or away).
+        for c0 in START_TILTS {
+            let m = minimize(e, [a0, b0, c0], [0.3 * a0, 0.3 * b0, 0.3], &nm);
+            let mut h = base;
+            h.helix = ProjectedHelix::new(m.x[0].abs(), m.x[1].abs(), m.x[2]);
+            let piece = coverage(&h, points, s, 0.0, (lo, hi), opts.emax);
+            candidates.push((piece.last - piece.first, m.value, piece));
+        }
+    }
+    // The paper keeps the candidate covering most vertices. Beyond the
+    // paper: the best few are refined on the vertices they cover and the
+    // walk resumed, repeatedly; the refined piece covering most wins (a
+    // refinement can stop in a local minimum — the distance to a curve
+    // that loops has many — so one start is not enough).
+    candidates.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.total_cmp(&y.1)));
+    let obj = Objective {
+        alpha_t: 0.0,
+        emax: opts.emax,
+    };
+    let mut best: Option<Piece> = None;
+    for (_, _, mut piece) in candidates.into_iter().take(REFINED_CANDIDATES) {
+        for _ in 0..GROW_ROUNDS {
+            if piece.ts.len() >= 3 {
+                refine(points, std::slice::from_mut(&mut piece), &obj, GROW_ITERATIONS);
+                hop(points, &mut piece, &obj);
+            }
+            if !extend(&mut piece, points, (lo, hi), opts.emax) {
+                break;
+            }
+        }
+        let better = best.as_ref().map_or(true, |b| {
+            let (nb, np) = (b.last - b.first, piece.last - piece.first);
+            np > nb || np == nb && piece.max_distance(points) < b.max_distance(points)
+        });
+        if better {
+            best = Some(piece);
+        }
+    }
+    // A range of one vertex cannot happen (callers pass ≥ 2).
+    best.unwrap_or(Piece {
+        helix: base,
+        first: s,
+        last: s,
+        ts: vec![0.0],
+        mirror: false,
+    })
+}
+
+/// Where a refinement stops short of fitting its vertices (a local
+/// minimum: over a short arc many helices fit nearly as well, and the one
+/// reached need not extend), restart it from the radius scaled by each of
+/// [`HOP_SCALES`] and keep the best.
+fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective) {
+    let cost = |p: &Piece| super::refine::objective(points, std::slice::from_ref(p), obj);
+    let mut best_cost = cost(piece);
+    if piece.max_distance(points) <= HOP_BELOW * obj.emax {
+        return;
+    }
+    let start = piece.clone();
+    for scale in HOP_SCALES {
+        let mut trial = start.clone();
+        let mut p = trial.helix.params();
+        p[3] *= scale;
+        trial.helix = PlacedHelix::from_params(&p, trial.helix.reflect);
+        trial.reproject(points);
+        refine(points, std::slice::from_mut(&mut trial), obj, GROW_ITERATIONS);
+        let c = cost(&trial);
+        if c < best_cost {
+            best_cost = c;
+            *piece = trial;
+        }
+    }
+}
+
+/// Force `piece` to span `[first, last]`, projecting the new vertices.
+fn stretch(piece: &mut Piece, points: &[DVec2], first: usize, last: usize) {
+    while piece.first > first {
+        piece.first -= 1;
+        let t0 = piece.ts[0];
+        let t = next_parameter(&piece.helix, points[piece.first], t0);
+        piece.ts.insert(0, t);
+    }
+    while piece.last < last {
+        piece.last += 1;
+        let t0 = piece.ts[piece.ts.len() - 1];
+        let t = next_parameter(&piece.helix, points[piece.last], t0);
+        piece.ts.push(t);
+    }
+}
+
+/// Cover vertices `[lo, hi]` (Section 6.4); pieces in order along the
+/// sketch, consecutive ones sharing their junction vertex.
+pub fn cover(points: &[DVec2], geometry: &[(DVec2, f64)], opts: &CoverOptions) -> Vec<Piece> {
+    let mut out = Vec::new();
+    if points.len() >= 2 {
+        cover_range(points, geometry, (0, points.len() - 1), opts, &mut out);
+    }
+    out.sort_by_key(|p| p.first);
+    merge(points, &mut out, opts);
+    absorb(points, &mut out, opts);
+    out
+}
+
+/// Beyond the paper: a piece between two others is dropped if its
+/// neighbours, extended to meet at one of its vertices, fit within `E_max`
+/// (the meeting vertex with the smallest worst distance is kept). A walk
+/// that stops a few vertices short of a true junction leaves such a
+/// sliver, and a sliver is a spurious junction.
+fn absorb(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
+    let obj = Objective {
+        alpha_t: 0.0,
+        emax: opts.emax,
+    };
+    let mut i = 1;
+    while i + 1 < pieces.len() {
+        let (left, mid, right) = (&pieces[i - 1], &pieces[i], &pieces[i + 1]);
+        let mut best: Option<(f64, Piece, Piece)> = None;
+        if left.last == mid.first && mid.last == right.first {
+            for j in mid.first..=mid.last {
+                // `left` ends and `right` starts inside `mid`: both grow.
+                let mut l = left.clone();
+                stretch(&mut l, points, left.first, j);
+                let mut r = right.clone();
+                stretch(&mut r, points, j, right.last);
+                refine(points, std::slice::from_mut(&mut l), &obj, GROW_ITERATIONS);
+                refine(points, std::slice::from_mut(&mut r), &obj, GROW_ITERATIONS);
+                let d = l.max_distance(points).max(r.max_distance(points));
+                if d <= opts.emax && best.as_ref().map_or(true, |(b, _, _)| d < *b) {
+                    best = Some((d, l, r));
+                }
+            }
+        }
+        match best {
+            Some((_, l, r)) => {
+                pieces[i - 1] = l;
+                pieces[i + 1] = r;
+                pieces.remove(i);
+            }
+            None => i += 1,
+        }
+    }
+}
+
+/// Beyond the paper: merge neighbours that one helix fits within `E_max`
+/// (refined from either one's parameters over both ranges). A covering
+/// grown from a seed can stop in a local minimum of the fit (see
+/// [`hop`]); the merged fit starts from a helix that already fits a
+/// longer stretch, which usually escapes it.
+fn merge(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
+    let obj = Objective {
+        alpha_t: 0.0,
+        emax: opts.emax,
+    };
+    let mut i = 1;
+    while i < pieces.len() {
+        let (first, last) = (pieces[i - 1].first, pieces[i].last);
+        let mut best: Option<(f64, Piece)> = None;
+        for start in [&pieces[i - 1], &pieces[i]] {
+            let mut trial = start.clone();
+            stretch(&mut trial, points, first, last);
+            refine(points, std::slice::from_mut(&mut trial), &obj, GROW_ITERATIONS);
+            hop(points, &mut trial, &obj);
+            let d = trial.max_distance(points);
+            if d <= opts.emax && best.as_ref().map_or(true, |(b, _)| d < *b) {
+                best = Some((d, trial));
+            }
+        }
+        match best {
+            Some((_, merged)) => {
+                pieces[i - 1] = merged;
+                pieces.remove(i);
+                i = i.max(2) - 1;
+            }
+            None => i += 1,
+        }
+    }
+}
+
+fn cover_range(
+    points: &[DVec2],
+    geometry: &[(DVec2, f64)],
+    (lo, hi): (usize, usize),
+    opts: &CoverOptions,
+    out: &mut Vec<Piece>,
+) {
+    let mut piece = fit_one(points, geometry, (lo, hi), opts);
+    // At least one segment each side of the seed, so the recursion ends.
+    let first = if piece.first - lo < MIN_VERTICES - 1 {
+        lo
+    } else {
+        piece.first.min(piece.last.saturating_sub(1)).max(lo)
+    };
+    let last = if hi - piece.last < MIN_VERTICES - 1 {
+        hi
+    } else {
+        piece.last.max(piece.first + 1).min(hi)
+    };
+    stretch(&mut piece, points, first, last);
+    let (first, last) = (piece.first, piece.last);
+    out.push(piece);
+    if first > lo {
+        cover_range(points, geometry, (lo, first), opts, out);
+    }
+    if last < hi {
+        cover_range(points, geometry, (last, hi), opts, out);
+    }
+}

@@ -1,0 +1,315 @@
+//! The whole method: a 2D polyline to a 3D piecewise helix (Sections 6–7).
+//!
+//! 1. Checks, and normalisation to unit length about the centroid (so every
+//!    tolerance below is relative, and the result is invariant to
+//!    translation and uniform scale by construction; rotation invariance
+//!    follows from the tangent-based alignment, as the paper says).
+//! 2. Uniform resampling (Section 6 assumes it) when the input's edges
+//!    differ by more than [`UNIFORM_RATIO`]; otherwise the input vertices
+//!    are used as they are.
+//! 3. Tangents and curvatures (Section 5), covering (6.1–6.4).
+//! 4. Lift (Section 7): each helix or its mirror, chosen so the 3D tangents
+//!    at each junction are most parallel; then the fine fitting of
+//!    `α_T E_T + (1 − α_T) E_D` ([`refine`](super::refine)); then `z`
+//!    offsets making the curve continuous in `z` at every junction.
+//! 5. Report: per junction the remaining tangent angle and position gap,
+//!    and the projection error (vertex distances from the fitted curves).
+
+use glam::{DVec2, DVec3};
+
+use super::cover::{cover, CoverOptions};
+use super::estimate::{resample, tangents_and_curvatures};
+use super::placed::PlacedHelix;
+use super::refine::{refine, Objective, Piece, RefineReport};
+use super::ProjectedHelix;
+
+/// Inputs whose longest edge is within this factor of the shortest are
+/// used as they are; others are resampled uniformly.
+pub const UNIFORM_RATIO: f64 = 3.0;
+
+/// Options of [`lift_sketch`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SketchOptions {
+    /// `E_max` as a fraction of the sketch length (paper: 0.1 %).
+    pub emax: f64,
+    /// `α_T` of the fine fitting, in `[0, 1)` (0: distances only).
+    pub alpha_t: f64,
+    /// `NMAX`: neighbours of each seed tried on each side (Section 6.3).
+    pub nmax: usize,
+    /// Half-width of the curvature estimator's window (Section 5).
+    pub window: usize,
+    /// Iteration cap of the fine fitting.
+    pub fine_iterations: usize,
+}
+
+impl Default for SketchOptions {
+    fn default() -> Self {
+        SketchOptions {
+            emax: 1e-3,
+            alpha_t: 0.5,
+            nmax: 12,
+            window: 3,
+            fine_iterations: 100,
+        }
+    }
+}
+
+/// Why a sketch cannot be lifted.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SketchError {
+    #[error("a sketch needs at least 3 distinct points, found {0}")]
+    TooFew(usize),
+    #[error("point {0} is not finite")]
+    NonFinite(usize),
+    #[error("the sketch has zero length")]
+    ZeroLength,
+    #[error("invalid option: {0}")]
+    Options(&'static str),
+}
+
+/// One helix of the result, in the sketch's units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LiftedHelix {
+    /// `(a, b, c)` of Section 4.1 (radius `|a|`, pitch `|b|` per radian,
+    /// tilt `c`).
+    pub helix: ProjectedHelix,
+    /// Placement of the helix frame in the sketch plane (Section 6.1).
+    pub theta: f64,
+    pub origin: DVec2,
+    pub reflect: bool,
+    /// `H_3D,S` (the mirror) rather than `H_3D,R`.
+    pub mirror: bool,
+    /// `z` offset: the lift is `(P(t), ±z(t) + z0)`.
+    pub z0: f64,
+    /// Parameter range and vertex range (inclusive).
+    pub t_start: f64,
+    pub t_end: f64,
+    pub first: usize,
+    pub last: usize,
+    /// Largest vertex distance from the projected helix.
+    pub max_error: f64,
+}
+
+impl LiftedHelix {
+    fn placed(&self) -> PlacedHelix {
+        PlacedHelix {
+            helix: self.helix,
+            theta: self.theta,
+            origin: self.origin,
+            reflect: self.reflect,
+        }
+    }
+
+    /// The projected helix in the sketch plane.
+    pub fn point_2d(&self, t: f64) -> DVec2 {
+        self.placed().point(t)
+    }
+
+    /// The 3D helix.
+    pub fn point_3d(&self, t: f64) -> DVec3 {
+        self.placed().point_3d(t, self.mirror, self.z0)
+    }
+
+    /// The unit tangent of the 3D helix, pointing along the sketch (`t`
+    /// may run either way: from `t_start` at the first vertex to `t_end`).
+    pub fn tangent_3d(&self, t: f64) -> Option<DVec3> {
+        let sign = if self.t_end < self.t_start { -1.0 } else { 1.0 };
+        self.placed().tangent_3d(t, self.mirror).map(|v| sign * v)
+    }
+
+    /// `m ≥ 2` points of the 3D helix, evenly spaced in `t`.
+    pub fn sample_3d(&self, m: usize) -> Vec<DVec3> {
+        let m = m.max(2);
+        (0..m)
+            .map(|k| {
+                let u = k as f64 / (m - 1) as f64;
+                self.point_3d(self.t_start + u * (self.t_end - self.t_start))
+            })
+            .collect()
+    }
+}
+
+/// What is left at a junction vertex (the paper's curve is neither C0 nor
+/// G1 there).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Junction {
+    pub vertex: usize,
+    /// Angle between the 3D tangents of the two helices, radians.
+    pub tangent_angle: f64,
+    /// Distance between the two helices' points at the junction.
+    pub position_gap: f64,
+}
+
+/// The result of [`lift_sketch`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SketchLift {
+    pub helices: Vec<LiftedHelix>,
+    /// The vertices the fit ran on (the input, or its uniform resampling).
+    pub points_2d: Vec<DVec2>,
+    pub resampled: bool,
+    /// The lifted vertices `(x, y, z)` (Section 7: `x, y` are the sketch's).
+    pub points_3d: Vec<DVec3>,
+    pub junctions: Vec<Junction>,
+    /// Largest and root-mean-square vertex distance from the projected fit.
+    pub max_error: f64,
+    pub rms_error: f64,
+    /// Length of the sketch polyline.
+    pub length: f64,
+    /// The fine fitting (Section 7).
+    pub fine_fit: RefineReport,
+}
+
+fn check(points: &[DVec2]) -> Result<Vec<DVec2>, SketchError> {
+    if let Some(i) = points.iter().position(|p| !p.is_finite()) {
+        return Err(SketchError::NonFinite(i));
+    }
+    let mut clean: Vec<DVec2> = Vec::with_capacity(points.len());
+    for &p in points {
+        if clean.last() != Some(&p) {
+            clean.push(p);
+        }
+    }
+    if clean.len() < 3 {
+        return Err(SketchError::TooFew(clean.len()));
+    }
+    Ok(clean)
+}
+
+/// Lift a 2D polyline to a 3D piecewise helix.
+pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift, SketchError> {
+    if !(opts.emax > 0.0 && opts.emax < 1.0) {
+        return Err(SketchError::Options("emax must be in (0, 1) (a fraction of the length)"));
+    }
+    if !(opts.alpha_t >= 0.0 && opts.alpha_t < 1.0) {
+        return Err(SketchError::Options("alpha_t must be in [0, 1)"));
+    }
+    if opts.nmax == 0 || opts.window == 0 {
+        return Err(SketchError::Options("nmax and window must be at least 1"));
+    }
+    let clean = check(points)?;
+    let edges: Vec<f64> = clean.windows(2).map(|w| (w[1] - w[0]).length()).collect();
+    let length: f64 = edges.iter().sum();
+    if !(length > 0.0) || !length.is_finite() {
+        return Err(SketchError::ZeroLength);
+    }
+    let (shortest, longest) = edges
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
+    let resampled = longest > UNIFORM_RATIO * shortest;
+    let work = if resampled {
+        let m = ((length / shortest).round() as usize + 1).clamp(clean.len(), 4 * clean.len());
+        resample(&clean, m)
+    } else {
+        clean
+    };
+    // Normalise: centroid to the origin, unit length.
+    let centre = work.iter().copied().sum::<DVec2>() / work.len() as f64;
+    let unit: Vec<DVec2> = work.iter().map(|&p| (p - centre) / length).collect();
+
+    let geometry = tangents_and_curvatures(&unit, opts.window);
+    let cover_opts = CoverOptions {
+        emax: opts.emax,
+        nmax: opts.nmax,
+        end_guard: opts.window,
+    };
+    let mut pieces = cover(&unit, &geometry, &cover_opts);
+    choose_mirrors(&mut pieces);
+    let obj = Objective {
+        alpha_t: opts.alpha_t,
+        emax: opts.emax,
+    };
+    let fine_fit = refine(&unit, &mut pieces, &obj, opts.fine_iterations);
+    let z0 = z_offsets(&pieces);
+
+    // Back to the sketch's units.
+    let helices: Vec<LiftedHelix> = pieces
+        .iter()
+        .zip(&z0)
+        .map(|(p, &z)| LiftedHelix {
+            helix: ProjectedHelix::new(
+                p.helix.helix.a * length,
+                p.helix.helix.b * length,
+                p.helix.helix.c,
+            ),
+            theta: p.helix.theta,
+            origin: centre + p.helix.origin * length,
+            reflect: p.helix.reflect,
+            mirror: p.mirror,
+            z0: z * length,
+            t_start: p.ts[0],
+            t_end: p.ts[p.ts.len() - 1],
+            first: p.first,
+            last: p.last,
+            max_error: p.max_distance(&unit) * length,
+        })
+        .collect();
+    let mut points_3d: Vec<DVec3> = work.iter().map(|p| p.extend(0.0)).collect();
+    let mut sum2 = 0.0;
+    let mut count = 0usize;
+    let mut max_error = 0.0f64;
+    for (h, p) in helices.iter().zip(&pieces) {
+        for (k, &t) in p.ts.iter().enumerate() {
+            let j = p.first + k;
+            points_3d[j].z = h.point_3d(t).z;
+            let d = (work[j] - h.point_2d(t)).length();
+            sum2 += d * d;
+            count += 1;
+            max_error = max_error.max(d);
+        }
+    }
+    let junctions = (1..helices.len())
+        .filter(|&i| helices[i - 1].last == helices[i].first)
+        .map(|i| {
+            let (l, r) = (&helices[i - 1], &helices[i]);
+            let tl = l.tangent_3d(l.t_end).unwrap_or(DVec3::ZERO);
+            let tr = r.tangent_3d(r.t_start).unwrap_or(DVec3::ZERO);
+            Junction {
+                vertex: r.first,
+                tangent_angle: tl.angle_between(tr),
+                position_gap: (l.point_3d(l.t_end) - r.point_3d(r.t_start)).length(),
+            }
+        })
+        .collect();
+    Ok(SketchLift {
+        helices,
+        points_2d: work,
+        resampled,
+        points_3d,
+        junctions,
+        max_error,
+        rms_error: (sum2 / count.max(1) as f64).sqrt(),
+        length,
+        fine_fit,
+    })
+}
+
+/// Section 7: the first helix as is, each next one or its mirror, whichever
+/// makes the 3D tangents at their junction most parallel.
+fn choose_mirrors(pieces: &mut [Piece]) {
+    for i in 1..pieces.len() {
+        let tl = pieces[i - 1].end_tangent(true);
+        let dot = |m: bool| {
+            let mut p = pieces[i].clone();
+            p.mirror = m;
+            p.end_tangent(false).dot(tl)
+        };
+        pieces[i].mirror = dot(true) > dot(false);
+    }
+}
+
+/// `z₀` per piece: the first vertex at `z = 0`, then continuity in `z` at
+/// each junction (Section 7).
+fn z_offsets(pieces: &[Piece]) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::with_capacity(pieces.len());
+    for (i, p) in pieces.iter().enumerate() {
+        let z_start = p.helix.point_3d(p.ts[0], p.mirror, 0.0).z;
+        let target = if i == 0 {
+            0.0
+        } else {
+            let l = &pieces[i - 1];
+            l.helix.point_3d(l.ts[l.ts.len() - 1], l.mirror, out[i - 1]).z
+        };
+        out.push(target - z_start);
+    }
+    out
+}

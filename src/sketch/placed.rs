@@ -1,0 +1,236 @@
+//! A projected helix placed in the sketch plane: the alignment of Section
+//! 6.1 (translation, rotation and possibly a reflection between the helix
+//! frame `F_H` at `t = 0` and the sketch), with the helix `(a, b, c)`:
+//!
+//! ```text
+//! P(t) = o + R(θ) S H(t),   S = diag(−1, 1) if reflected, else I,
+//! ```
+//!
+//! and its lift `(P(t), σ H_3D,R,z(t) + z₀)` (Section 7; `σ = −1` is the
+//! mirror helix `H_3D,S`). The map `(x, y, z) ↦ (o + R S (x, y), σ z + z₀)`
+//! is an isometry of space, so the lift of a helix is a helix.
+//!
+//! Parameters for the fits are `p = [θ, o_x, o_y, a, b, c]`; `a` and `b`
+//! may go negative during a fit (the curve is still a helix of radius `|a|`
+//! and pitch `|b|`).
+
+use glam::{DVec2, DVec3};
+
+use super::ProjectedHelix;
+
+/// The number of parameters of one placed helix.
+pub const PARAMS: usize = 6;
+
+/// A projected helix in sketch coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlacedHelix {
+    pub helix: ProjectedHelix,
+    /// Rotation of the helix frame into the sketch.
+    pub theta: f64,
+    /// Where `H(0)` lands.
+    pub origin: DVec2,
+    /// The helix frame's `x` axis is flipped before the rotation.
+    pub reflect: bool,
+}
+
+fn rotate(theta: f64, v: DVec2) -> DVec2 {
+    let (s, c) = theta.sin_cos();
+    DVec2::new(c * v.x - s * v.y, s * v.x + c * v.y)
+}
+
+impl PlacedHelix {
+    /// From the parameter vector `[θ, o_x, o_y, a, b, c]`.
+    pub fn from_params(p: &[f64; PARAMS], reflect: bool) -> Self {
+        PlacedHelix {
+            helix: ProjectedHelix::new(p[3], p[4], p[5]),
+            theta: p[0],
+            origin: DVec2::new(p[1], p[2]),
+            reflect,
+        }
+    }
+
+    pub fn params(&self) -> [f64; PARAMS] {
+        [
+            self.theta,
+            self.origin.x,
+            self.origin.y,
+            self.helix.a,
+            self.helix.b,
+            self.helix.c,
+        ]
+    }
+
+    /// `R S v`: a vector of the helix frame in the sketch.
+    pub fn to_sketch_vector(&self, v: DVec2) -> DVec2 {
+        let v = if self.reflect { DVec2::new(-v.x, v.y) } else { v };
+        rotate(self.theta, v)
+    }
+
+    /// The inverse map of a sketch point into the helix frame.
+    pub fn to_local(&self, p: DVec2) -> DVec2 {
+        let v = rotate(-self.theta, p - self.origin);
+        if self.reflect {
+            DVec2::new(-v.x, v.y)
+        } else {
+            v
+        }
+    }
+
+    /// `P(t)`.
+    pub fn point(&self, t: f64) -> DVec2 {
+        self.origin + self.to_sketch_vector(self.helix.point(t))
+    }
+
+    /// `P′(t)`.
+    pub fn derivative(&self, t: f64) -> DVec2 {
+        self.to_sketch_vector(self.helix.derivative(t))
+    }
+
+    /// `P″(t)`.
+    pub fn second_derivative(&self, t: f64) -> DVec2 {
+        self.to_sketch_vector(self.helix.second_derivative(t))
+    }
+
+    /// `∂P(t)/∂p` for `p = [θ, o_x, o_y, a, b, c]`, from
+    /// `∂H/∂a = (cos t − 1, −sin c sin t)`, `∂H/∂b = (0, t cos c)`,
+    /// `∂H/∂c = (0, −bt sin c − a cos c sin t)` and `∂(R v)/∂θ = (R v)^⊥`.
+    pub fn param_jacobian(&self, t: f64) -> [DVec2; PARAMS] {
+        let (st, ct) = t.sin_cos();
+        let (sc, cc) = self.helix.c.sin_cos();
+        let (a, b) = (self.helix.a, self.helix.b);
+        let q = self.to_sketch_vector(self.helix.point(t));
+        [
+            DVec2::new(-q.y, q.x),
+            DVec2::X,
+            DVec2::Y,
+            self.to_sketch_vector(DVec2::new(ct - 1.0, -sc * st)),
+            self.to_sketch_vector(DVec2::new(0.0, t * cc)),
+            self.to_sketch_vector(DVec2::new(0.0, -b * t * sc - a * cc * st)),
+        ]
+    }
+
+    /// The lifted point `(P(t), σ z(t) + z₀)`, `σ = −1` when `mirror`.
+    pub fn point_3d(&self, t: f64, mirror: bool, z0: f64) -> DVec3 {
+        let p = self.point(t);
+        let z = self.helix.point_3d(t).z;
+        DVec3::new(p.x, p.y, if mirror { -z } else { z } + z0)
+    }
+
+    /// The unit tangent of the lift; `None` where the helix degenerates to
+    /// a point (`a = b = 0`).
+    pub fn tangent_3d(&self, t: f64, mirror: bool) -> Option<DVec3> {
+        let d = self.helix.derivative_3d(t);
+        let xy = self.to_sketch_vector(DVec2::new(d.x, d.y));
+        DVec3::new(xy.x, xy.y, if mirror { -d.z } else { d.z }).try_normalize()
+    }
+
+    /// The parameter of the point of the curve nearest `v`, by Newton's
+    /// method on `g(t) = (P(t) − v)·P′(t)` from `guess` (Gauss–Newton
+    /// steps where `g′ = |P′|² + (P − v)·P″` is not safely positive, steps
+    /// capped at ½ rad). Local: it follows the branch of the curve near
+    /// `guess`, which is what walking along a polyline needs — a projected
+    /// helix can loop back near itself, so a global search could jump.
+    pub fn closest_parameter(&self, v: DVec2, guess: f64) -> f64 {
+        let mut t = guess;
+        for _ in 0..30 {
+            let d = self.point(t) - v;
+            let d1 = self.derivative(t);
+            let speed2 = d1.length_squared();
+            if !(speed2 > 0.0) {
+                break;
+            }
+            let g = d.dot(d1);
+            let gp = speed2 + d.dot(self.second_derivative(t));
+            let step = if gp > 0.25 * speed2 { g / gp } else { g / speed2 };
+            let step = step.clamp(-0.5, 0.5);
+            t -= step;
+            if !t.is_finite() {
+                return guess;
+            }
+            if step.abs() <= 1e-15 * (1.0 + t.abs()) {
+                break;
+            }
+        }
+        t
+    }
+
+    /// The signed distance of `v` from the curve at parameter `t` along the
+    /// unit normal `ν = P′^⊥/|P′|`, and that normal (zero at a cusp).
+    pub fn normal_offset(&self, v: DVec2, t: f64) -> (f64, DVec2) {
+        let n = self.derivative(t).perp().normalize_or_zero();
+        ((v - self.point(t)).dot(n), n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> PlacedHelix {
+        PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true)
+    }
+
+    #[test]
+    fn local_and_sketch_coordinates_are_inverse() {
+        let h = sample();
+        for k in 0..10 {
+            let t = -2.0 + 0.45 * k as f64;
+            let p = h.point(t);
+            let l = h.to_local(p);
+            assert!((l - h.helix.point(t)).length() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn param_jacobian_matches_finite_differences() {
+        for reflect in [false, true] {
+            let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], reflect);
+            for t in [-1.3, 0.0, 0.4, 2.9] {
+                let j = h.param_jacobian(t);
+                for (k, jk) in j.iter().enumerate() {
+                    let mut p = h.params();
+                    let e = 1e-6;
+                    p[k] += e;
+                    let hp = PlacedHelix::from_params(&p, reflect).point(t);
+                    p[k] -= 2.0 * e;
+                    let hm = PlacedHelix::from_params(&p, reflect).point(t);
+                    let fd = (hp - hm) / (2.0 * e);
+                    assert!((fd - *jk).length() < 1e-8, "{k} at {t}: {fd} vs {jk}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_lift_is_an_isometric_copy_of_the_helix() {
+        // Distances between lifted points equal those on H_3D,R, mirrored
+        // or not: the lift of a helix is a helix.
+        let h = sample();
+        for mirror in [false, true] {
+            for (s, u) in [(0.1, 1.7), (-2.0, 0.5), (0.0, 3.0)] {
+                let d_lift = (h.point_3d(s, mirror, 0.3) - h.point_3d(u, mirror, 0.3)).length();
+                let d_true = (h.helix.point_3d(s) - h.helix.point_3d(u)).length();
+                assert!((d_lift - d_true).abs() < 1e-14);
+            }
+            let t = h.tangent_3d(0.8, mirror).unwrap();
+            let fd = (h.point_3d(0.8 + 1e-6, mirror, 0.0) - h.point_3d(0.8 - 1e-6, mirror, 0.0))
+                .normalize();
+            assert!((t - fd).length() < 1e-8);
+        }
+    }
+
+    #[test]
+    fn closest_parameter_finds_the_foot_of_the_normal() {
+        // Radius of curvature of the projection ≥ 0.085 (at t = 0).
+        let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.3, 0.3, 0.4], true);
+        for k in 0..12 {
+            let t = -2.5 + 0.4 * k as f64;
+            let (_, n) = h.normal_offset(DVec2::ZERO, t);
+            let v = h.point(t) + 0.01 * n;
+            let found = h.closest_parameter(v, t + 0.1);
+            assert!((found - t).abs() < 1e-9, "{t}: {found}");
+            let (d, _) = h.normal_offset(v, found);
+            assert!((d - 0.01).abs() < 1e-12);
+        }
+    }
+}
