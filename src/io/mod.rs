@@ -26,6 +26,7 @@ pub mod format;
 pub mod hair;
 pub mod inspect;
 pub mod polyline;
+pub mod sketch;
 mod spool;
 pub mod tck;
 pub mod trk;
