@@ -213,3 +213,29 @@ pub fn spiral_end_pairs(spirals: &[FrenetProblem]) -> Vec<Pair> {
         })
         .collect()
 }
+
+/// A drawing of `n` vertices for the sketch benchmarks: the projection of
+/// a helix of radius 30 whose axis is tilted 60° out of the page, 2.5
+/// turns, followed by a wider, flatter curl of 1.5 turns (two helices),
+/// sampled evenly in the helix parameter (so the edges are uneven).
+pub fn synthetic_sketch(n: usize) -> Vec<glam::DVec2> {
+    let n = n.max(4);
+    let first = n * 5 / 8;
+    let mut out = Vec::with_capacity(n);
+    let tilt = 60f64.to_radians();
+    let coil = |u: f64, r: f64, p: f64, tilt: f64| {
+        glam::DVec2::new(r * u.cos(), r * u.sin() * tilt.cos() - p * u * tilt.sin())
+    };
+    for k in 0..first {
+        let u = 2.5 * std::f64::consts::TAU * k as f64 / (first - 1) as f64;
+        out.push(coil(u, 30.0, 9.0, tilt));
+    }
+    let join = *out.last().unwrap_or(&glam::DVec2::ZERO);
+    let second = n - first;
+    let start = coil(0.0, 45.0, 20.0, 1.2);
+    for k in 1..=second {
+        let u = 1.5 * std::f64::consts::TAU * k as f64 / second as f64;
+        out.push(join + coil(u, 45.0, 20.0, 1.2) - start);
+    }
+    out
+}

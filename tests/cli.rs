@@ -651,3 +651,59 @@ fn motion_batches_json_lines_and_names_bad_streams() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("<stdin>"));
 }
+
+#[test]
+fn sketch_lifts_the_bundled_spring_drawing() {
+    // examples/spring.svg: the projection of a helix of radius 30, pitch
+    // 9 per radian, axis tilted 60° out of the page (c = 30°), 2.5 turns.
+    let dir = tempfile::tempdir().unwrap();
+    let out_json = dir.path().join("spring.json");
+    let preview = dir.path().join("preview.svg");
+    let out = strandfit(
+        &[
+            "sketch",
+            "examples/spring.svg",
+            "-o",
+            out_json.to_str().unwrap(),
+            "--preview",
+            preview.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let doc = json(&std::fs::read(&out_json).unwrap());
+    let helices = doc["helices"].as_array().unwrap();
+    assert_eq!(helices.len(), 1, "{doc}");
+    let h = &helices[0];
+    // The drawing is a polyline through the curve (its chords are within
+    // 0.02 of it), so the parameters come back to about 1e-3.
+    assert!((h["radius"].as_f64().unwrap() - 30.0).abs() < 0.05, "{h}");
+    assert!((h["pitch_per_turn"].as_f64().unwrap() - 18.0 * std::f64::consts::PI).abs() < 0.1, "{h}");
+    assert!((h["c"].as_f64().unwrap().abs() - 30f64.to_radians()).abs() < 1e-3, "{h}");
+    assert!(doc["projection_error"]["max_relative"].as_f64().unwrap() < 1e-4);
+    let n = doc["points_3d"].as_array().unwrap().len();
+    assert_eq!(h["last_vertex"].as_u64().unwrap() as usize, n - 1);
+    let svg = std::fs::read_to_string(&preview).unwrap();
+    assert_eq!(svg.matches("<polyline").count(), 2, "sketch + one helix");
+}
+
+#[test]
+fn sketch_refuses_bad_drawings_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let two = dir.path().join("two.json");
+    std::fs::write(&two, "[[0,0],[1,1]]").unwrap();
+    let target = dir.path().join("out.json");
+    let out = strandfit(&["sketch", two.to_str().unwrap(), "-o", target.to_str().unwrap()], "");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("two.json") && err.contains("at least 3"), "{err}");
+    assert!(!target.exists());
+    let bad = dir.path().join("draw.png");
+    std::fs::write(&bad, "x").unwrap();
+    let out = strandfit(&["sketch", bad.to_str().unwrap()], "");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("draw.png"));
+    let out = strandfit(&["sketch", "examples/spring.svg", "--alpha-t", "1.5"], "");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--alpha-t"));
+}

@@ -54,6 +54,9 @@ const PAPER_PAIRS: usize = 20;
 const MOTION_STREAM_POINTS: usize = 30;
 const MOTION_SAMPLES: usize = 200;
 
+/// Vertices of the drawing in the sketch benchmark.
+const SKETCH_VERTICES: usize = 500;
+
 /// Points per element in the decompression benchmark.
 const EVAL_POINTS_PER_ELEMENT: usize = 8;
 
@@ -279,6 +282,22 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         ),
         (streams.len() * MOTION_SAMPLES) as f64,
         "points",
+        &mut times,
+    );
+    
+    // Sketch to 3D (paper 003): one 500-vertex drawing (two helices),
+    // single-threaded (the paper: about a minute in Matlab).
+    let drawing = crate::synthetic::synthetic_sketch(SKETCH_VERTICES);
+    let (mut times, lifted) = time_runs(args.repeat, |_| {
+        Ok(crate::sketch::lift_sketch(&drawing, &crate::sketch::SketchOptions::default())?)
+    })?;
+    report(
+        &format!(
+            "sketch lift ({SKETCH_VERTICES} vertices, {} helices, cpu)",
+            lifted.helices.len()
+        ),
+        SKETCH_VERTICES as f64,
+        "vertices",
         &mut times,
     );
     Ok(())

@@ -15,6 +15,7 @@ mod integrate_cmd;
 mod io_util;
 mod motion_cmd;
 mod sample_cmd;
+mod sketch_cmd;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -115,6 +116,9 @@ pub enum Command {
     /// "frame":[u,v,w],"c":0.125}): a G1 spline of RRMF quintics with a
     /// rational rotation-minimising frame; JSON Lines for many streams.
     Motion(MotionArgs),
+    /// Lift a 2D drawing (JSON, CSV or SVG polyline) to a 3D piecewise
+    /// helix whose projection matches it (paper 003).
+    Sketch(SketchArgs),
     /// Measure whole-fit throughput on synthetic splines (elements per second).
     Bench(BenchArgs),
 }
@@ -341,6 +345,25 @@ pub struct MotionArgs {
 }
 
 #[derive(clap::Args, Debug)]
+pub struct SketchArgs {
+    /// The drawing: .json ([[x,y],...] or {"points":[...]}), .csv/.txt
+    /// (x,y per line) or .svg (first path, polyline or polygon).
+    pub input: PathBuf,
+    /// Output JSON (absent: standard output). Written atomically.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// E_max, the coverage threshold, as a fraction of the drawing's length.
+    #[arg(long, default_value_t = 1e-3)]
+    pub emax: f64,
+    /// Weight of tangent continuity in the fine fitting, in [0, 1).
+    #[arg(long = "alpha-t", default_value_t = 0.5)]
+    pub alpha_t: f64,
+    /// Also write an SVG of the drawing with the projected fit over it.
+    #[arg(long)]
+    pub preview: Option<PathBuf>,
+}
+
+#[derive(clap::Args, Debug)]
 pub struct InspectArgs {
     /// The file to inspect.
     pub input: PathBuf,
@@ -412,6 +435,7 @@ pub fn main() -> ExitCode {
         Command::Integrate(a) => cli.backend().and_then(|b| integrate_cmd::run(a, &b)),
         Command::Complete(a) => cli.backend().and_then(|b| complete_cmd::run(a, &b)),
         Command::Motion(a) => motion_cmd::run(a),
+        Command::Sketch(a) => sketch_cmd::run(a),
         Command::Compress(a) => compress_cmd::run(a),
         Command::Decompress(a) => decompress_cmd::run(a),
         Command::Inspect(a) => inspect_cmd::run(a),

@@ -1,0 +1,173 @@
+//! `strandfit sketch IN -o OUT.json`: a 2D drawing lifted to a 3D piecewise
+//! helix (paper 003, [`crate::sketch`]).
+//!
+//! Input: a polyline as JSON (`[[x,y],…]` or `{"points":[…]}`), CSV/TXT
+//! (`x,y` per line) or SVG (the first path, polyline or polygon; curves
+//! flattened), by extension ([`crate::io::sketch`]). Output: the helices
+//! (`a`, `b`, `c`, placement, mirror, `z0`, parameter and vertex ranges,
+//! worst vertex distance), the 3D polyline (the drawing's `x, y` with the
+//! lifted `z`), per junction the tangent angle and position gap left, and
+//! the projection error; `--preview` writes an SVG of the drawing with the
+//! projected fit over it.
+
+use std::f64::consts::PI;
+
+use anyhow::{bail, Context, Result};
+use glam::DVec2;
+use serde::Serialize;
+
+use super::io_util::Output;
+use super::SketchArgs;
+use crate::io::sketch::{read_sketch, write_preview_svg};
+use crate::sketch::{lift_sketch, SketchLift, SketchOptions};
+
+#[derive(Serialize)]
+struct HelixOut {
+    a: f64,
+    b: f64,
+    c: f64,
+    radius: f64,
+    pitch_per_turn: f64,
+    theta: f64,
+    origin: [f64; 2],
+    reflect: bool,
+    mirror: bool,
+    z0: f64,
+    t_start: f64,
+    t_end: f64,
+    first_vertex: usize,
+    last_vertex: usize,
+    max_error: f64,
+}
+
+#[derive(Serialize)]
+struct JunctionOut {
+    vertex: usize,
+    tangent_angle_deg: f64,
+    position_gap: f64,
+}
+
+#[derive(Serialize)]
+struct SketchOut {
+    input: String,
+    length: f64,
+    resampled: bool,
+    emax: f64,
+    alpha_t: f64,
+    helices: Vec<HelixOut>,
+    junctions: Vec<JunctionOut>,
+    max_tangent_angle_deg: f64,
+    projection_error: ErrorOut,
+    fine_fit: FineOut,
+    points_3d: Vec<[f64; 3]>,
+}
+
+#[derive(Serialize)]
+struct ErrorOut {
+    max: f64,
+    rms: f64,
+    max_relative: f64,
+}
+
+#[derive(Serialize)]
+struct FineOut {
+    iterations: usize,
+    objective_before: f64,
+    objective_after: f64,
+}
+
+fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
+    let helices = r
+        .helices
+        .iter()
+        .map(|h| HelixOut {
+            a: h.helix.a,
+            b: h.helix.b,
+            c: h.helix.c,
+            radius: h.helix.a.abs(),
+            pitch_per_turn: 2.0 * PI * h.helix.b.abs(),
+            theta: h.theta,
+            origin: h.origin.to_array(),
+            reflect: h.reflect,
+            mirror: h.mirror,
+            z0: h.z0,
+            t_start: h.t_start,
+            t_end: h.t_end,
+            first_vertex: h.first,
+            last_vertex: h.last,
+            max_error: h.max_error,
+        })
+        .collect();
+    let junctions: Vec<JunctionOut> = r
+        .junctions
+        .iter()
+        .map(|j| JunctionOut {
+            vertex: j.vertex,
+            tangent_angle_deg: j.tangent_angle.to_degrees(),
+            position_gap: j.position_gap,
+        })
+        .collect();
+    SketchOut {
+        input,
+        length: r.length,
+        resampled: r.resampled,
+        emax: opts.emax * r.length,
+        alpha_t: opts.alpha_t,
+        helices,
+        max_tangent_angle_deg: junctions
+            .iter()
+            .map(|j| j.tangent_angle_deg)
+            .fold(0.0, f64::max),
+        junctions,
+        projection_error: ErrorOut {
+            max: r.max_error,
+            rms: r.rms_error,
+            max_relative: r.max_error / r.length,
+        },
+        fine_fit: FineOut {
+            iterations: r.fine_fit.iterations,
+            objective_before: r.fine_fit.before,
+            objective_after: r.fine_fit.after,
+        },
+        points_3d: r.points_3d.iter().map(|p| p.to_array()).collect(),
+    }
+}
+
+/// The projected fit of each helix, sampled for the preview.
+fn projected_pieces(r: &SketchLift) -> Vec<Vec<DVec2>> {
+    r.helices
+        .iter()
+        .map(|h| {
+            let m = 8 * (h.last - h.first).max(1) + 1;
+            (0..m)
+                .map(|k| h.point_2d(h.t_start + (h.t_end - h.t_start) * k as f64 / (m - 1) as f64))
+                .collect()
+        })
+        .collect()
+}
+
+pub fn run(args: &SketchArgs) -> Result<()> {
+    let opts = SketchOptions {
+        emax: args.emax,
+        alpha_t: args.alpha_t,
+        ..Default::default()
+    };
+    if !(opts.emax > 0.0 && opts.emax < 1.0) {
+        bail!("--emax must be in (0, 1): a fraction of the drawing's length");
+    }
+    if !(opts.alpha_t >= 0.0 && opts.alpha_t < 1.0) {
+        bail!("--alpha-t must be in [0, 1)");
+    }
+    let points = read_sketch(&args.input)?;
+    let name = args.input.display().to_string();
+    let r = lift_sketch(&points, &opts).with_context(|| format!("{name}: cannot lift the sketch"))?;
+    if let Some(preview) = &args.preview {
+        let junctions: Vec<DVec2> = r.junctions.iter().map(|j| r.points_2d[j.vertex]).collect();
+        write_preview_svg(preview, &points, &projected_pieces(&r), &junctions)?;
+    }
+    let doc = answer(name, &r, &opts);
+    let mut out = Output::create(&args.output)?;
+    serde_json::to_writer_pretty(out.writer(), &doc).context("cannot write output")?;
+    out.writer().write_all(b"\n")?;
+    out.commit()
+}
