@@ -670,7 +670,11 @@ fn sketch_lifts_the_bundled_spring_drawing() {
         ],
         "",
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let doc = json(&std::fs::read(&out_json).unwrap());
     let helices = doc["helices"].as_array().unwrap();
     assert_eq!(helices.len(), 1, "{doc}");
@@ -678,8 +682,14 @@ fn sketch_lifts_the_bundled_spring_drawing() {
     // The drawing is a polyline through the curve (its chords are within
     // 0.02 of it), so the parameters come back to about 1e-3.
     assert!((h["radius"].as_f64().unwrap() - 30.0).abs() < 0.05, "{h}");
-    assert!((h["pitch_per_turn"].as_f64().unwrap() - 18.0 * std::f64::consts::PI).abs() < 0.1, "{h}");
-    assert!((h["c"].as_f64().unwrap().abs() - 30f64.to_radians()).abs() < 1e-3, "{h}");
+    assert!(
+        (h["pitch_per_turn"].as_f64().unwrap() - 18.0 * std::f64::consts::PI).abs() < 0.1,
+        "{h}"
+    );
+    assert!(
+        (h["c"].as_f64().unwrap().abs() - 30f64.to_radians()).abs() < 1e-3,
+        "{h}"
+    );
     assert!(doc["projection_error"]["max_relative"].as_f64().unwrap() < 1e-4);
     let n = doc["points_3d"].as_array().unwrap().len();
     assert_eq!(h["last_vertex"].as_u64().unwrap() as usize, n - 1);
@@ -693,10 +703,21 @@ fn sketch_refuses_bad_drawings_naming_the_file() {
     let two = dir.path().join("two.json");
     std::fs::write(&two, "[[0,0],[1,1]]").unwrap();
     let target = dir.path().join("out.json");
-    let out = strandfit(&["sketch", two.to_str().unwrap(), "-o", target.to_str().unwrap()], "");
+    let out = strandfit(
+        &[
+            "sketch",
+            two.to_str().unwrap(),
+            "-o",
+            target.to_str().unwrap(),
+        ],
+        "",
+    );
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("two.json") && err.contains("at least 3"), "{err}");
+    assert!(
+        err.contains("two.json") && err.contains("at least 3"),
+        "{err}"
+    );
     assert!(!target.exists());
     let bad = dir.path().join("draw.png");
     std::fs::write(&bad, "x").unwrap();

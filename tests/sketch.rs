@@ -27,7 +27,9 @@ impl Helix3 {
 /// 3D points they come from.
 fn projection(h: &Helix3, u0: f64, u1: f64, m: usize) -> (Vec<DVec2>, Vec<DVec3>) {
     let fine = 20_000;
-    let us: Vec<f64> = (0..=fine).map(|k| u0 + (u1 - u0) * k as f64 / fine as f64).collect();
+    let us: Vec<f64> = (0..=fine)
+        .map(|k| u0 + (u1 - u0) * k as f64 / fine as f64)
+        .collect();
     let mut s = vec![0.0];
     for w in us.windows(2) {
         let d = (h.point(w[1]) - h.point(w[0])).truncate().length();
@@ -77,7 +79,9 @@ fn projection(h: &Helix3, u0: f64, u1: f64, m: usize) -> (Vec<DVec2>, Vec<DVec3>
 
 /// Deterministic pseudo-random numbers in [0, 1).
 fn rng(seed: &mut u64) -> f64 {
-    *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *seed = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (*seed >> 11) as f64 / (1u64 << 53) as f64
 }
 
@@ -85,7 +89,9 @@ fn rng(seed: &mut u64) -> f64 {
 /// drawing has a (near-)cusp, where it turns back on itself.
 fn speed_ratio(h: &Helix3, u0: f64, u1: f64) -> f64 {
     let speed = |u: f64| ((h.point(u + 1e-6) - h.point(u - 1e-6)).truncate() / 2e-6).length();
-    let s: Vec<f64> = (0..=400).map(|k| speed(u0 + (u1 - u0) * k as f64 / 400.0)).collect();
+    let s: Vec<f64> = (0..=400)
+        .map(|k| speed(u0 + (u1 - u0) * k as f64 / 400.0))
+        .collect();
     s.iter().cloned().fold(f64::INFINITY, f64::min) / s.iter().cloned().fold(0.0, f64::max)
 }
 
@@ -126,14 +132,28 @@ fn exact_projections_are_lifted_to_their_helix() {
         let (sketch, truth) = projection(&h, 0.0, u1, 150);
         let r = lift_sketch(&sketch, &SketchOptions::default()).unwrap();
         assert!(!r.resampled);
-        assert_eq!(r.helices.len(), 1, "case {cases}: p {} c {} {:?}", h.p, (h.frame * DVec3::Z).z.asin(), r.helices);
-        assert!(r.max_error < 1e-6 * r.length, "case {cases}: {:e}", r.max_error / r.length);
+        assert_eq!(
+            r.helices.len(),
+            1,
+            "case {cases}: p {} c {} {:?}",
+            h.p,
+            (h.frame * DVec3::Z).z.asin(),
+            r.helices
+        );
+        assert!(
+            r.max_error < 1e-6 * r.length,
+            "case {cases}: {:e}",
+            r.max_error / r.length
+        );
         assert!(r.junctions.is_empty());
         // The lift is the helix or its mirror, up to a shift in z: z − z_true
         // or z + z_true is constant.
         let same = spread(r.points_3d.iter().zip(&truth).map(|(a, b)| a.z - b.z));
         let mirror = spread(r.points_3d.iter().zip(&truth).map(|(a, b)| a.z + b.z));
-        assert!(same.min(mirror) < 1e-6 * r.length, "case {cases}: {same:e} {mirror:e}");
+        assert!(
+            same.min(mirror) < 1e-6 * r.length,
+            "case {cases}: {same:e} {mirror:e}"
+        );
         // And the fitted helix has the true radius and pitch.
         let f = r.helices[0].helix;
         assert!((f.a.abs() - h.r).abs() < 1e-6, "{f:?}");
@@ -193,7 +213,10 @@ fn piecewise_projections_are_split_at_their_junctions() {
         for _ in 0..3 {
             let (sketch, truth) = piecewise(k, &mut seed, 60);
             // α_T = 0: the fine fit keeps every vertex within E_max.
-            let o = SketchOptions { alpha_t: 0.0, ..Default::default() };
+            let o = SketchOptions {
+                alpha_t: 0.0,
+                ..Default::default()
+            };
             let r = lift_sketch(&sketch, &o).unwrap();
             // Within E_max, except leftovers of < 4 vertices absorbed by a
             // neighbour (cover::MIN_VERTICES): 2 E_max.
@@ -226,14 +249,24 @@ fn similar_drawings_give_similar_helices() {
     let mut seed = 21u64;
     let (sketch, _) = piecewise(2, &mut seed, 60);
     let base = lift_sketch(&sketch, &SketchOptions::default()).unwrap();
-    for (angle, scale, shift) in [(0.7, 1.0, DVec2::ZERO), (2.5, 3.0, DVec2::new(10.0, -4.0)), (-1.2, 0.02, DVec2::new(0.3, 0.1))] {
+    for (angle, scale, shift) in [
+        (0.7, 1.0, DVec2::ZERO),
+        (2.5, 3.0, DVec2::new(10.0, -4.0)),
+        (-1.2, 0.02, DVec2::new(0.3, 0.1)),
+    ] {
         let rot = DVec2::from_angle(angle);
-        let moved: Vec<DVec2> = sketch.iter().map(|&p| rot.rotate(p) * scale + shift).collect();
+        let moved: Vec<DVec2> = sketch
+            .iter()
+            .map(|&p| rot.rotate(p) * scale + shift)
+            .collect();
         let r = lift_sketch(&moved, &SketchOptions::default()).unwrap();
         assert_eq!(r.helices.len(), base.helices.len());
         for (a, b) in r.helices.iter().zip(&base.helices) {
             assert_eq!((a.first, a.last), (b.first, b.last));
-            assert!((a.helix.a.abs() - scale * b.helix.a.abs()).abs() < 1e-6 * scale, "{a:?} {b:?}");
+            assert!(
+                (a.helix.a.abs() - scale * b.helix.a.abs()).abs() < 1e-6 * scale,
+                "{a:?} {b:?}"
+            );
             assert!((a.helix.b.abs() - scale * b.helix.b.abs()).abs() < 1e-6 * scale);
         }
         assert!((r.max_error - scale * base.max_error).abs() < 1e-7 * scale * base.length);
@@ -241,9 +274,22 @@ fn similar_drawings_give_similar_helices() {
             assert!((a.tangent_angle - b.tangent_angle).abs() < 1e-6);
         }
         // The 3D shapes agree: z up to sign and shift, scaled.
-        let same = spread(r.points_3d.iter().zip(&base.points_3d).map(|(a, b)| a.z - scale * b.z));
-        let mirror = spread(r.points_3d.iter().zip(&base.points_3d).map(|(a, b)| a.z + scale * b.z));
-        assert!(same.min(mirror) < 1e-6 * scale * base.length, "{same} {mirror}");
+        let same = spread(
+            r.points_3d
+                .iter()
+                .zip(&base.points_3d)
+                .map(|(a, b)| a.z - scale * b.z),
+        );
+        let mirror = spread(
+            r.points_3d
+                .iter()
+                .zip(&base.points_3d)
+                .map(|(a, b)| a.z + scale * b.z),
+        );
+        assert!(
+            same.min(mirror) < 1e-6 * scale * base.length,
+            "{same} {mirror}"
+        );
     }
 }
 
@@ -260,10 +306,25 @@ fn noisy_drawings_give_a_bounded_projection_error() {
         for p in sketch.iter_mut() {
             *p += noise * DVec2::new(rng(&mut seed) - 0.5, rng(&mut seed) - 0.5) * 2.0;
         }
-        let r = lift_sketch(&sketch, &SketchOptions { emax: 3e-3, ..Default::default() }).unwrap();
+        let r = lift_sketch(
+            &sketch,
+            &SketchOptions {
+                emax: 3e-3,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert!(r.helices.len() <= 12, "{}", r.helices.len());
-        assert!(r.max_error < 5.0 * noise, "{} vs noise {noise}", r.max_error);
-        assert!(r.rms_error < 2.0 * noise, "{} vs noise {noise}", r.rms_error);
+        assert!(
+            r.max_error < 5.0 * noise,
+            "{} vs noise {noise}",
+            r.max_error
+        );
+        assert!(
+            r.rms_error < 2.0 * noise,
+            "{} vs noise {noise}",
+            r.rms_error
+        );
         assert_eq!(r.helices[0].first, 0);
         assert_eq!(r.helices.last().unwrap().last, r.points_2d.len() - 1);
         assert!(r.points_3d.iter().all(|p| p.is_finite()));
@@ -275,7 +336,10 @@ fn bad_sketches_are_refused_with_a_reason() {
     let o = SketchOptions::default();
     let p = |v: &[[f64; 2]]| v.iter().map(|a| DVec2::from(*a)).collect::<Vec<_>>();
     assert_eq!(lift_sketch(&[], &o).unwrap_err(), SketchError::TooFew(0));
-    assert_eq!(lift_sketch(&p(&[[0.0, 0.0], [1.0, 0.0]]), &o).unwrap_err(), SketchError::TooFew(2));
+    assert_eq!(
+        lift_sketch(&p(&[[0.0, 0.0], [1.0, 0.0]]), &o).unwrap_err(),
+        SketchError::TooFew(2)
+    );
     assert_eq!(
         lift_sketch(&p(&[[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [1.0, 0.0]]), &o).unwrap_err(),
         SketchError::TooFew(2)
@@ -284,14 +348,29 @@ fn bad_sketches_are_refused_with_a_reason() {
         lift_sketch(&p(&[[0.0, 0.0], [f64::NAN, 0.0], [1.0, 0.0]]), &o).unwrap_err(),
         SketchError::NonFinite(1)
     );
-    let e = lift_sketch(&p(&[[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]]), &SketchOptions { emax: 0.0, ..o });
+    let e = lift_sketch(
+        &p(&[[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]]),
+        &SketchOptions { emax: 0.0, ..o },
+    );
     assert!(matches!(e, Err(SketchError::Options(_))));
-    let e = lift_sketch(&p(&[[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]]), &SketchOptions { alpha_t: 1.0, ..o });
+    let e = lift_sketch(
+        &p(&[[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]]),
+        &SketchOptions { alpha_t: 1.0, ..o },
+    );
     assert!(matches!(e, Err(SketchError::Options(_))));
-    assert!(SketchError::TooFew(2).to_string().contains("at least 3 distinct points"));
+    assert!(SketchError::TooFew(2)
+        .to_string()
+        .contains("at least 3 distinct points"));
     // A straight stroke and a three-point stroke still work (degenerate helices).
-    let r = lift_sketch(&p(&[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0], [4.0, 0.0]]), &o).unwrap();
-    assert!(r.max_error < 1e-9 && r.points_3d.iter().all(|q| q.is_finite()), "{r:?}");
+    let r = lift_sketch(
+        &p(&[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0], [4.0, 0.0]]),
+        &o,
+    )
+    .unwrap();
+    assert!(
+        r.max_error < 1e-9 && r.points_3d.iter().all(|q| q.is_finite()),
+        "{r:?}"
+    );
     let r = lift_sketch(&p(&[[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]]), &o).unwrap();
     assert!(r.points_3d.iter().all(|q| q.is_finite()));
 }

@@ -21,8 +21,8 @@ use crate::synthetic::{
     random_spirals, spiral_end_pairs, synthetic_hermite_pairs, synthetic_local_motions,
     synthetic_splines, synthetic_streams,
 };
-use rayon::prelude::*;
 use anyhow::Result;
+use rayon::prelude::*;
 
 /// Steps per spiral in the Frenet–Serret benchmark.
 const FRENET_STEPS: usize = 64;
@@ -226,7 +226,7 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         "completions",
         &mut times,
     );
-    
+
     // ATPH Hermite interpolation (paper 002) on the backend: one pair per
     // element, the ends of arcs of wandering helices.
     let atph_pairs = synthetic_hermite_pairs(args.curves * args.elements);
@@ -284,12 +284,15 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         "points",
         &mut times,
     );
-    
+
     // Sketch to 3D (paper 003): one 500-vertex drawing (two helices),
     // single-threaded (the paper: about a minute in Matlab).
     let drawing = crate::synthetic::synthetic_sketch(SKETCH_VERTICES);
     let (mut times, lifted) = time_runs(args.repeat, |_| {
-        Ok(crate::sketch::lift_sketch(&drawing, &crate::sketch::SketchOptions::default())?)
+        Ok(crate::sketch::lift_sketch(
+            &drawing,
+            &crate::sketch::SketchOptions::default(),
+        )?)
     })?;
     report(
         &format!(

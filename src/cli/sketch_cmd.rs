@@ -160,7 +160,8 @@ pub fn run(args: &SketchArgs) -> Result<()> {
     }
     let points = read_sketch(&args.input)?;
     let name = args.input.display().to_string();
-    let r = lift_sketch(&points, &opts).with_context(|| format!("{name}: cannot lift the sketch"))?;
+    let r =
+        lift_sketch(&points, &opts).with_context(|| format!("{name}: cannot lift the sketch"))?;
     if let Some(preview) = &args.preview {
         let junctions: Vec<DVec2> = r.junctions.iter().map(|j| r.points_2d[j.vertex]).collect();
         write_preview_svg(preview, &points, &projected_pieces(&r), &junctions)?;

@@ -130,7 +130,11 @@ fn coverage(
 ) -> Piece {
     // Does t run along the sketch here?
     let ahead = points[(s + 1).min(range.1)] - points[s.saturating_sub(1).max(range.0)];
-    let orient = if h.derivative(ts).dot(ahead) < 0.0 { -1.0 } else { 1.0 };
+    let orient = if h.derivative(ts).dot(ahead) < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
     let back = walk(h, points, s, ts, -1, orient, range, emax);
     let fwd = walk(h, points, s, ts, 1, orient, range, emax);
     let mut params: Vec<f64> = back.iter().rev().copied().collect();
@@ -149,8 +153,26 @@ fn coverage(
 fn extend(piece: &mut Piece, points: &[DVec2], range: (usize, usize), emax: f64) -> bool {
     let h = piece.helix;
     let orient = piece.orientation();
-    let back = walk(&h, points, piece.first, piece.ts[0], -1, orient, range, emax);
-    let fwd = walk(&h, points, piece.last, piece.ts[piece.ts.len() - 1], 1, orient, range, emax);
+    let back = walk(
+        &h,
+        points,
+        piece.first,
+        piece.ts[0],
+        -1,
+        orient,
+        range,
+        emax,
+    );
+    let fwd = walk(
+        &h,
+        points,
+        piece.last,
+        piece.ts[piece.ts.len() - 1],
+        1,
+        orient,
+        range,
+        emax,
+    );
     if back.is_empty() && fwd.is_empty() {
         return false;
     }
@@ -243,7 +265,12 @@ fn fit_one(
     for (_, _, mut piece) in candidates.into_iter().take(REFINED_CANDIDATES) {
         for _ in 0..GROW_ROUNDS {
             if piece.ts.len() >= 3 {
-                refine(points, std::slice::from_mut(&mut piece), &obj, GROW_ITERATIONS);
+                refine(
+                    points,
+                    std::slice::from_mut(&mut piece),
+                    &obj,
+                    GROW_ITERATIONS,
+                );
                 hop(points, &mut piece, &obj);
             }
             if !extend(&mut piece, points, (lo, hi), opts.emax) {
@@ -285,7 +312,12 @@ fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective) {
         p[3] *= scale;
         trial.helix = PlacedHelix::from_params(&p, trial.helix.reflect);
         trial.reproject(points);
-        refine(points, std::slice::from_mut(&mut trial), obj, GROW_ITERATIONS);
+        refine(
+            points,
+            std::slice::from_mut(&mut trial),
+            obj,
+            GROW_ITERATIONS,
+        );
         let c = cost(&trial);
         if c < best_cost {
             best_cost = c;
@@ -380,7 +412,12 @@ fn merge(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
         for start in [&pieces[i - 1], &pieces[i]] {
             let mut trial = start.clone();
             stretch(&mut trial, points, first, last);
-            refine(points, std::slice::from_mut(&mut trial), &obj, GROW_ITERATIONS);
+            refine(
+                points,
+                std::slice::from_mut(&mut trial),
+                &obj,
+                GROW_ITERATIONS,
+            );
             hop(points, &mut trial, &obj);
             let d = trial.max_distance(points);
             if d <= opts.emax && best.as_ref().map_or(true, |(b, _)| d < *b) {

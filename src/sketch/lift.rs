@@ -178,7 +178,9 @@ fn check(points: &[DVec2]) -> Result<Vec<DVec2>, SketchError> {
 /// Lift a 2D polyline to a 3D piecewise helix.
 pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift, SketchError> {
     if !(opts.emax > 0.0 && opts.emax < 1.0) {
-        return Err(SketchError::Options("emax must be in (0, 1) (a fraction of the length)"));
+        return Err(SketchError::Options(
+            "emax must be in (0, 1) (a fraction of the length)",
+        ));
     }
     if !(opts.alpha_t >= 0.0 && opts.alpha_t < 1.0) {
         return Err(SketchError::Options("alpha_t must be in [0, 1)"));
@@ -307,7 +309,9 @@ fn z_offsets(pieces: &[Piece]) -> Vec<f64> {
             0.0
         } else {
             let l = &pieces[i - 1];
-            l.helix.point_3d(l.ts[l.ts.len() - 1], l.mirror, out[i - 1]).z
+            l.helix
+                .point_3d(l.ts[l.ts.len() - 1], l.mirror, out[i - 1])
+                .z
         };
         out.push(target - z_start);
     }

@@ -66,7 +66,10 @@ pub fn minimize<const N: usize>(
         // Stable sort: equal values keep their order (Lagarias' rule).
         simplex.sort_by(|p, q| p.1.total_cmp(&q.1));
         let best = simplex[0].1;
-        let fspread = simplex.iter().map(|p| (p.1 - best).abs()).fold(0.0, f64::max);
+        let fspread = simplex
+            .iter()
+            .map(|p| (p.1 - best).abs())
+            .fold(0.0, f64::max);
         let xspread = simplex
             .iter()
             .flat_map(|p| p.0.iter().zip(&simplex[0].0).map(|(a, b)| (a - b).abs()))
@@ -139,15 +142,23 @@ mod tests {
                 ..Default::default()
             },
         );
-        assert!((r.x[0] - 1.0).abs() < 1e-6 && (r.x[1] - 1.0).abs() < 1e-6, "{r:?}");
+        assert!(
+            (r.x[0] - 1.0).abs() < 1e-6 && (r.x[1] - 1.0).abs() < 1e-6,
+            "{r:?}"
+        );
         assert!(r.value < 1e-12);
     }
 
     #[test]
     fn finds_a_shifted_quadratic_in_three_dimensions_and_respects_the_budget() {
-        let f = |x: &[f64; 3]| (x[0] - 3.0).powi(2) + 10.0 * (x[1] + 1.0).powi(2) + (x[2] - 0.5).powi(4);
+        let f = |x: &[f64; 3]| {
+            (x[0] - 3.0).powi(2) + 10.0 * (x[1] + 1.0).powi(2) + (x[2] - 0.5).powi(4)
+        };
         let r = minimize(f, [0.0; 3], [0.5; 3], &NelderMeadOptions::default());
-        assert!((r.x[0] - 3.0).abs() < 1e-5 && (r.x[1] + 1.0).abs() < 1e-5, "{r:?}");
+        assert!(
+            (r.x[0] - 3.0).abs() < 1e-5 && (r.x[1] + 1.0).abs() < 1e-5,
+            "{r:?}"
+        );
         assert!((r.x[2] - 0.5).abs() < 1e-2);
         let few = minimize(
             f,
@@ -166,7 +177,13 @@ mod tests {
     fn nan_regions_are_avoided() {
         // NaN for x < 0: the minimum at x = 0.25 is still found from x = 1.
         let r = minimize(
-            |x: &[f64; 1]| if x[0] < 0.0 { f64::NAN } else { (x[0] - 0.25).powi(2) },
+            |x: &[f64; 1]| {
+                if x[0] < 0.0 {
+                    f64::NAN
+                } else {
+                    (x[0] - 0.25).powi(2)
+                }
+            },
             [1.0],
             [0.8],
             &NelderMeadOptions::default(),

@@ -62,7 +62,11 @@ impl PlacedHelix {
 
     /// `R S v`: a vector of the helix frame in the sketch.
     pub fn to_sketch_vector(&self, v: DVec2) -> DVec2 {
-        let v = if self.reflect { DVec2::new(-v.x, v.y) } else { v };
+        let v = if self.reflect {
+            DVec2::new(-v.x, v.y)
+        } else {
+            v
+        };
         rotate(self.theta, v)
     }
 
@@ -141,7 +145,11 @@ impl PlacedHelix {
             }
             let g = d.dot(d1);
             let gp = speed2 + d.dot(self.second_derivative(t));
-            let step = if gp > 0.25 * speed2 { g / gp } else { g / speed2 };
+            let step = if gp > 0.25 * speed2 {
+                g / gp
+            } else {
+                g / speed2
+            };
             let step = step.clamp(-0.5, 0.5);
             t -= step;
             if !t.is_finite() {

@@ -74,7 +74,11 @@ impl Piece {
     /// The unit tangent of the lift at the first or last vertex, pointing
     /// along the sketch.
     pub fn end_tangent(&self, at_end: bool) -> DVec3 {
-        let t = if at_end { self.ts[self.ts.len() - 1] } else { self.ts[0] };
+        let t = if at_end {
+            self.ts[self.ts.len() - 1]
+        } else {
+            self.ts[0]
+        };
         self.orientation() * self.helix.tangent_3d(t, self.mirror).unwrap_or(DVec3::ZERO)
     }
 }
@@ -126,7 +130,11 @@ pub fn objective(points: &[DVec2], pieces: &[Piece], obj: &Objective) -> f64 {
 /// its parameters replaced by `params`, re-projecting that vertex.
 fn perturbed_tangent(piece: &Piece, params: &[f64; PARAMS], v: DVec2, at_end: bool) -> DVec3 {
     let h = PlacedHelix::from_params(params, piece.helix.reflect);
-    let t0 = if at_end { piece.ts[piece.ts.len() - 1] } else { piece.ts[0] };
+    let t0 = if at_end {
+        piece.ts[piece.ts.len() - 1]
+    } else {
+        piece.ts[0]
+    };
     let t = h.closest_parameter(v, t0);
     piece.orientation() * h.tangent_3d(t, piece.mirror).unwrap_or(DVec3::ZERO)
 }
@@ -265,7 +273,9 @@ mod tests {
     use super::*;
 
     fn exact_piece(truth: &PlacedHelix, n: usize) -> (Vec<DVec2>, Piece) {
-        let ts: Vec<f64> = (0..n).map(|k| -4.0 + 8.0 * k as f64 / (n - 1) as f64).collect();
+        let ts: Vec<f64> = (0..n)
+            .map(|k| -4.0 + 8.0 * k as f64 / (n - 1) as f64)
+            .collect();
         let points: Vec<DVec2> = ts.iter().map(|&t| truth.point(t)).collect();
         let mut start = *truth;
         start.theta += 0.03;
@@ -341,11 +351,31 @@ mod tests {
         let mut lo = make();
         let mut hi = make();
         let k0 = kink(&lo);
-        refine(&points, &mut lo, &Objective { alpha_t: 0.1, emax: 1e-3 }, 200);
-        refine(&points, &mut hi, &Objective { alpha_t: 0.9, emax: 1e-3 }, 200);
+        refine(
+            &points,
+            &mut lo,
+            &Objective {
+                alpha_t: 0.1,
+                emax: 1e-3,
+            },
+            200,
+        );
+        refine(
+            &points,
+            &mut hi,
+            &Objective {
+                alpha_t: 0.9,
+                emax: 1e-3,
+            },
+            200,
+        );
         let (klo, khi) = (kink(&lo), kink(&hi));
         assert!(khi < klo && klo < k0, "{k0} {klo} {khi}");
-        let dist = |p: &[Piece]| p.iter().map(|q| q.max_distance(&points)).fold(0.0, f64::max);
+        let dist = |p: &[Piece]| {
+            p.iter()
+                .map(|q| q.max_distance(&points))
+                .fold(0.0, f64::max)
+        };
         assert!(dist(&hi) > dist(&lo), "{} {}", dist(&lo), dist(&hi));
     }
 }
