@@ -27,20 +27,26 @@ pub fn hermite_spline(
     BezierSpline::from_control_points(&cps)
 }
 
+/// Curve `c` of the synthetic family: a wandering helix (radius and pitch
+/// varying slowly), about the shape of a hair strand.
+fn wandering_helix(c: usize) -> impl Fn(f64) -> DVec3 {
+    let phase = c as f64 * 0.618_033_988_75;
+    move |u: f64| {
+        let r = 1.0 + 0.3 * (0.7 * u + phase).sin();
+        DVec3::new(
+            r * (2.0 * u + phase).cos(),
+            r * (2.0 * u + phase).sin(),
+            0.8 * u + 0.2 * (1.3 * u).sin(),
+        )
+    }
+}
+
 /// Deterministic smooth test splines: Hermite cubics of a wandering helix
 /// (curvature and torsion varying slowly), about the shape of a hair strand.
 pub fn synthetic_splines(count: usize, segments: usize) -> Vec<BezierSpline> {
     (0..count)
         .filter_map(|c| {
-            let phase = c as f64 * 0.618_033_988_75;
-            let pos = |u: f64| {
-                let r = 1.0 + 0.3 * (0.7 * u + phase).sin();
-                DVec3::new(
-                    r * (2.0 * u + phase).cos(),
-                    r * (2.0 * u + phase).sin(),
-                    0.8 * u + 0.2 * (1.3 * u).sin(),
-                )
-            };
+            let pos = wandering_helix(c);
             hermite_spline(pos, 0.0, 6.0, segments).ok()
         })
         .collect()
@@ -52,15 +58,7 @@ pub fn synthetic_splines(count: usize, segments: usize) -> Vec<BezierSpline> {
 pub fn synthetic_hermite_pairs(count: usize) -> Vec<(DVec3, DVec3, DVec3, DVec3)> {
     (0..count)
         .map(|c| {
-            let phase = c as f64 * 0.618_033_988_75;
-            let pos = |u: f64| {
-                let r = 1.0 + 0.3 * (0.7 * u + phase).sin();
-                DVec3::new(
-                    r * (2.0 * u + phase).cos(),
-                    r * (2.0 * u + phase).sin(),
-                    0.8 * u + 0.2 * (1.3 * u).sin(),
-                )
-            };
+            let pos = wandering_helix(c);
             let tangent = |u: f64| ((pos(u + 1e-6) - pos(u - 1e-6)) / 2e-6).normalize();
             let u0 = (c as f64 * 0.414_213_562_37).fract() * 6.0;
             let u1 = u0 + 0.1 + 0.5 * (c as f64 * 0.732_050_807_57).fract();
