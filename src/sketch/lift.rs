@@ -199,7 +199,12 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
         .fold((f64::INFINITY, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
     let resampled = longest > UNIFORM_RATIO * shortest;
     let work = if resampled {
-        let m = ((length / shortest).round() as usize + 1).clamp(clean.len(), 4 * clean.len());
+        // As many vertices as the input: the cost of the covering grows
+        // with the vertex count (resampling at the shortest edge, tried
+        // first, made up to 4× more vertices and 10× the time), and the
+        // neighbourhoods NMAX and the estimator's window are counted in
+        // vertices of the drawing's own density.
+        let m = clean.len();
         resample(&clean, m)
     } else {
         clean

@@ -99,18 +99,7 @@ impl PlacedHelix {
     /// `∂H/∂a = (cos t − 1, −sin c sin t)`, `∂H/∂b = (0, t cos c)`,
     /// `∂H/∂c = (0, −bt sin c − a cos c sin t)` and `∂(R v)/∂θ = (R v)^⊥`.
     pub fn param_jacobian(&self, t: f64) -> [DVec2; PARAMS] {
-        let (st, ct) = t.sin_cos();
-        let (sc, cc) = self.helix.c.sin_cos();
-        let (a, b) = (self.helix.a, self.helix.b);
-        let q = self.to_sketch_vector(self.helix.point(t));
-        [
-            DVec2::new(-q.y, q.x),
-            DVec2::X,
-            DVec2::Y,
-            self.to_sketch_vector(DVec2::new(ct - 1.0, -sc * st)),
-            self.to_sketch_vector(DVec2::new(0.0, t * cc)),
-            self.to_sketch_vector(DVec2::new(0.0, -b * t * sc - a * cc * st)),
-        ]
+        self.evaluator().param_jacobian(t)
     }
 
     /// The lifted point `(P(t), σ z(t) + z₀)`, `σ = −1` when `mirror`.
@@ -129,6 +118,71 @@ impl PlacedHelix {
     }
 
     /// The parameter of the point of the curve nearest `v`, by Newton's
+    /// method from `guess`; see [`Evaluator::closest_parameter`].
+    pub fn closest_parameter(&self, v: DVec2, guess: f64) -> f64 {
+        self.evaluator().closest_parameter(v, guess)
+    }
+
+    /// The signed distance of `v` from the curve at parameter `t` along the
+    /// unit normal `ν = P′^⊥/|P′|`, and that normal (zero at a cusp).
+    pub fn normal_offset(&self, v: DVec2, t: f64) -> (f64, DVec2) {
+        self.evaluator().normal_offset(v, t)
+    }
+
+    /// The curve with its trigonometry precomputed, for inner loops.
+    pub fn evaluator(&self) -> Evaluator {
+        let (st, ct) = self.theta.sin_cos();
+        let sx = if self.reflect { -1.0 } else { 1.0 };
+        let (sc, cc) = self.helix.c.sin_cos();
+        Evaluator {
+            origin: self.origin,
+            ex: DVec2::new(sx * ct, sx * st),
+            ey: DVec2::new(-st, ct),
+            a: self.helix.a,
+            b: self.helix.b,
+            sc,
+            cc,
+        }
+    }
+}
+
+/// A placed helix with `R S e_x`, `R S e_y`, `sin c` and `cos c`
+/// precomputed: `P`, `P′` and `P″` at one `t` then cost one `sin_cos(t)`
+/// (the closest-point searches and least-squares rows of every fit run
+/// through here, a few hundred thousand times per sketch).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Evaluator {
+    origin: DVec2,
+    ex: DVec2,
+    ey: DVec2,
+    a: f64,
+    b: f64,
+    sc: f64,
+    cc: f64,
+}
+
+impl Evaluator {
+    fn sketch_vector(&self, v: DVec2) -> DVec2 {
+        self.ex * v.x + self.ey * v.y
+    }
+
+    /// `(P(t), P′(t), P″(t))`, from `H = (a(cos t − 1), bt cos c − a sin c
+    /// sin t)`, `H′ = (−a sin t, b cos c − a sin c cos t)`, `H″ = (−a cos t,
+    /// a sin c sin t)`.
+    pub fn jet(&self, t: f64) -> (DVec2, DVec2, DVec2) {
+        let (st, ct) = t.sin_cos();
+        let (a, b, sc, cc) = (self.a, self.b, self.sc, self.cc);
+        let h = DVec2::new(a * (ct - 1.0), b * t * cc - a * sc * st);
+        let d1 = DVec2::new(-a * st, b * cc - a * sc * ct);
+        let d2 = DVec2::new(-a * ct, a * sc * st);
+        (
+            self.origin + self.sketch_vector(h),
+            self.sketch_vector(d1),
+            self.sketch_vector(d2),
+        )
+    }
+
+    /// The parameter of the point of the curve nearest `v`, by Newton's
     /// method on `g(t) = (P(t) − v)·P′(t)` from `guess` (Gauss–Newton
     /// steps where `g′ = |P′|² + (P − v)·P″` is not safely positive, steps
     /// capped at ½ rad). Local: it follows the branch of the curve near
@@ -137,36 +191,53 @@ impl PlacedHelix {
     pub fn closest_parameter(&self, v: DVec2, guess: f64) -> f64 {
         let mut t = guess;
         for _ in 0..30 {
-            let d = self.point(t) - v;
-            let d1 = self.derivative(t);
+            let (p, d1, d2) = self.jet(t);
+            let d = p - v;
             let speed2 = d1.length_squared();
             if !(speed2 > 0.0) {
                 break;
             }
             let g = d.dot(d1);
-            let gp = speed2 + d.dot(self.second_derivative(t));
-            let step = if gp > 0.25 * speed2 {
-                g / gp
-            } else {
-                g / speed2
-            };
+            let gp = speed2 + d.dot(d2);
+            let newton = gp > 0.25 * speed2;
+            let step = if newton { g / gp } else { g / speed2 };
             let step = step.clamp(-0.5, 0.5);
             t -= step;
             if !t.is_finite() {
                 return guess;
             }
-            if step.abs() <= 1e-15 * (1.0 + t.abs()) {
+            // A Newton step converges quadratically: after one of 1e-9 the
+            // error is of order 1e-18 (and below 1e-15 the step is
+            // rounding noise, which would keep the loop going).
+            let tol = if newton { 1e-9 } else { 1e-15 };
+            if step.abs() <= tol * (1.0 + t.abs()) {
                 break;
             }
         }
         t
     }
 
-    /// The signed distance of `v` from the curve at parameter `t` along the
-    /// unit normal `ν = P′^⊥/|P′|`, and that normal (zero at a cusp).
+    /// See [`PlacedHelix::normal_offset`].
     pub fn normal_offset(&self, v: DVec2, t: f64) -> (f64, DVec2) {
-        let n = self.derivative(t).perp().normalize_or_zero();
-        ((v - self.point(t)).dot(n), n)
+        let (p, d1, _) = self.jet(t);
+        let n = d1.perp().normalize_or_zero();
+        ((v - p).dot(n), n)
+    }
+
+    /// `∂P(t)/∂p` for `p = [θ, o_x, o_y, a, b, c]`; see
+    /// [`PlacedHelix::param_jacobian`].
+    pub fn param_jacobian(&self, t: f64) -> [DVec2; PARAMS] {
+        let (st, ct) = t.sin_cos();
+        let (a, b, sc, cc) = (self.a, self.b, self.sc, self.cc);
+        let q = self.sketch_vector(DVec2::new(a * (ct - 1.0), b * t * cc - a * sc * st));
+        [
+            DVec2::new(-q.y, q.x),
+            DVec2::X,
+            DVec2::Y,
+            self.sketch_vector(DVec2::new(ct - 1.0, -sc * st)),
+            self.sketch_vector(DVec2::new(0.0, t * cc)),
+            self.sketch_vector(DVec2::new(0.0, -b * t * sc - a * cc * st)),
+        ]
     }
 }
 
@@ -186,6 +257,20 @@ mod tests {
             let p = h.point(t);
             let l = h.to_local(p);
             assert!((l - h.helix.point(t)).length() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn the_evaluator_matches_the_helix() {
+        for reflect in [false, true] {
+            let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], reflect);
+            let e = h.evaluator();
+            for t in [-2.1, -0.3, 0.0, 1.1, 4.0] {
+                let (p, d1, d2) = e.jet(t);
+                assert!((p - h.point(t)).length() < 1e-15);
+                assert!((d1 - h.derivative(t)).length() < 1e-15);
+                assert!((d2 - h.second_derivative(t)).length() < 1e-15);
+            }
         }
     }
 

@@ -47,17 +47,19 @@ pub struct Piece {
 impl Piece {
     /// Re-project every vertex, each from its previous parameter.
     pub fn reproject(&mut self, points: &[DVec2]) {
+        let e = self.helix.evaluator();
         for (k, t) in self.ts.iter_mut().enumerate() {
-            *t = self.helix.closest_parameter(points[self.first + k], *t);
+            *t = e.closest_parameter(points[self.first + k], *t);
         }
     }
 
     /// The largest vertex distance from the curve.
     pub fn max_distance(&self, points: &[DVec2]) -> f64 {
+        let e = self.helix.evaluator();
         self.ts
             .iter()
             .enumerate()
-            .map(|(k, &t)| (points[self.first + k] - self.helix.point(t)).length())
+            .map(|(k, &t)| (points[self.first + k] - e.jet(t).0).length())
             .fold(0.0, f64::max)
     }
 
@@ -109,8 +111,9 @@ fn joined(pieces: &[Piece], i: usize) -> bool {
 pub fn objective(points: &[DVec2], pieces: &[Piece], obj: &Objective) -> f64 {
     let mut ed = 0.0;
     for p in pieces {
+        let e = p.helix.evaluator();
         for (k, &t) in p.ts.iter().enumerate() {
-            let (d, _) = p.helix.normal_offset(points[p.first + k], t);
+            let (d, _) = e.normal_offset(points[p.first + k], t);
             ed += (d / obj.emax).powi(2);
         }
     }
@@ -149,6 +152,17 @@ pub fn refine(
     obj: &Objective,
     max_iterations: usize,
 ) -> RefineReport {
+    refine_to(points, pieces, obj, max_iterations, 1e-13)
+}
+
+/// [`refine`], stopping once a step lowers `E` by a relative `gain` or less.
+pub fn refine_to(
+    points: &[DVec2],
+    pieces: &mut [Piece],
+    obj: &Objective,
+    max_iterations: usize,
+    gain_tol: f64,
+) -> RefineReport {
     let n = pieces.len() * PARAMS;
     let wd = (1.0 - obj.alpha_t).sqrt() / obj.emax;
     let wt = obj.alpha_t.sqrt();
@@ -165,9 +179,10 @@ pub fn refine(
         // Distance rows: one block per piece.
         for (i, p) in pieces.iter().enumerate() {
             let base = i * PARAMS;
+            let e = p.helix.evaluator();
             for (k, &t) in p.ts.iter().enumerate() {
-                let (d, nu) = p.helix.normal_offset(points[p.first + k], t);
-                let jac = p.helix.param_jacobian(t);
+                let (d, nu) = e.normal_offset(points[p.first + k], t);
+                let jac = e.param_jacobian(t);
                 let row: [f64; PARAMS] = std::array::from_fn(|q| -wd * nu.dot(jac[q]));
                 let r = wd * d;
                 for a in 0..PARAMS {
@@ -252,7 +267,7 @@ pub fn refine(
                 pieces.clone_from_slice(&trial);
                 cost = new_cost;
                 lambda = (lambda / 3.0).max(1e-12);
-                improved = gain > 1e-13;
+                improved = gain > gain_tol;
                 break;
             }
             lambda *= 4.0;
