@@ -698,6 +698,60 @@ fn sketch_lifts_the_bundled_spring_drawing() {
 }
 
 #[test]
+fn sketch_g1_refits_a_two_helix_drawing() {
+    // Two helices meeting with a tangent gap in the lift; --g1 adds the
+    // floating-tangents re-fit: G1 to rounding, within its tolerance, its
+    // projection within its 3D distance of the drawing.
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("two.json");
+    let pts: Vec<[f64; 2]> = strandfit::synthetic::synthetic_sketch(200)
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
+    std::fs::write(&input, serde_json::to_string(&pts).unwrap()).unwrap();
+    let out_json = dir.path().join("out.json");
+    let out = strandfit(
+        &[
+            "sketch",
+            input.to_str().unwrap(),
+            "-o",
+            out_json.to_str().unwrap(),
+            "--g1",
+        ],
+        "",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc = json(&std::fs::read(&out_json).unwrap());
+    assert!(doc["helices"].as_array().unwrap().len() >= 2, "{doc}");
+    let g = &doc["g1"];
+    let t = g["tolerance"].as_f64().unwrap();
+    assert!(
+        (t - doc["emax"].as_f64().unwrap()).abs() <= 1e-12 * t,
+        "{g}"
+    );
+    assert_eq!(g["within_tolerance"], true, "{g}");
+    assert!(g["continuity_angle_deg"].as_f64().unwrap() < 1e-5, "{g}");
+    let d3 = g["distance_3d"].as_f64().unwrap();
+    let dp = g["projection_distance"].as_f64().unwrap();
+    assert!(d3 <= t && dp <= d3 * (1.0 + 1e-6) + t / 64.0, "{g}");
+    let n = g["elements"].as_u64().unwrap() as usize;
+    assert_eq!(g["chain"]["elements"].as_array().unwrap().len(), n);
+    // Without --g1 there is no such section; the tolerance needs --g1.
+    let out = strandfit(&["sketch", "examples/spring.svg"], "");
+    assert!(out.status.success());
+    assert!(json(&out.stdout).get("g1").is_none());
+    let out = strandfit(
+        &["sketch", "examples/spring.svg", "--g1-tolerance", "0.1"],
+        "",
+    );
+    assert!(!out.status.success());
+}
+
+#[test]
 fn sketch_refuses_bad_drawings_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let two = dir.path().join("two.json");

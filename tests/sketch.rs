@@ -5,7 +5,7 @@
 use std::f64::consts::TAU;
 
 use glam::{DQuat, DVec2, DVec3};
-use strandfit::sketch::{lift_sketch, SketchError, SketchOptions};
+use strandfit::sketch::{lift_sketch, refit_g1, SketchError, SketchOptions};
 
 /// A 3D helix about `axis` (unit), radius `r`, pitch `p` per radian,
 /// through `centre`, turned about its axis by `phase`.
@@ -246,6 +246,49 @@ fn piecewise_projections_are_split_at_their_junctions() {
     }
     eprintln!("{exact} junctions exact, {near} within a step of the corner, of {total}");
     assert!(exact >= total / 2, "{exact}/{total}");
+}
+
+#[test]
+fn the_g1_refit_closes_the_junction_gaps_and_reports_its_projection() {
+    // Two- and three-helix drawings: the lift leaves tangent gaps at its
+    // junctions; the floating-tangents re-fit within T = E_max·L has none
+    // (rounding), meets T, and its projection is within its 3D distance of
+    // the drawing (projection shortens distances) — the number reported.
+    let mut seed = 21u64;
+    for k in [2, 3] {
+        let (sketch, _) = piecewise(k, &mut seed, 60);
+        let r = lift_sketch(&sketch, &SketchOptions::default()).unwrap();
+        let kink = r
+            .junctions
+            .iter()
+            .map(|j| j.tangent_angle)
+            .fold(0.0, f64::max);
+        assert!(kink > 1e-3, "{kink}");
+        let t = 1e-3 * r.length;
+        let g = refit_g1(&r, t).unwrap();
+        assert!(
+            g.within_tolerance && g.distance_3d <= t,
+            "{} vs {t}",
+            g.distance_3d
+        );
+        let (gap, angle) = g.continuity;
+        assert!(gap < 1e-9 * r.length && angle < 1e-7, "{gap} {angle}");
+        assert!(
+            g.projection_distance <= g.distance_3d * (1.0 + 1e-6) + t / 64.0,
+            "{} vs {}",
+            g.projection_distance,
+            g.distance_3d
+        );
+        // It did move: the drawing is not G1 at the corners.
+        assert!(g.projection_distance > 0.0);
+        eprintln!(
+            "k={k}: lift kink {:.1}°, G1 chain of {} elements, 3D {:.2e} L, projection {:.2e} L",
+            kink.to_degrees(),
+            g.chain.len(),
+            g.distance_3d / r.length,
+            g.projection_distance / r.length
+        );
+    }
 }
 
 #[test]

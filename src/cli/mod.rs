@@ -361,6 +361,15 @@ pub struct SketchArgs {
     /// Also write an SVG of the drawing with the projected fit over it.
     #[arg(long)]
     pub preview: Option<PathBuf>,
+    /// Also re-fit the lifted curve exactly G1 with the floating-tangents
+    /// fitter (the paper's result has gaps at its junctions), reporting how
+    /// far its projection moves from the drawing.
+    #[arg(long)]
+    pub g1: bool,
+    /// Tolerance of the G1 re-fit, in the drawing's units (default: E_max
+    /// times the drawing's length).
+    #[arg(long = "g1-tolerance", requires = "g1")]
+    pub g1_tolerance: Option<f64>,
 }
 
 #[derive(clap::Args, Debug)]

@@ -8,7 +8,9 @@
 //! worst vertex distance), the 3D polyline (the drawing's `x, y` with the
 //! lifted `z`), per junction the tangent angle and position gap left, and
 //! the projection error; `--preview` writes an SVG of the drawing with the
-//! projected fit over it.
+//! projected fit over it. `--g1` adds the lift re-fitted exactly G1 by the
+//! floating-tangents fitter ([`crate::sketch::g1`]): its chain in compact
+//! form, samples of it, and how far its projection moved from the drawing.
 
 use std::f64::consts::PI;
 
@@ -19,7 +21,7 @@ use serde::Serialize;
 use super::io_util::Output;
 use super::SketchArgs;
 use crate::io::sketch::{read_sketch, write_preview_svg};
-use crate::sketch::{lift_sketch, SketchLift, SketchOptions};
+use crate::sketch::{lift_sketch, refit_g1, G1Refit, SketchLift, SketchOptions};
 
 #[derive(Serialize)]
 struct HelixOut {
@@ -60,6 +62,63 @@ struct SketchOut {
     projection_error: ErrorOut,
     fine_fit: FineOut,
     points_3d: Vec<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    g1: Option<G1Out>,
+}
+
+#[derive(Serialize)]
+struct G1Out {
+    tolerance: f64,
+    within_tolerance: bool,
+    elements: usize,
+    /// The chain's distance from the lifted polyline (3D).
+    distance_3d: f64,
+    /// How far the chain's projection is from the drawing (in order).
+    projection_distance: f64,
+    continuity_gap: f64,
+    continuity_angle_deg: f64,
+    chain: ChainOut,
+    /// Samples of the chain, 4 per vertex of the drawing.
+    points_3d: Vec<[f64; 3]>,
+}
+
+#[derive(Serialize)]
+struct ChainOut {
+    start: [f64; 3],
+    tangent: [f64; 3],
+    normal: [f64; 3],
+    /// `[length, curvature, torsion, twist]` per element.
+    elements: Vec<[f64; 4]>,
+}
+
+fn g1_answer(g: &G1Refit, vertices: usize) -> G1Out {
+    let params = g.chain.to_params();
+    G1Out {
+        tolerance: g.tolerance,
+        within_tolerance: g.within_tolerance,
+        elements: g.chain.len(),
+        distance_3d: g.distance_3d,
+        projection_distance: g.projection_distance,
+        continuity_gap: g.continuity.0,
+        continuity_angle_deg: g.continuity.1.to_degrees(),
+        chain: ChainOut {
+            start: params.as_ref().map_or([0.0; 3], |p| p.start.to_array()),
+            tangent: params.as_ref().map_or([0.0; 3], |p| p.tangent.to_array()),
+            normal: params.as_ref().map_or([0.0; 3], |p| p.normal.to_array()),
+            elements: params.map_or(Vec::new(), |p| {
+                p.elements
+                    .iter()
+                    .map(|e| [e.length, e.curvature, e.torsion, e.twist])
+                    .collect()
+            }),
+        },
+        points_3d: g
+            .chain
+            .sample(4 * vertices.max(1))
+            .iter()
+            .map(|p| p.to_array())
+            .collect(),
+    }
 }
 
 #[derive(Serialize)]
@@ -130,6 +189,7 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
             objective_after: r.fine_fit.after,
         },
         points_3d: r.points_3d.iter().map(|p| p.to_array()).collect(),
+        g1: None,
     }
 }
 
@@ -166,7 +226,18 @@ pub fn run(args: &SketchArgs) -> Result<()> {
         let junctions: Vec<DVec2> = r.junctions.iter().map(|j| r.points_2d[j.vertex]).collect();
         write_preview_svg(preview, &points, &projected_pieces(&r), &junctions)?;
     }
-    let doc = answer(name, &r, &opts);
+    let g1 = if args.g1 {
+        let t = args.g1_tolerance.unwrap_or(opts.emax * r.length);
+        if !(t > 0.0 && t.is_finite()) {
+            bail!("--g1-tolerance must be positive and finite");
+        }
+        let g = refit_g1(&r, t).with_context(|| format!("{name}: G1 re-fit failed"))?;
+        Some(g1_answer(&g, r.points_2d.len()))
+    } else {
+        None
+    };
+    let mut doc = answer(name.clone(), &r, &opts);
+    doc.g1 = g1;
     let mut out = Output::create(&args.output)?;
     serde_json::to_writer_pretty(out.writer(), &doc).context("cannot write output")?;
     out.writer().write_all(b"\n")?;

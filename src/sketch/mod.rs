@@ -10,15 +10,19 @@
 //!   recursive covering (6.4).
 //! * [`refine`]: least squares on placed helices; the fine fitting (7).
 //! * [`lift`]: the whole method, [`lift_sketch`].
+//! * [`g1`]: beyond the paper, the lift re-fitted exactly G1 by the
+//!   floating-tangents fitter, [`refit_g1`].
 
 pub mod cover;
 pub mod estimate;
+pub mod g1;
 pub mod lift;
 pub mod nelder_mead;
 pub mod placed;
 pub mod projected;
 pub mod refine;
 
+pub use g1::{refit_g1, G1Refit};
 pub use lift::{lift_sketch, Junction, LiftedHelix, SketchError, SketchLift, SketchOptions};
 pub use placed::PlacedHelix;
 pub use projected::ProjectedHelix;
