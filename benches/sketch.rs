@@ -5,7 +5,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use strandfit::sketch::{lift_sketch, SketchOptions};
-use strandfit::synthetic::synthetic_sketch;
+use strandfit::synthetic::{synthetic_sketch, synthetic_sketch_curls};
 
 fn sketch(c: &mut Criterion) {
     let mut g = c.benchmark_group("sketch");
@@ -15,6 +15,10 @@ fn sketch(c: &mut Criterion) {
             b.iter(|| lift_sketch(black_box(d), &SketchOptions::default()).expect("lift"))
         });
     }
+    let drawing = synthetic_sketch_curls(500, 4);
+    g.bench_with_input(BenchmarkId::new("lift_4_curls", 500), &drawing, |b, d| {
+        b.iter(|| lift_sketch(black_box(d), &SketchOptions::default()).expect("lift"))
+    });
     g.finish();
 }
 

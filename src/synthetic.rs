@@ -237,3 +237,48 @@ pub fn synthetic_sketch(n: usize) -> Vec<glam::DVec2> {
     }
     out
 }
+
+/// A harder drawing of `n` vertices for the sketch benchmarks: `k` curls
+/// (projections of helices of different radii, pitches and tilts, 1.25
+/// turns each), each starting where the last ended with its direction
+/// turned by 0.6 rad (a corner), evenly sampled in the helix parameter.
+pub fn synthetic_sketch_curls(n: usize, k: usize) -> Vec<glam::DVec2> {
+    use glam::DVec2;
+    let k = k.max(1);
+    let per = (n.max(4 * k) / k).max(4);
+    let radii = [30.0, 18.0, 25.0, 12.0];
+    let pitches = [6.0, 4.0, 9.0, 2.5];
+    let tilts: [f64; 4] = [1.0, 0.5, 1.2, 0.8];
+    let mut out: Vec<DVec2> = Vec::with_capacity(per * k);
+    for i in 0..k {
+        let (r, p, tilt) = (radii[i % 4], pitches[i % 4], tilts[i % 4]);
+        let coil = |u: f64| DVec2::new(r * u.cos(), r * u.sin() * tilt.cos() - p * u * tilt.sin());
+        let turn = 1.25 * std::f64::consts::TAU;
+        let count = if i + 1 == k {
+            n.max(per * k) - per * (k - 1)
+        } else {
+            per
+        };
+        let part: Vec<DVec2> = (0..=count)
+            .map(|j| coil(turn * j as f64 / count as f64))
+            .collect();
+        if out.len() < 2 {
+            out.extend(&part[..count]);
+            continue;
+        }
+        // Place the curl at the end of the drawing, turned 0.6 rad.
+        let m = out.len();
+        let end_dir = (out[m - 1] - out[m - 2]).to_angle();
+        let start_dir = (part[1] - part[0]).to_angle();
+        let rot = DVec2::from_angle(end_dir + 0.6 - start_dir);
+        let join = out[m - 1];
+        out.extend(
+            part[1..]
+                .iter()
+                .take(count)
+                .map(|&q| join + rot.rotate(q - part[0])),
+        );
+    }
+    out.truncate(n.max(4));
+    out
+}

@@ -285,8 +285,9 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         &mut times,
     );
 
-    // Sketch to 3D (paper 003): one 500-vertex drawing (two helices),
-    // single-threaded (the paper: about a minute in Matlab).
+    // Sketch to 3D (paper 003): one 500-vertex drawing at a time (two
+    // helices; then four curls), rayon inside the lift (the paper: about a
+    // minute in Matlab).
     let drawing = crate::synthetic::synthetic_sketch(SKETCH_VERTICES);
     let (mut times, lifted) = time_runs(args.repeat, |_| {
         Ok(crate::sketch::lift_sketch(
@@ -297,6 +298,23 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     report(
         &format!(
             "sketch lift ({SKETCH_VERTICES} vertices, {} helices, cpu)",
+            lifted.helices.len()
+        ),
+        SKETCH_VERTICES as f64,
+        "vertices",
+        &mut times,
+    );
+    // A harder drawing: four curls joined at corners.
+    let drawing = crate::synthetic::synthetic_sketch_curls(SKETCH_VERTICES, 4);
+    let (mut times, lifted) = time_runs(args.repeat, |_| {
+        Ok(crate::sketch::lift_sketch(
+            &drawing,
+            &crate::sketch::SketchOptions::default(),
+        )?)
+    })?;
+    report(
+        &format!(
+            "sketch lift ({SKETCH_VERTICES} vertices, 4 curls: {} helices, cpu)",
             lifted.helices.len()
         ),
         SKETCH_VERTICES as f64,

@@ -221,6 +221,46 @@ fn extend(piece: &mut Piece, points: &[DVec2], range: (usize, usize), emax: f64)
     true
 }
 
+/// Turning angle of the polyline at vertex `i` (0 at the ends).
+fn turning(points: &[DVec2], i: usize) -> f64 {
+    if i == 0 || i + 1 >= points.len() {
+        return 0.0;
+    }
+    (points[i] - points[i - 1])
+        .angle_to(points[i + 1] - points[i])
+        .abs()
+}
+
+/// A vertex turning by more than [`CORNER_TURN`] and [`CORNER_RATIO`] times
+/// the median turning of the vertices around it (a corner; on a smooth
+/// stroke the turning varies slowly).
+fn is_corner(points: &[DVec2], i: usize) -> bool {
+    let t = turning(points, i);
+    if t <= CORNER_TURN {
+        return false;
+    }
+    let lo = i.saturating_sub(CORNER_SPAN);
+    let hi = (i + CORNER_SPAN).min(points.len() - 1);
+    let mut around: Vec<f64> = (lo..=hi)
+        .filter(|&j| j + 1 < i || j > i + 1)
+        .map(|j| turning(points, j))
+        .collect();
+    if around.is_empty() {
+        return false;
+    }
+    around.sort_by(f64::total_cmp);
+    t > CORNER_RATIO * around[around.len() / 2]
+}
+
+/// Whether a corner lies within `w` vertices of `i`.
+fn near_corner(points: &[DVec2], i: usize, w: usize) -> bool {
+    (i.saturating_sub(w)..=(i + w).min(points.len() - 1)).any(|j| is_corner(points, j))
+}
+
+const CORNER_TURN: f64 = 0.1;
+const CORNER_RATIO: f64 = 4.0;
+const CORNER_SPAN: usize = 8;
+
 /// Sections 6.1–6.3 on vertices `[lo, hi]`, then refinement and growth.
 fn fit_one(
     points: &[DVec2],
@@ -231,11 +271,19 @@ fn fit_one(
     // The seed: the largest curvature, away from the sketch's ends where
     // the estimator's window is one-sided (and the ends of a drawn stroke
     // hook) unless the range has nothing else.
+    // Beyond the paper: and away from corners of the drawing, where the
+    // estimated curvature peaks too but no helix goes on (a seed there
+    // covers a few vertices and leaves a sliver).
     let n = points.len();
-    let inner = (lo.max(opts.end_guard)..=hi.min(n.saturating_sub(1 + opts.end_guard)))
-        .max_by(|&i, &j| geometry[i].1.abs().total_cmp(&geometry[j].1.abs()));
+    let by_curvature = |&i: &usize, &j: &usize| geometry[i].1.abs().total_cmp(&geometry[j].1.abs());
+    let guard = opts.end_guard;
+    let inner = lo.max(guard)..=hi.min(n.saturating_sub(1 + guard));
     let s = inner
-        .or_else(|| (lo..=hi).max_by(|&i, &j| geometry[i].1.abs().total_cmp(&geometry[j].1.abs())))
+        .clone()
+        .filter(|&i| !near_corner(points, i, guard))
+        .max_by(by_curvature)
+        .or_else(|| inner.max_by(by_curvature))
+        .or_else(|| (lo..=hi).max_by(by_curvature))
         .unwrap_or(lo);
     let (tangent, kappa) = geometry[s];
     // 6.1: R(θ) takes +y to T̂_{v_s}; reflect if the sketch turns right.
@@ -690,4 +738,25 @@ fn cover_range(
     out.push(piece);
     out.extend(right);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn corners_are_found_and_smooth_turns_are_not() {
+        // An arc of radius 1 turning 0.05 rad per vertex, then a corner of
+        // 0.6 rad, then the arc goes on.
+        let mut pts = vec![DVec2::ZERO];
+        let mut dir = 0.0f64;
+        for k in 0..40 {
+            dir += if k == 20 { 0.6 } else { 0.05 };
+            let last = *pts.last().unwrap();
+            pts.push(last + 0.05 * DVec2::from_angle(dir));
+        }
+        let corners: Vec<usize> = (0..pts.len()).filter(|&i| is_corner(&pts, i)).collect();
+        assert_eq!(corners, vec![20]);
+        assert!(near_corner(&pts, 17, 3) && !near_corner(&pts, 16, 3));
+    }
 }
