@@ -288,38 +288,29 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     // Sketch to 3D (paper 003): one 500-vertex drawing at a time (two
     // helices; then four curls), rayon inside the lift (the paper: about a
     // minute in Matlab).
-    let drawing = crate::synthetic::synthetic_sketch(SKETCH_VERTICES);
-    let (mut times, lifted) = time_runs(args.repeat, |_| {
-        Ok(crate::sketch::lift_sketch(
-            &drawing,
-            &crate::sketch::SketchOptions::default(),
-        )?)
-    })?;
-    report(
-        &format!(
-            "sketch lift ({SKETCH_VERTICES} vertices, {} helices, cpu)",
-            lifted.helices.len()
+    let drawings = [
+        ("", crate::synthetic::synthetic_sketch(SKETCH_VERTICES)),
+        (
+            "4 curls: ",
+            crate::synthetic::synthetic_sketch_curls(SKETCH_VERTICES, 4),
         ),
-        SKETCH_VERTICES as f64,
-        "vertices",
-        &mut times,
-    );
-    // A harder drawing: four curls joined at corners.
-    let drawing = crate::synthetic::synthetic_sketch_curls(SKETCH_VERTICES, 4);
-    let (mut times, lifted) = time_runs(args.repeat, |_| {
-        Ok(crate::sketch::lift_sketch(
-            &drawing,
-            &crate::sketch::SketchOptions::default(),
-        )?)
-    })?;
-    report(
-        &format!(
-            "sketch lift ({SKETCH_VERTICES} vertices, 4 curls: {} helices, cpu)",
-            lifted.helices.len()
-        ),
-        SKETCH_VERTICES as f64,
-        "vertices",
-        &mut times,
-    );
+    ];
+    for (kind, drawing) in &drawings {
+        let (mut times, lifted) = time_runs(args.repeat, |_| {
+            Ok(crate::sketch::lift_sketch(
+                drawing,
+                &crate::sketch::SketchOptions::default(),
+            )?)
+        })?;
+        report(
+            &format!(
+                "sketch lift ({SKETCH_VERTICES} vertices, {kind}{} helices, cpu)",
+                lifted.helices.len()
+            ),
+            SKETCH_VERTICES as f64,
+            "vertices",
+            &mut times,
+        );
+    }
     Ok(())
 }

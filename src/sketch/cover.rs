@@ -449,6 +449,26 @@ fn set_range(piece: &mut Piece, points: &[DVec2], first: usize, last: usize) {
     stretch(piece, points, first, last);
 }
 
+/// `left` and `right` made to meet at vertex `j` (each keeping its far
+/// end), refitted with `iterations`, and the sum of their `E_D`.
+fn meet_at(
+    points: &[DVec2],
+    left: &Piece,
+    right: &Piece,
+    j: usize,
+    obj: &Objective,
+    iterations: usize,
+) -> (f64, Piece, Piece) {
+    let mut l = left.clone();
+    set_range(&mut l, points, left.first, j);
+    let mut r = right.clone();
+    set_range(&mut r, points, j, right.last);
+    refine(points, std::slice::from_mut(&mut l), obj, iterations);
+    refine(points, std::slice::from_mut(&mut r), obj, iterations);
+    let score = distance_cost(points, &l, obj) + distance_cost(points, &r, obj);
+    (score, l, r)
+}
+
 /// `E_D` of one piece: `Σ (d / E_max)²` over its vertices.
 fn distance_cost(points: &[DVec2], piece: &Piece, obj: &Objective) -> f64 {
     super::refine::objective(points, std::slice::from_ref(piece), obj)
@@ -486,23 +506,7 @@ fn polish_junctions(points: &[DVec2], pieces: &mut [Piece], opts: &CoverOptions)
             let trials: Vec<(f64, usize, Piece, Piece)> = (lo..=hi)
                 .into_par_iter()
                 .map(|j| {
-                    let mut l = left.clone();
-                    set_range(&mut l, points, left.first, j);
-                    let mut r = right.clone();
-                    set_range(&mut r, points, j, right.last);
-                    refine(
-                        points,
-                        std::slice::from_mut(&mut l),
-                        &obj,
-                        POLISH_ITERATIONS,
-                    );
-                    refine(
-                        points,
-                        std::slice::from_mut(&mut r),
-                        &obj,
-                        POLISH_ITERATIONS,
-                    );
-                    let score = distance_cost(points, &l, &obj) + distance_cost(points, &r, &obj);
+                    let (score, l, r) = meet_at(points, left, right, j, &obj, POLISH_ITERATIONS);
                     (score, j, l, r)
                 })
                 .collect();
@@ -571,27 +575,8 @@ fn absorb(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
             // best one only.
             best = meeting_candidates(mid.first, mid.last)
                 .into_par_iter()
-                .map(|j| {
-                    // `left` ends and `right` starts inside `mid`: both grow.
-                    let mut l = left.clone();
-                    stretch(&mut l, points, left.first, j);
-                    let mut r = right.clone();
-                    stretch(&mut r, points, j, right.last);
-                    refine(
-                        points,
-                        std::slice::from_mut(&mut l),
-                        &obj,
-                        MERGE_PROBE_ITERATIONS,
-                    );
-                    refine(
-                        points,
-                        std::slice::from_mut(&mut r),
-                        &obj,
-                        MERGE_PROBE_ITERATIONS,
-                    );
-                    let score = distance_cost(points, &l, &obj) + distance_cost(points, &r, &obj);
-                    (score, l, r)
-                })
+                // `left` ends and `right` starts inside `mid`: both grow.
+                .map(|j| meet_at(points, left, right, j, &obj, MERGE_PROBE_ITERATIONS))
                 .collect::<Vec<_>>()
                 .into_iter()
                 .min_by(|x, y| x.0.total_cmp(&y.0));
