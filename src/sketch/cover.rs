@@ -298,43 +298,43 @@ fn fit_one(
         ftol: 1e-12,
         xtol: 1e-9,
     };
-    let mut candidates: Vec<(usize, f64, Piece)> = Vec::new();
     let first_n = s.saturating_sub(opts.nmax).max(lo);
     let last_n = (s + opts.nmax).min(hi);
-    for n in first_n..=last_n {
-        if n == s {
-            continue;
-        }
-        let v = base.to_local(points[n]);
-        let tn = base.to_local(points[s] + geometry[n].0);
-        let alpha = if n > s { FRAC_PI_4 } else { -FRAC_PI_4 };
-        let scale2 = v.length_squared();
-        if !(scale2 > 0.0) {
-            continue;
-        }
-        // Start from c = 0, where H(α) = (a(cos α − 1), bα).
-        let floor = 0.05 * scale2.sqrt();
-        let a0 = (v.x / (alpha.cos() - 1.0)).max(floor);
-        let b0 = (v.y / alpha).max(floor);
-        let e = |x: &[f64; 3]| {
-            let h = ProjectedHelix::new(x[0].abs(), x[1].abs(), x[2]);
-            // Along the sketch, t runs one way or the other: compare
-            // tangents up to that sign (fixed at t = 0 by T̂_H(0) = ±y).
-            let lead = h.derivative(0.0).y.signum();
-            let tangent = h.unit_tangent(alpha).unwrap_or(DVec2::ZERO) * lead;
-            BETA_D * (v - h.point(alpha * lead)).length_squared() / scale2
-                + (1.0 - BETA_D) * (tn - tangent).length_squared()
-        };
-        // Several starting tilts: the two-vertex problem has several
-        // minima (a loop or not at the seed, the axis towards or away).
-        for c0 in START_TILTS {
-            let m = minimize(e, [a0, b0, c0], [0.3 * a0, 0.3 * b0, 0.3], &nm);
-            let mut h = base;
-            h.helix = ProjectedHelix::new(m.x[0].abs(), m.x[1].abs(), m.x[2]);
-            let piece = coverage(&h, points, s, 0.0, (lo, hi), opts.emax);
-            candidates.push((piece.last - piece.first, m.value, piece));
-        }
-    }
+    // The neighbours' fits are independent: in parallel, collected in
+    // neighbour order.
+    let mut candidates: Vec<(usize, f64, Piece)> = (first_n..=last_n)
+        .into_par_iter()
+        .filter(|&n| n != s)
+        .flat_map_iter(|n| {
+            let v = base.to_local(points[n]);
+            let tn = base.to_local(points[s] + geometry[n].0);
+            let alpha = if n > s { FRAC_PI_4 } else { -FRAC_PI_4 };
+            let scale2 = v.length_squared();
+            // Start from c = 0, where H(α) = (a(cos α − 1), bα).
+            let floor = 0.05 * scale2.sqrt();
+            let a0 = (v.x / (alpha.cos() - 1.0)).max(floor);
+            let b0 = (v.y / alpha).max(floor);
+            let e = move |x: &[f64; 3]| {
+                let h = ProjectedHelix::new(x[0].abs(), x[1].abs(), x[2]);
+                // Along the sketch, t runs one way or the other: compare
+                // tangents up to that sign (fixed at t = 0 by T̂_H(0) = ±y).
+                let lead = h.derivative(0.0).y.signum();
+                let tangent = h.unit_tangent(alpha).unwrap_or(DVec2::ZERO) * lead;
+                BETA_D * (v - h.point(alpha * lead)).length_squared() / scale2
+                    + (1.0 - BETA_D) * (tn - tangent).length_squared()
+            };
+            // Several starting tilts: the two-vertex problem has several
+            // minima (a loop or not at the seed, the axis towards or away).
+            let tilts = if scale2 > 0.0 { &START_TILTS[..] } else { &[] };
+            tilts.iter().map(move |&c0| {
+                let m = minimize(e, [a0, b0, c0], [0.3 * a0, 0.3 * b0, 0.3], &nm);
+                let mut h = base;
+                h.helix = ProjectedHelix::new(m.x[0].abs(), m.x[1].abs(), m.x[2]);
+                let piece = coverage(&h, points, s, 0.0, (lo, hi), opts.emax);
+                (piece.last - piece.first, m.value, piece)
+            })
+        })
+        .collect();
     // The paper keeps the candidate covering most vertices. Beyond the
     // paper: the best few are refined on the vertices they cover and the
     // walk resumed, repeatedly; the refined piece covering most wins (a
@@ -397,20 +397,26 @@ fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective) {
     if piece.max_distance(points) <= HOP_BELOW * obj.emax {
         return;
     }
+    // The restarts are independent: in parallel, kept in scale order.
     let start = piece.clone();
-    for scale in HOP_SCALES {
-        let mut trial = start.clone();
-        let mut p = trial.helix.params();
-        p[3] *= scale;
-        trial.helix = PlacedHelix::from_params(&p, trial.helix.reflect);
-        trial.reproject(points);
-        refine(
-            points,
-            std::slice::from_mut(&mut trial),
-            obj,
-            GROW_ITERATIONS,
-        );
-        let c = cost(&trial);
+    let trials: Vec<(f64, Piece)> = HOP_SCALES
+        .into_par_iter()
+        .map(|scale| {
+            let mut trial = start.clone();
+            let mut p = trial.helix.params();
+            p[3] *= scale;
+            trial.helix = PlacedHelix::from_params(&p, trial.helix.reflect);
+            trial.reproject(points);
+            refine(
+                points,
+                std::slice::from_mut(&mut trial),
+                obj,
+                GROW_ITERATIONS,
+            );
+            (cost(&trial), trial)
+        })
+        .collect();
+    for (c, trial) in trials {
         if c < best_cost {
             best_cost = c;
             *piece = trial;
@@ -570,10 +576,28 @@ fn absorb(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
     while i + 1 < pieces.len() {
         let (left, mid, right) = (&pieces[i - 1], &pieces[i], &pieces[i + 1]);
         let mut best: Option<(f64, Piece, Piece)> = None;
-        if left.last == mid.first && mid.last == right.first {
+        let meetings = meeting_candidates(mid.first, mid.last);
+        // Neighbours that are other helices than the piece between them,
+        // extended over it as they are, leave it far off; a sliver's
+        // neighbours, extended over its few vertices, nearly fit them.
+        // Only where one meeting vertex keeps both extensions within
+        // `ABSORB_REACH · E_max` are the (costly) refitted probes run.
+        let reach = |&j: &usize| {
+            let mut l = left.clone();
+            set_range(&mut l, points, left.first, j);
+            let mut r = right.clone();
+            set_range(&mut r, points, j, right.last);
+            l.max_distance(points).max(r.max_distance(points))
+        };
+        let joined = left.last == mid.first && mid.last == right.first;
+        if joined
+            && meetings
+                .iter()
+                .any(|j| reach(j) <= ABSORB_REACH * opts.emax)
+        {
             // A short probe at every meeting vertex, the full fit at the
             // best one only.
-            best = meeting_candidates(mid.first, mid.last)
+            best = meetings
                 .into_par_iter()
                 // `left` ends and `right` starts inside `mid`: both grow.
                 .map(|j| meet_at(points, left, right, j, &obj, MERGE_PROBE_ITERATIONS))
@@ -581,6 +605,11 @@ fn absorb(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
                 .into_iter()
                 .min_by(|x, y| x.0.total_cmp(&y.0));
             best = best.and_then(|(_, mut l, mut r)| {
+                // Neighbours that are other helices stay far off.
+                let probe = l.max_distance(points).max(r.max_distance(points));
+                if probe > MERGE_PROBE_LIMIT * opts.emax {
+                    return None;
+                }
                 refine(points, std::slice::from_mut(&mut l), &obj, GROW_ITERATIONS);
                 refine(points, std::slice::from_mut(&mut r), &obj, GROW_ITERATIONS);
                 let d = l.max_distance(points).max(r.max_distance(points));
@@ -597,6 +626,10 @@ fn absorb(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
         }
     }
 }
+
+/// See [`absorb`]: twice [`MERGE_PROBE_LIMIT`], as the extensions are not
+/// refitted.
+const ABSORB_REACH: f64 = 2.0 * MERGE_PROBE_LIMIT;
 
 /// Where two pieces may be made to meet inside `[first, last]`: every
 /// vertex of a short range, nine spread over a long one (the junction
@@ -643,6 +676,9 @@ fn merge(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
                             &obj,
                             MERGE_PROBE_ITERATIONS,
                         );
+                        if trial.max_distance(points) > MERGE_PROBE_LIMIT * opts.emax {
+                            return None;
+                        }
                     }
                 }
                 // A short probe first: neighbours that are different
@@ -728,6 +764,92 @@ fn cover_range(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Projections of helices `[a, b, c]` over `t ∈ [0, 2]`, `per` vertices
+    /// each, chained with a 0.6 rad corner at each join; each helix with
+    /// its vertex parameters.
+    fn chain(shapes: &[[f64; 3]], per: usize) -> (Vec<DVec2>, Vec<(PlacedHelix, Vec<f64>)>) {
+        let ts: Vec<f64> = (0..per)
+            .map(|k| 2.0 * k as f64 / (per - 1) as f64)
+            .collect();
+        let mut points: Vec<DVec2> = Vec::new();
+        let mut out = Vec::new();
+        for &[a, b, c] in shapes {
+            let mut h = PlacedHelix::from_params(&[0.0, 0.0, 0.0, a, b, c], false);
+            if let Some(&join) = points.last() {
+                let (prev, prev_ts): &(PlacedHelix, Vec<f64>) = out.last().unwrap();
+                let d = prev.derivative(prev_ts[per - 1]).normalize();
+                let want = DVec2::from_angle(0.6).rotate(d);
+                h.theta = want.to_angle() - h.derivative(0.0).normalize().to_angle();
+                h.origin = join - h.to_sketch_vector(h.helix.point(0.0));
+                points.pop();
+            }
+            points.extend(ts.iter().map(|&t| h.point(t)));
+            out.push((h, ts.clone()));
+        }
+        (points, out)
+    }
+
+    /// The piece of `h` over vertices `[first, last]`, projected from `t0`.
+    fn piece_on(h: &PlacedHelix, points: &[DVec2], first: usize, last: usize, t0: f64) -> Piece {
+        let mut p = Piece {
+            helix: *h,
+            first,
+            last: first,
+            ts: vec![h.closest_parameter(points[first], t0)],
+            mirror: false,
+        };
+        stretch(&mut p, points, first, last);
+        p
+    }
+
+    #[test]
+    fn a_sliver_between_two_helices_is_absorbed_at_their_corner() {
+        // Helices over vertices [0, 39] and [39, 78]; the covering left a
+        // sliver [34, 44] over the corner.
+        let (points, truth) = chain(&[[0.3, 0.1, 0.4], [0.2, 0.15, -0.3]], 40);
+        let opts = CoverOptions {
+            emax: 1e-3,
+            nmax: 12,
+            end_guard: 3,
+        };
+        let (h1, h2) = (&truth[0].0, &truth[1].0);
+        let mut pieces = vec![
+            piece_on(h1, &points, 0, 34, 0.0),
+            piece_on(h2, &points, 34, 44, 0.0),
+            piece_on(h2, &points, 44, 78, 0.5),
+        ];
+        absorb(&points, &mut pieces, &opts);
+        assert_eq!(pieces.len(), 2);
+        assert_eq!((pieces[0].last, pieces[1].first), (39, 39));
+        for p in &pieces {
+            assert!(
+                p.max_distance(&points) < 1e-9,
+                "{}",
+                p.max_distance(&points)
+            );
+        }
+    }
+
+    #[test]
+    fn a_helix_between_two_others_is_kept() {
+        let (points, truth) = chain(&[[0.3, 0.1, 0.4], [0.2, 0.15, -0.3], [0.25, 0.05, 0.8]], 40);
+        let opts = CoverOptions {
+            emax: 1e-3,
+            nmax: 12,
+            end_guard: 3,
+        };
+        let mut pieces: Vec<Piece> = truth
+            .iter()
+            .enumerate()
+            .map(|(k, (h, _))| piece_on(h, &points, 39 * k, 39 * (k + 1), 0.0))
+            .collect();
+        let before = pieces.clone();
+        absorb(&points, &mut pieces, &opts);
+        merge(&points, &mut pieces, &opts);
+        assert_eq!(pieces, before);
+        assert!(pieces.iter().all(|p| p.max_distance(&points) < 1e-12));
+    }
 
     #[test]
     fn corners_are_found_and_smooth_turns_are_not() {

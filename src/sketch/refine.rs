@@ -28,7 +28,7 @@ use faer::linalg::solvers::Solve;
 use faer::Mat;
 use glam::{DVec2, DVec3};
 
-use super::placed::{PlacedHelix, PARAMS};
+use super::placed::{Foot, PlacedHelix, PARAMS};
 
 /// One helix of the covering with the sketch vertices it fits.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,10 +47,32 @@ pub struct Piece {
 impl Piece {
     /// Re-project every vertex, each from its previous parameter.
     pub fn reproject(&mut self, points: &[DVec2]) {
+        self.reproject_feet(points);
+    }
+
+    /// [`reproject`](Self::reproject), returning each vertex measured at
+    /// its new parameter.
+    pub fn reproject_feet(&mut self, points: &[DVec2]) -> Vec<Foot> {
         let e = self.helix.evaluator();
-        for (k, t) in self.ts.iter_mut().enumerate() {
-            *t = e.closest_parameter(points[self.first + k], *t);
-        }
+        self.ts
+            .iter_mut()
+            .enumerate()
+            .map(|(k, t)| {
+                let f = e.project(points[self.first + k], *t);
+                *t = f.t;
+                f
+            })
+            .collect()
+    }
+
+    /// Every vertex measured at its parameter.
+    pub fn feet(&self, points: &[DVec2]) -> Vec<Foot> {
+        let e = self.helix.evaluator();
+        self.ts
+            .iter()
+            .enumerate()
+            .map(|(k, &t)| e.foot(points[self.first + k], t))
+            .collect()
     }
 
     /// The largest vertex distance from the curve.
@@ -109,14 +131,17 @@ fn joined(pieces: &[Piece], i: usize) -> bool {
 
 /// `E` for the current parameters and projections.
 pub fn objective(points: &[DVec2], pieces: &[Piece], obj: &Objective) -> f64 {
-    let mut ed = 0.0;
-    for p in pieces {
-        let e = p.helix.evaluator();
-        for (k, &t) in p.ts.iter().enumerate() {
-            let (d, _) = e.normal_offset(points[p.first + k], t);
-            ed += (d / obj.emax).powi(2);
-        }
-    }
+    let feet: Vec<Vec<Foot>> = pieces.iter().map(|p| p.feet(points)).collect();
+    objective_with(pieces, &feet, obj)
+}
+
+/// `E` from the pieces' measured vertices.
+fn objective_with(pieces: &[Piece], feet: &[Vec<Foot>], obj: &Objective) -> f64 {
+    let ed: f64 = feet
+        .iter()
+        .flatten()
+        .map(|f| (f.offset / obj.emax).powi(2))
+        .sum();
     let mut et = 0.0;
     if obj.alpha_t > 0.0 {
         for i in 1..pieces.len() {
@@ -166,7 +191,10 @@ pub fn refine_to(
     let n = pieces.len() * PARAMS;
     let wd = (1.0 - obj.alpha_t).sqrt() / obj.emax;
     let wt = obj.alpha_t.sqrt();
-    let mut cost = objective(points, pieces, obj);
+    // Each vertex is measured once per projection: the cost and the rows
+    // of the next iteration share its trigonometry.
+    let mut feet: Vec<Vec<Foot>> = pieces.iter().map(|p| p.feet(points)).collect();
+    let mut cost = objective_with(pieces, &feet, obj);
     let before = cost;
     let mut lambda = 1e-3;
     let mut iterations = 0;
@@ -177,14 +205,13 @@ pub fn refine_to(
         jtj.iter_mut().for_each(|v| *v = 0.0);
         jtr.iter_mut().for_each(|v| *v = 0.0);
         // Distance rows: one block per piece.
-        for (i, p) in pieces.iter().enumerate() {
+        for (i, (p, pf)) in pieces.iter().zip(&feet).enumerate() {
             let base = i * PARAMS;
             let e = p.helix.evaluator();
-            for (k, &t) in p.ts.iter().enumerate() {
-                let (d, nu) = e.normal_offset(points[p.first + k], t);
-                let jac = e.param_jacobian(t);
-                let row: [f64; PARAMS] = std::array::from_fn(|q| -wd * nu.dot(jac[q]));
-                let r = wd * d;
+            for f in pf {
+                let jac = e.param_jacobian_at(f);
+                let row: [f64; PARAMS] = std::array::from_fn(|q| -wd * f.normal.dot(jac[q]));
+                let r = wd * f.offset;
                 for a in 0..PARAMS {
                     jtr[base + a] += row[a] * r;
                     for b in 0..PARAMS {
@@ -248,6 +275,7 @@ pub fn refine_to(
             let delta = a.partial_piv_lu().solve(&rhs);
             let mut trial: Vec<Piece> = pieces.to_vec();
             let mut finite = true;
+            let mut trial_feet: Vec<Vec<Foot>> = Vec::with_capacity(trial.len());
             for (i, p) in trial.iter_mut().enumerate() {
                 let mut params = p.helix.params();
                 for (q, v) in params.iter_mut().enumerate() {
@@ -255,16 +283,17 @@ pub fn refine_to(
                     finite &= v.is_finite();
                 }
                 p.helix = PlacedHelix::from_params(&params, p.helix.reflect);
-                p.reproject(points);
+                trial_feet.push(p.reproject_feet(points));
             }
             let new_cost = if finite {
-                objective(points, &trial, obj)
+                objective_with(&trial, &trial_feet, obj)
             } else {
                 f64::INFINITY
             };
             if new_cost < cost {
                 let gain = (cost - new_cost) / cost;
                 pieces.clone_from_slice(&trial);
+                feet = trial_feet;
                 cost = new_cost;
                 lambda = (lambda / 3.0).max(1e-12);
                 improved = gain > gain_tol;
