@@ -44,9 +44,13 @@
 //! each join: every junction at the corner vertex, none spurious
 //! (`tests/sketch.rs`).
 //!
-//! The two sides of a seed's helix, the candidates' refinements and the
-//! junction trials run in parallel (rayon); choices are made in a fixed
-//! order, so the result does not depend on the number of threads.
+//! The two sides of a seed's helix, the two-vertex fits, the candidates'
+//! refinements and their restarts, and the junction trials run in parallel
+//! (rayon); choices are made in a fixed order, so the result does not
+//! depend on the number of threads. Merges and absorptions are first
+//! probed cheaply (a few iterations, or the neighbours extended without a
+//! refit): most neighbours are different helices, and the full fits with
+//! their restarts are kept for the pairs that come close.
 
 use std::f64::consts::FRAC_PI_4;
 
