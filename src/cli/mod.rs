@@ -370,6 +370,18 @@ pub struct SketchArgs {
     /// times the drawing's length).
     #[arg(long = "g1-tolerance", requires = "g1")]
     pub g1_tolerance: Option<f64>,
+    /// How an unevenly sampled drawing (edges more than 3x apart) is evened
+    /// out: split its long edges along a spline, keeping every drawn vertex,
+    /// or the paper's uniform resampling (corners between samples are cut).
+    #[arg(long, value_enum, default_value_t = ResampleArg::Densify)]
+    pub resample: ResampleArg,
+}
+
+/// See [`crate::sketch::Resampling`].
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum ResampleArg {
+    Densify,
+    Uniform,
 }
 
 #[derive(clap::Args, Debug)]

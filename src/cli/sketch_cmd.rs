@@ -19,9 +19,9 @@ use glam::DVec2;
 use serde::Serialize;
 
 use super::io_util::Output;
-use super::SketchArgs;
+use super::{ResampleArg, SketchArgs};
 use crate::io::sketch::{read_sketch, write_preview_svg};
-use crate::sketch::{lift_sketch, refit_g1, G1Refit, SketchLift, SketchOptions};
+use crate::sketch::{lift_sketch, refit_g1, G1Refit, Resampling, SketchLift, SketchOptions};
 
 #[derive(Serialize)]
 struct HelixOut {
@@ -54,6 +54,8 @@ struct SketchOut {
     input: String,
     length: f64,
     resampled: bool,
+    /// `densify` or `uniform`; applied only where `resampled`.
+    resampling: &'static str,
     emax: f64,
     alpha_t: f64,
     helices: Vec<HelixOut>,
@@ -170,6 +172,10 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
         input,
         length: r.length,
         resampled: r.resampled,
+        resampling: match opts.resampling {
+            Resampling::Densify => "densify",
+            Resampling::Uniform => "uniform",
+        },
         emax: opts.emax * r.length,
         alpha_t: opts.alpha_t,
         helices,
@@ -210,6 +216,10 @@ pub fn run(args: &SketchArgs) -> Result<()> {
     let opts = SketchOptions {
         emax: args.emax,
         alpha_t: args.alpha_t,
+        resampling: match args.resample {
+            ResampleArg::Densify => Resampling::Densify,
+            ResampleArg::Uniform => Resampling::Uniform,
+        },
         ..Default::default()
     };
     if !(opts.emax > 0.0 && opts.emax < 1.0) {

@@ -57,6 +57,7 @@ use std::f64::consts::FRAC_PI_4;
 use glam::DVec2;
 use rayon::prelude::*;
 
+use super::estimate::is_corner;
 use super::nelder_mead::{minimize, NelderMeadOptions};
 use super::placed::{Evaluator, PlacedHelix};
 use super::refine::{refine_to, Objective, Piece};
@@ -225,45 +226,10 @@ fn extend(piece: &mut Piece, points: &[DVec2], range: (usize, usize), emax: f64)
     true
 }
 
-/// Turning angle of the polyline at vertex `i` (0 at the ends).
-fn turning(points: &[DVec2], i: usize) -> f64 {
-    if i == 0 || i + 1 >= points.len() {
-        return 0.0;
-    }
-    (points[i] - points[i - 1])
-        .angle_to(points[i + 1] - points[i])
-        .abs()
-}
-
-/// A vertex turning by more than [`CORNER_TURN`] and [`CORNER_RATIO`] times
-/// the median turning of the vertices around it (a corner; on a smooth
-/// stroke the turning varies slowly).
-fn is_corner(points: &[DVec2], i: usize) -> bool {
-    let t = turning(points, i);
-    if t <= CORNER_TURN {
-        return false;
-    }
-    let lo = i.saturating_sub(CORNER_SPAN);
-    let hi = (i + CORNER_SPAN).min(points.len() - 1);
-    let mut around: Vec<f64> = (lo..=hi)
-        .filter(|&j| j + 1 < i || j > i + 1)
-        .map(|j| turning(points, j))
-        .collect();
-    if around.is_empty() {
-        return false;
-    }
-    around.sort_by(f64::total_cmp);
-    t > CORNER_RATIO * around[around.len() / 2]
-}
-
 /// Whether a corner lies within `w` vertices of `i`.
 fn near_corner(points: &[DVec2], i: usize, w: usize) -> bool {
     (i.saturating_sub(w)..=(i + w).min(points.len() - 1)).any(|j| is_corner(points, j))
 }
-
-const CORNER_TURN: f64 = 0.1;
-const CORNER_RATIO: f64 = 4.0;
-const CORNER_SPAN: usize = 8;
 
 /// The seed of a helix on vertices `[lo, hi]`: the largest curvature (the
 /// paper), away from the sketch's ends where the estimator's window is
@@ -271,11 +237,13 @@ const CORNER_SPAN: usize = 8;
 /// nothing else. Beyond the paper: away from corners of the drawing too,
 /// where the estimated curvature peaks but no helix goes on (a seed there
 /// covers a few vertices and leaves a sliver); and at a local maximum of
-/// `|κ|` within `±guard` (Proposition 1 puts `t = 0` there): the flank of
-/// a peak excluded as a corner has a large `|κ|` too, but the two-vertex
-/// fit's `t = 0` is wrong there and its helices fit a short arc only
-/// (measured: a 1000-vertex drawing of two helices was first covered by
-/// nine pieces, and took 450 ms instead of 50 ms).
+/// `|κ|` within `±guard`, in the whole drawing rather than the range (the
+/// flank of a peak just outside the range is no seed either; Proposition 1
+/// puts `t = 0` at a peak). The flank of a peak excluded as a corner has a
+/// large `|κ|` too, but the two-vertex fit's `t = 0` is wrong there and its
+/// helices fit a short arc only (measured: a 1000-vertex drawing of two
+/// helices was first covered by nine pieces, and took 450 ms instead of
+/// 50 ms).
 fn seed_vertex(
     points: &[DVec2],
     geometry: &[(DVec2, f64)],
@@ -287,8 +255,7 @@ fn seed_vertex(
     let by_curvature = |&i: &usize, &j: &usize| curvature(i).total_cmp(&curvature(j));
     let inner = lo.max(guard)..=hi.min(n.saturating_sub(1 + guard));
     let local_max = |i: usize| {
-        (i.saturating_sub(guard).max(lo)..=(i + guard).min(hi))
-            .all(|j| curvature(j) <= curvature(i))
+        (i.saturating_sub(guard)..=(i + guard).min(n - 1)).all(|j| curvature(j) <= curvature(i))
     };
     let smooth = |i: &usize| !near_corner(points, *i, guard);
     inner
@@ -895,6 +862,8 @@ mod tests {
             .collect();
         assert!(is_corner(&pts, 20));
         assert_eq!(seed_vertex(&pts, &geometry, (0, 60), 3), 40);
+        // Nor the flank just past the end of a range.
+        assert_eq!(seed_vertex(&pts, &geometry, (24, 60), 3), 40);
         // Without a corner anywhere the largest curvature is the seed.
         let line: Vec<DVec2> = (0..61).map(|k| DVec2::new(0.05 * k as f64, 0.0)).collect();
         assert_eq!(seed_vertex(&line, &geometry, (0, 60), 3), 20);

@@ -23,6 +23,8 @@ pub mod projected;
 pub mod refine;
 
 pub use g1::{refit_g1, G1Refit};
-pub use lift::{lift_sketch, Junction, LiftedHelix, SketchError, SketchLift, SketchOptions};
+pub use lift::{
+    lift_sketch, Junction, LiftedHelix, Resampling, SketchError, SketchLift, SketchOptions,
+};
 pub use placed::PlacedHelix;
 pub use projected::ProjectedHelix;
