@@ -698,6 +698,67 @@ fn sketch_lifts_the_bundled_spring_drawing() {
 }
 
 #[test]
+fn sketch_evens_out_an_uneven_drawing_keeping_its_vertices() {
+    // The benchmark's two-helix drawing at 200 vertices, sampled evenly in
+    // the helix parameter (edges up to ~5x apart). Densified (default):
+    // every drawn vertex is kept, so the fit is exact and the junction is
+    // a drawn vertex; uniform (the paper's): as many points as drawn.
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("two.json");
+    let pts: Vec<[f64; 2]> = strandfit::synthetic::synthetic_sketch(200)
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
+    std::fs::write(&input, serde_json::to_string(&pts).unwrap()).unwrap();
+    let run = |extra: &[&str]| {
+        let out_json = dir.path().join("out.json");
+        let mut args = vec![
+            "sketch",
+            input.to_str().unwrap(),
+            "-o",
+            out_json.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let out = strandfit(&args, "");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        json(&std::fs::read(&out_json).unwrap())
+    };
+    let dense = run(&[]);
+    assert_eq!(dense["resampled"], true);
+    assert_eq!(dense["resampling"], "densify");
+    let lifted: Vec<[f64; 2]> = dense["points_3d"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| [p[0].as_f64().unwrap(), p[1].as_f64().unwrap()])
+        .collect();
+    assert!(
+        lifted.len() > 200 && lifted.len() <= 400,
+        "{}",
+        lifted.len()
+    );
+    let mut it = lifted.iter();
+    assert!(
+        pts.iter().all(|p| it.any(|q| q == p)),
+        "a drawn vertex was moved"
+    );
+    assert_eq!(dense["helices"].as_array().unwrap().len(), 2, "{dense}");
+    assert!(dense["projection_error"]["max_relative"].as_f64().unwrap() < 1e-5);
+    let uniform = run(&["--resample", "uniform"]);
+    assert_eq!(uniform["resampling"], "uniform");
+    assert_eq!(uniform["points_3d"].as_array().unwrap().len(), 200);
+    let bad = strandfit(
+        &["sketch", input.to_str().unwrap(), "--resample", "cubic"],
+        "",
+    );
+    assert!(!bad.status.success());
+}
+
+#[test]
 fn sketch_g1_refits_a_two_helix_drawing() {
     // Two helices meeting with a tangent gap in the lift; --g1 adds the
     // floating-tangents re-fit: G1 to rounding, within its tolerance, its
