@@ -697,6 +697,18 @@ fn sketch_lifts_the_bundled_spring_drawing() {
     assert_eq!(svg.matches("<polyline").count(), 2, "sketch + one helix");
 }
 
+/// The benchmark's two-helix drawing at 200 vertices, written to
+/// `dir/two.json`; its path and points.
+fn two_helix_drawing(dir: &std::path::Path) -> (std::path::PathBuf, Vec<[f64; 2]>) {
+    let input = dir.join("two.json");
+    let pts: Vec<[f64; 2]> = strandfit::synthetic::synthetic_sketch(200)
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
+    std::fs::write(&input, serde_json::to_string(&pts).unwrap()).unwrap();
+    (input, pts)
+}
+
 #[test]
 fn sketch_evens_out_an_uneven_drawing_keeping_its_vertices() {
     // The benchmark's two-helix drawing at 200 vertices, sampled evenly in
@@ -704,12 +716,7 @@ fn sketch_evens_out_an_uneven_drawing_keeping_its_vertices() {
     // every drawn vertex is kept, so the fit is exact and the junction is
     // a drawn vertex; uniform (the paper's): as many points as drawn.
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("two.json");
-    let pts: Vec<[f64; 2]> = strandfit::synthetic::synthetic_sketch(200)
-        .iter()
-        .map(|p| p.to_array())
-        .collect();
-    std::fs::write(&input, serde_json::to_string(&pts).unwrap()).unwrap();
+    let (input, pts) = two_helix_drawing(dir.path());
     let run = |extra: &[&str]| {
         let out_json = dir.path().join("out.json");
         let mut args = vec![
@@ -764,12 +771,7 @@ fn sketch_g1_refits_a_two_helix_drawing() {
     // floating-tangents re-fit: G1 to rounding, within its tolerance, its
     // projection within its 3D distance of the drawing.
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("two.json");
-    let pts: Vec<[f64; 2]> = strandfit::synthetic::synthetic_sketch(200)
-        .iter()
-        .map(|p| p.to_array())
-        .collect();
-    std::fs::write(&input, serde_json::to_string(&pts).unwrap()).unwrap();
+    let (input, _) = two_helix_drawing(dir.path());
     let out_json = dir.path().join("out.json");
     let out = strandfit(
         &[
