@@ -168,8 +168,11 @@ pub struct Junction {
 #[derive(Clone, Debug, PartialEq)]
 pub struct SketchLift {
     pub helices: Vec<LiftedHelix>,
-    /// The vertices the fit ran on (the input, or its uniform resampling).
+    /// The vertices the fit ran on: the input, or (where `resampled`) the
+    /// input evened out as [`SketchOptions::resampling`] says (densified:
+    /// every input vertex is among them).
     pub points_2d: Vec<DVec2>,
+    /// Whether the input's edges differed by more than [`UNIFORM_RATIO`].
     pub resampled: bool,
     /// The lifted vertices `(x, y, z)` (Section 7: `x, y` are the sketch's).
     pub points_3d: Vec<DVec3>,
