@@ -18,6 +18,17 @@ fn strandfit(args: &[&str], stdin: &str) -> Output {
     child.wait_with_output().unwrap()
 }
 
+/// [`strandfit`], which must succeed (its stderr shown if not).
+fn strandfit_ok(args: &[&str], stdin: &str) -> Output {
+    let out = strandfit(args, stdin);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn json(s: &[u8]) -> serde_json::Value {
     serde_json::from_slice(s).expect("valid JSON")
 }
@@ -82,14 +93,9 @@ fn helix_reads_a_file_and_writes_a_file() {
         "{\"p0\":[0,0,0],\"t0\":[1,0,0],\"p1\":[3,0,0],\"t1\":[1,0,0]}\n",
     )
     .unwrap();
-    let out = strandfit(
+    strandfit_ok(
         &["helix", inp.to_str().unwrap(), "-o", outp.to_str().unwrap()],
         "",
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let v = json(std::fs::read(&outp).unwrap().trim_ascii_end());
     assert_eq!(v["length"].as_f64().unwrap(), 3.0);
@@ -104,14 +110,9 @@ const TWO_SPLINES: &str = r#"{"splines":[
 fn fit_writes_the_documented_format() {
     let dir = tempfile::tempdir().unwrap();
     let outp = dir.path().join("out.json");
-    let out = strandfit(
+    strandfit_ok(
         &["fit", "--elements", "6", "-o", outp.to_str().unwrap()],
         TWO_SPLINES,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let v = json(&std::fs::read(&outp).unwrap());
     let curves = v["curves"].as_array().unwrap();
@@ -190,12 +191,7 @@ fn malformed_fit_input_names_the_spline_and_leaves_no_file() {
 #[test]
 fn bundled_example_runs() {
     let ex = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/curls.json");
-    let out = strandfit(&["fit", "--elements", "20", ex], "");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = strandfit_ok(&["fit", "--elements", "20", ex], "");
     let v = json(&out.stdout);
     for c in v["curves"].as_array().unwrap() {
         assert!(c["frechet"].as_f64().unwrap() < 0.1, "{}", c["id"]);
@@ -213,7 +209,7 @@ fn evaluate_decompresses_fit_output() {
     let fitted = dir.path().join("fit.json");
     let polys = dir.path().join("polys.json");
     let n = 6;
-    let out = strandfit(
+    strandfit_ok(
         &[
             "--backend",
             "cpu",
@@ -225,13 +221,8 @@ fn evaluate_decompresses_fit_output() {
         ],
         TWO_SPLINES,
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let m = 32 * n + 1; // fit's default --samples-per-element 32
-    let out = strandfit(
+    strandfit_ok(
         &[
             "--backend",
             "cpu",
@@ -244,11 +235,6 @@ fn evaluate_decompresses_fit_output() {
             polys.to_str().unwrap(),
         ],
         "",
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let fit = json(&std::fs::read(&fitted).unwrap());
     let ev = json(&std::fs::read(&polys).unwrap());
@@ -323,12 +309,7 @@ fn evaluate_rejects_bad_elements_by_name() {
 #[test]
 fn sample_writes_equal_arclength_points() {
     use strandfit::spline::BezierSpline;
-    let out = strandfit(&["--backend", "cpu", "sample", "-n", "5"], TWO_SPLINES);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = strandfit_ok(&["--backend", "cpu", "sample", "-n", "5"], TWO_SPLINES);
     let v = json(&out.stdout);
     let input = json(TWO_SPLINES.as_bytes());
     for (k, s) in v["splines"].as_array().unwrap().iter().enumerate() {
@@ -371,14 +352,9 @@ fn integrate_answers_every_line() {
         r#"{"start":[1,2,3],"tangent":[0,0,1],"normal":[1,0,0],"kappa0":0.5,"gamma":0.2,"tau0":0.3,"delta":-0.1,"length":5}"#,
         "\n",
     );
-    let out = strandfit(
+    let out = strandfit_ok(
         &["--backend", "cpu", "integrate", "--steps", "512", "-m", "5"],
         input,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let lines: Vec<serde_json::Value> = out
         .stdout
@@ -432,12 +408,7 @@ fn closed_stdout_pipe_is_not_a_panic() {
 
 #[test]
 fn complete_fills_gaps_with_euler_spirals() {
-    let out = strandfit(&["complete", "--samples", "9", "examples/gaps.json"], "");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = strandfit_ok(&["complete", "--samples", "9", "examples/gaps.json"], "");
     let doc = json(&out.stdout);
     let pairs = doc["pairs"].as_array().unwrap();
     assert_eq!(pairs.len(), 4);
@@ -467,7 +438,7 @@ fn complete_fills_gaps_with_euler_spirals() {
 
 #[test]
 fn complete_with_atph_curves() {
-    let out = strandfit(
+    let out = strandfit_ok(
         &[
             "complete",
             "--method",
@@ -477,11 +448,6 @@ fn complete_with_atph_curves() {
             "examples/gaps.json",
         ],
         "",
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let doc = json(&out.stdout);
     let pairs = doc["pairs"].as_array().unwrap();
@@ -523,12 +489,7 @@ fn complete_atph_with_prescribed_lengths() {
     let input = r#"{"pairs":[
         {"id":"fig5","p0":[0,0,0],"t0":[1,0,0],"p1":[1.5,4,2],"t1":[-3,2,3]},
         {"id":"own","p0":[0,0,0],"t0":[1,0,0],"p1":[1,0,1],"t1":[0,0,1],"length":1.7}]}"#;
-    let out = strandfit(&["complete", "--method", "atph", "--length", "6"], input);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = strandfit_ok(&["complete", "--method", "atph", "--length", "6"], input);
     let doc = json(&out.stdout);
     let f = &doc["pairs"][0];
     assert_eq!(f["rho"].as_array().unwrap().len(), 4, "{f}");
@@ -553,7 +514,7 @@ fn complete_atph_with_prescribed_lengths() {
 fn motion_through_a_point_stream() {
     let dir = tempfile::tempdir().unwrap();
     let vtk = dir.path().join("motion.vtk");
-    let out = strandfit(
+    let out = strandfit_ok(
         &[
             "motion",
             "--samples",
@@ -563,11 +524,6 @@ fn motion_through_a_point_stream() {
             vtk.to_str().unwrap(),
         ],
         "",
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let doc = json(&out.stdout);
     assert_eq!(doc["id"], "example-5.6");
@@ -615,12 +571,7 @@ fn motion_through_a_point_stream() {
 
 #[test]
 fn motion_batches_json_lines_and_names_bad_streams() {
-    let out = strandfit(&["motion", "examples/motions.jsonl"], "");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = strandfit_ok(&["motion", "examples/motions.jsonl"], "");
     let text = String::from_utf8_lossy(&out.stdout);
     let lines: Vec<serde_json::Value> = text
         .lines()
@@ -659,7 +610,7 @@ fn sketch_lifts_the_bundled_spring_drawing() {
     let dir = tempfile::tempdir().unwrap();
     let out_json = dir.path().join("spring.json");
     let preview = dir.path().join("preview.svg");
-    let out = strandfit(
+    strandfit_ok(
         &[
             "sketch",
             "examples/spring.svg",
@@ -669,11 +620,6 @@ fn sketch_lifts_the_bundled_spring_drawing() {
             preview.to_str().unwrap(),
         ],
         "",
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let doc = json(&std::fs::read(&out_json).unwrap());
     let helices = doc["helices"].as_array().unwrap();
@@ -726,12 +672,7 @@ fn sketch_evens_out_an_uneven_drawing_keeping_its_vertices() {
             out_json.to_str().unwrap(),
         ];
         args.extend(extra);
-        let out = strandfit(&args, "");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        strandfit_ok(&args, "");
         json(&std::fs::read(&out_json).unwrap())
     };
     let dense = run(&[]);
@@ -773,7 +714,7 @@ fn sketch_g1_refits_a_two_helix_drawing() {
     let dir = tempfile::tempdir().unwrap();
     let (input, _) = two_helix_drawing(dir.path());
     let out_json = dir.path().join("out.json");
-    let out = strandfit(
+    strandfit_ok(
         &[
             "sketch",
             input.to_str().unwrap(),
@@ -782,11 +723,6 @@ fn sketch_g1_refits_a_two_helix_drawing() {
             "--g1",
         ],
         "",
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let doc = json(&std::fs::read(&out_json).unwrap());
     assert!(doc["helices"].as_array().unwrap().len() >= 2, "{doc}");
