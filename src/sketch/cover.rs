@@ -69,8 +69,15 @@ use super::refine::{refine_to, Objective, Piece};
 /// fine fit of Section 7 converges fully afterwards.
 const COVER_GAIN: f64 = 1e-6;
 
-fn refine(points: &[DVec2], pieces: &mut [Piece], obj: &Objective, max_iterations: usize) {
-    refine_to(points, pieces, obj, max_iterations, COVER_GAIN);
+/// Refine one piece of the covering (see [`COVER_GAIN`]).
+fn refine(points: &[DVec2], piece: &mut Piece, obj: &Objective, max_iterations: usize) {
+    refine_to(
+        points,
+        std::slice::from_mut(piece),
+        obj,
+        max_iterations,
+        COVER_GAIN,
+    );
 }
 use super::ProjectedHelix;
 
@@ -342,12 +349,7 @@ fn fit_one(
         .map(|(_, _, mut piece)| {
             for _ in 0..GROW_ROUNDS {
                 if piece.ts.len() >= 3 {
-                    refine(
-                        points,
-                        std::slice::from_mut(&mut piece),
-                        &obj,
-                        GROW_ITERATIONS,
-                    );
+                    refine(points, &mut piece, &obj, GROW_ITERATIONS);
                     hop(points, &mut piece, &obj);
                 }
                 if !extend(&mut piece, points, (lo, hi), opts.emax) {
@@ -383,7 +385,7 @@ fn fit_one(
 /// reached need not extend), restart it from the radius scaled by each of
 /// [`HOP_SCALES`] and keep the best.
 fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective) {
-    let cost = |p: &Piece| super::refine::objective(points, std::slice::from_ref(p), obj);
+    let cost = |p: &Piece| distance_cost(points, p, obj);
     let mut best_cost = cost(piece);
     if piece.max_distance(points) <= HOP_BELOW * obj.emax {
         return;
@@ -398,12 +400,7 @@ fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective) {
             p[3] *= scale;
             trial.helix = PlacedHelix::from_params(&p, trial.helix.reflect);
             trial.reproject(points);
-            refine(
-                points,
-                std::slice::from_mut(&mut trial),
-                obj,
-                GROW_ITERATIONS,
-            );
+            refine(points, &mut trial, obj, GROW_ITERATIONS);
             (cost(&trial), trial)
         })
         .collect();
@@ -460,8 +457,8 @@ fn meet_at(
     set_range(&mut l, points, left.first, j);
     let mut r = right.clone();
     set_range(&mut r, points, j, right.last);
-    refine(points, std::slice::from_mut(&mut l), obj, iterations);
-    refine(points, std::slice::from_mut(&mut r), obj, iterations);
+    refine(points, &mut l, obj, iterations);
+    refine(points, &mut r, obj, iterations);
     let score = distance_cost(points, &l, obj) + distance_cost(points, &r, obj);
     (score, l, r)
 }
@@ -601,8 +598,8 @@ fn absorb(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
                 if probe > MERGE_PROBE_LIMIT * opts.emax {
                     return None;
                 }
-                refine(points, std::slice::from_mut(&mut l), &obj, GROW_ITERATIONS);
-                refine(points, std::slice::from_mut(&mut r), &obj, GROW_ITERATIONS);
+                refine(points, &mut l, &obj, GROW_ITERATIONS);
+                refine(points, &mut r, &obj, GROW_ITERATIONS);
                 let d = l.max_distance(points).max(r.max_distance(points));
                 (d <= opts.emax).then_some((d, l, r))
             });
@@ -653,43 +650,22 @@ fn merge(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
             .into_par_iter()
             .map(|start| {
                 let mut trial = start.clone();
-                // Grown into the neighbour in steps, each refitted (a
-                // helix extrapolated over the whole neighbour at once can
-                // start the fit in a wrong basin).
+                // Grown into the neighbour in steps, each refitted by a
+                // short probe (a helix extrapolated over the whole
+                // neighbour at once can start the fit in a wrong basin).
+                // Neighbours that are different helices (most pairs) stay
+                // far off, and the full fit with its restarts would be
+                // wasted on them.
                 for k in 1..=MERGE_STEPS {
                     let f = trial.first - (trial.first - first) * k / MERGE_STEPS;
                     let l = trial.last + (last - trial.last) * k / MERGE_STEPS;
                     stretch(&mut trial, points, f, l);
-                    if k < MERGE_STEPS {
-                        refine(
-                            points,
-                            std::slice::from_mut(&mut trial),
-                            &obj,
-                            MERGE_PROBE_ITERATIONS,
-                        );
-                        if trial.max_distance(points) > MERGE_PROBE_LIMIT * opts.emax {
-                            return None;
-                        }
+                    refine(points, &mut trial, &obj, MERGE_PROBE_ITERATIONS);
+                    if trial.max_distance(points) > MERGE_PROBE_LIMIT * opts.emax {
+                        return None;
                     }
                 }
-                // A short probe first: neighbours that are different
-                // helices (most pairs) stay far off, and the full fit with
-                // its restarts would be wasted on them.
-                refine(
-                    points,
-                    std::slice::from_mut(&mut trial),
-                    &obj,
-                    MERGE_PROBE_ITERATIONS,
-                );
-                if trial.max_distance(points) > MERGE_PROBE_LIMIT * opts.emax {
-                    return None;
-                }
-                refine(
-                    points,
-                    std::slice::from_mut(&mut trial),
-                    &obj,
-                    GROW_ITERATIONS,
-                );
+                refine(points, &mut trial, &obj, GROW_ITERATIONS);
                 hop(points, &mut trial, &obj);
                 let d = trial.max_distance(points);
                 (d <= opts.emax).then_some((d, trial))
