@@ -264,10 +264,11 @@ fn seed_vertex(
     let local_max = |i: usize| {
         (i.saturating_sub(guard)..=(i + guard).min(n - 1)).all(|j| curvature(j) <= curvature(i))
     };
+    // The corner test (a sort per vertex around) only at local maxima.
     let smooth = |i: &usize| !near_corner(points, *i, guard);
     inner
         .clone()
-        .filter(|i| smooth(i) && local_max(*i))
+        .filter(|i| local_max(*i) && smooth(i))
         .max_by(by_curvature)
         .or_else(|| inner.clone().filter(smooth).max_by(by_curvature))
         .or_else(|| inner.max_by(by_curvature))
