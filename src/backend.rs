@@ -150,13 +150,28 @@ const EVAL_BATCH_SAMPLES: usize = 1 << 22;
 
 impl Backend {
     /// Open the backend the user chose. `auto` never fails: without an
-    /// adapter it reports the reason on stderr and uses the CPU.
+    /// adapter it uses the CPU ([`Backend::open_explained`] says why).
     pub fn open(choice: BackendChoice, precision: PrecisionChoice) -> Result<Backend, GpuError> {
+        Backend::open_explained(choice, precision).map(|(b, _)| b)
+    }
+
+    /// [`Backend::open`], with a sentence saying which backend was chosen
+    /// and, for `auto`, why (for a program to show its user; the library
+    /// prints nothing).
+    pub fn open_explained(
+        choice: BackendChoice,
+        precision: PrecisionChoice,
+    ) -> Result<(Backend, String), GpuError> {
         match choice {
-            BackendChoice::Cpu => Ok(Backend::Cpu),
+            BackendChoice::Cpu => Ok((Backend::Cpu, "backend cpu".into())),
             BackendChoice::Gpu => {
                 let engine = GpuEngine::new(GpuContext::new()?, precision)?;
-                Ok(Backend::Gpu(Box::new(engine)))
+                let why = format!(
+                    "backend gpu: {} ({})",
+                    engine.ctx.describe(),
+                    engine.precision.name()
+                );
+                Ok((Backend::Gpu(Box::new(engine)), why))
             }
             BackendChoice::Auto => {
                 match GpuContext::new().and_then(|ctx| GpuEngine::new(ctx, precision)) {
@@ -166,25 +181,22 @@ impl Backend {
                         if engine.ctx.adapter_info().device_type == wgpu::DeviceType::Cpu
                             && std::env::var_os(crate::gpu::ADAPTER_ENV).is_none() =>
                     {
-                        eprintln!(
-                            "strandfit: backend cpu (the only GPU adapter, {}, is software; \
-                         --backend gpu uses it)",
+                        let why = format!(
+                            "backend cpu (the only GPU adapter, {}, is software; \
+                             --backend gpu uses it)",
                             engine.ctx.adapter_info().name
                         );
-                        Ok(Backend::Cpu)
+                        Ok((Backend::Cpu, why))
                     }
                     Ok(engine) => {
-                        eprintln!(
-                            "strandfit: backend gpu: {} ({})",
+                        let why = format!(
+                            "backend gpu: {} ({})",
                             engine.ctx.describe(),
                             engine.precision.name()
                         );
-                        Ok(Backend::Gpu(Box::new(engine)))
+                        Ok((Backend::Gpu(Box::new(engine)), why))
                     }
-                    Err(e) => {
-                        eprintln!("strandfit: backend cpu (no usable GPU: {e})");
-                        Ok(Backend::Cpu)
-                    }
+                    Err(e) => Ok((Backend::Cpu, format!("backend cpu (no usable GPU: {e})"))),
                 }
             }
         }

@@ -87,22 +87,30 @@ pub struct CurveOutcome {
 
 /// Compress one polyline.
 pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome {
-    let verbatim = |why: String| CurveOutcome {
+    let tol = opts.tolerance();
+    // Points are stored as f32 unless the container is f64: exact for
+    // float32 sources, a measured rounding error for f64 ones (CSV, JSON).
+    let rounding = if opts.storage == Storage::F64 {
+        0.0
+    } else {
+        f32_rounding(points)
+    };
+    let as_points = |verbatim: Option<String>| CurveOutcome {
         shape: if points.is_empty() {
             Shape::Empty
         } else {
             Shape::Points(points.to_vec())
         },
-        frechet: 0.0,
+        frechet: rounding,
         elements: 0,
-        within: true,
-        verbatim: Some(why),
-        points_cheaper: false,
+        within: tol.map_or(true, |t| rounding <= t),
+        points_cheaper: verbatim.is_none(),
+        verbatim,
     };
+    let verbatim = |why: String| as_points(Some(why));
     if points.is_empty() {
         return verbatim("empty curve".into());
     }
-    let tol = opts.tolerance();
     let count = match tol {
         Some(t) if opts.storage == Storage::Compact => ElementCount::Tolerance(opts.fit_share * t),
         _ => opts.count,
@@ -156,17 +164,15 @@ pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome 
                 let decoded = PiecewiseHelix::from_params(&qc.dequantize());
                 if chain_within(&decoded, points, budget, opts.distance) {
                     let shape = Shape::Quantized(qc);
-                    if cheaper_as_points(points, &shape) {
-                        return CurveOutcome {
-                            shape: Shape::Points(points.to_vec()),
-                            frechet: 0.0,
-                            elements: 0,
-                            within: true,
-                            verbatim: None,
-                            points_cheaper: true,
-                        };
+                    if cheaper_as_points(points, &shape) && rounding <= budget {
+                        return as_points(None);
                     }
-                    let frechet = chain_frechet(&decoded, points, budget, opts.distance);
+                    // Both are upper bounds on the distance: the estimate
+                    // (1e-6 relative slack) and the budget the exact test
+                    // just proved; report the smaller, so that a curve
+                    // within the tolerance is never reported above it.
+                    let frechet =
+                        chain_frechet(&decoded, points, budget, opts.distance).min(budget);
                     return CurveOutcome {
                         // The test at `budget` (= the tolerance) passed.
                         within: true,
@@ -199,6 +205,14 @@ fn cheaper_as_points(points: &[DVec3], shape: &Shape) -> bool {
         .unwrap_or(usize::MAX)
     };
     size(Shape::Points(points.to_vec())) < size(shape.clone())
+}
+
+/// Largest distance between a point and its float32 rounding.
+fn f32_rounding(points: &[DVec3]) -> f64 {
+    points
+        .iter()
+        .map(|p| p.distance(p.as_vec3().as_dvec3()))
+        .fold(0.0, f64::max)
 }
 
 fn round_f32(c: &crate::helix::ChainParams) -> crate::helix::ChainParams {

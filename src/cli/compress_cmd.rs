@@ -11,11 +11,12 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::inspect_cmd::parse_format;
+use super::io_util::{check_losses, report_skipped, write_failed};
 use super::{CompressArgs, DistanceArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
 use crate::compress::{compress_curve, CompressOptions};
 use crate::io::container::{ContainerWriter, Header, SourceMeta, Storage, StoredCurve};
-use crate::io::{open_reader, Curve};
+use crate::io::{data_losses, open_reader_with, source_losses, BadCurves, Curve};
 
 /// Curves fitted per parallel batch (bounds memory; keeps order).
 const BATCH: usize = 4096;
@@ -43,6 +44,10 @@ pub struct CompressReport {
     pub verbatim: u64,
     /// Curves stored as their points because that is smaller.
     pub points_cheaper: u64,
+    /// Indices (in the input) of the curves `--skip-bad` left out.
+    pub skipped: Vec<u64>,
+    /// What the container does not hold (warned about on stderr).
+    pub dropped: Vec<String>,
     pub seconds: f64,
     pub curves_per_second: f64,
 }
@@ -89,8 +94,17 @@ pub fn run(args: &CompressArgs) -> Result<()> {
     };
     let from = args.from.as_deref().map(parse_format).transpose()?;
     let started = Instant::now();
-    let mut reader = open_reader(&args.input, from)?;
+    let bad = if args.care.skip_bad {
+        BadCurves::Skip
+    } else {
+        BadCurves::Fail
+    };
+    let mut reader = open_reader_with(&args.input, from, bad)?;
     let meta = reader.metadata().clone();
+    // The container keeps per-curve data, not per-point data.
+    let mut dropped = source_losses(&meta);
+    dropped.extend(data_losses(&meta, |_| false, true, "sfh"));
+    check_losses(&args.input, &args.output, &dropped, args.care.strict)?;
     let header = Header {
         storage,
         tolerance: args.tolerance,
@@ -103,12 +117,6 @@ pub fn run(args: &CompressArgs) -> Result<()> {
         dropped_point_data: meta.point_data_names.clone(),
         written_by: format!("strandfit {}", env!("CARGO_PKG_VERSION")),
     };
-    if !meta.point_data_names.is_empty() {
-        eprintln!(
-            "note: per-point data ({}) are not stored: the points are replaced by helices",
-            meta.point_data_names.join(", ")
-        );
-    }
     let mut writer = ContainerWriter::create(&args.output, header)?;
     let bar = match meta.count {
         Some(n) => ProgressBar::new(n),
@@ -126,6 +134,7 @@ pub fn run(args: &CompressArgs) -> Result<()> {
             Distance::Frechet => "frechet",
         },
         tolerance: args.tolerance,
+        dropped,
         ..Default::default()
     };
     let mut sum_distance = 0.0;
@@ -162,23 +171,29 @@ pub fn run(args: &CompressArgs) -> Result<()> {
             } else {
                 fitted += 1;
                 sum_distance += o.frechet;
-                report.max_distance = report.max_distance.max(o.frechet);
             }
+            // Verbatim points carry their float32 rounding (0 for float32
+            // sources): the maximum is over every curve.
+            report.max_distance = report.max_distance.max(o.frechet);
             if o.points_cheaper {
                 report.points_cheaper += 1;
             }
             if !o.within {
                 report.over_tolerance += 1;
             }
-            writer.write(&StoredCurve {
-                id: c.id.clone(),
-                source_points: c.points.len() as u64,
-                curve_data: c.curve_data.clone(),
-                shape: o.shape,
-            })?;
+            writer
+                .write(&StoredCurve {
+                    id: c.id.clone(),
+                    source_points: c.points.len() as u64,
+                    curve_data: c.curve_data.clone(),
+                    shape: o.shape,
+                })
+                .map_err(|e| write_failed(&args.input, index, reader.skipped(), e))?;
         }
         bar.inc(batch.len() as u64);
     }
+    report.skipped = reader.skipped().iter().map(|s| s.index).collect();
+    report_skipped(&args.input, reader.skipped());
     report.bytes_out = writer.finish()?;
     bar.finish_and_clear();
     report.bytes_in = std::fs::metadata(&args.input).map(|m| m.len()).unwrap_or(0);

@@ -5,9 +5,10 @@
 use anyhow::{bail, Result};
 
 use super::inspect_cmd::parse_format;
+use super::io_util::{check_losses, write_failed};
 use super::DecompressArgs;
 use crate::io::container::{ContainerReader, Shape};
-use crate::io::{create_writer, Curve};
+use crate::io::{create_writer, Curve, Format};
 
 pub fn run(args: &DecompressArgs) -> Result<()> {
     if let Some(s) = args.step {
@@ -21,17 +22,29 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
     let to = args.to.as_deref().map(parse_format).transpose()?;
     let reader = ContainerReader::open(&args.input)?;
     let meta = reader.header().source.to_metadata();
-    let mut writer = create_writer(&args.output, to, &meta)?;
+    let target = match to {
+        Some(f) => f,
+        None => Format::from_path(&args.output)?,
+    };
+    check_losses(
+        &args.input,
+        &args.output,
+        &target.losses(&meta),
+        args.strict,
+    )?;
+    let mut writer = create_writer(&args.output, Some(target), &meta)?;
     let mut n = 0u64;
     for c in reader {
         let c = c?;
         let points = shape_points(&c.shape, args.points, args.step, c.source_points);
-        writer.write_curve(&Curve {
-            id: c.id,
-            points,
-            point_data: Vec::new(),
-            curve_data: c.curve_data,
-        })?;
+        writer
+            .write_curve(&Curve {
+                id: c.id,
+                points,
+                point_data: Vec::new(),
+                curve_data: c.curve_data,
+            })
+            .map_err(|e| write_failed(&args.input, n, &[], e))?;
         n += 1;
     }
     writer.finish()?;

@@ -179,3 +179,101 @@ fn to_json<A: Serialize>(result: Result<A, String>, line_no: usize) -> String {
     };
     json.unwrap_or_else(|e| format!("{{\"error\":\"line {line_no}: cannot serialise: {e}\"}}"))
 }
+
+/// Report what a run drops (see `io::Format::losses`, `io::source_losses`)
+/// before anything is written: with `strict` an error, else one warning a
+/// line on stderr.
+pub fn check_losses(
+    input: &std::path::Path,
+    output: &std::path::Path,
+    losses: &[String],
+    strict: bool,
+) -> Result<()> {
+    if losses.is_empty() {
+        return Ok(());
+    }
+    if strict {
+        anyhow::bail!(
+            "{}: writing {} would drop {} (--strict)",
+            input.display(),
+            output.display(),
+            losses.join("; ")
+        );
+    }
+    for l in losses {
+        eprintln!(
+            "warning: {}: dropped {l}; --strict makes this an error",
+            input.display()
+        );
+    }
+    Ok(())
+}
+
+/// Report the curves `--skip-bad` left out: how many, and the first few
+/// with their reasons (all indices go to the JSON reports).
+pub fn report_skipped(input: &std::path::Path, skipped: &[crate::io::SkippedCurve]) {
+    if skipped.is_empty() {
+        return;
+    }
+    eprintln!(
+        "warning: {}: left out {} curve(s) with unusable points (--skip-bad):",
+        input.display(),
+        skipped.len()
+    );
+    for s in skipped.iter().take(10) {
+        eprintln!("  curve {}: {}", s.index, s.reason);
+    }
+    if skipped.len() > 10 {
+        eprintln!("  … and {} more", skipped.len() - 10);
+    }
+}
+
+/// Run `f` with the process's standard error (file descriptor 2) sent to
+/// /dev/null, for chatter from C libraries (the Vulkan loader) that Rust
+/// cannot catch; restored afterwards. Elsewhere than Unix, just `f()`.
+pub fn with_stderr_hidden<T>(f: impl FnOnce() -> T) -> T {
+    #[cfg(unix)]
+    {
+        // SAFETY: plain descriptor calls on fd 2 and on descriptors this
+        // function opens and closes itself; on any failure nothing is
+        // redirected and `f` runs as it is.
+        unsafe {
+            let saved = libc::dup(2);
+            let null = libc::open(c"/dev/null".as_ptr(), libc::O_WRONLY);
+            if saved >= 0 && null >= 0 && libc::dup2(null, 2) >= 0 {
+                libc::close(null);
+                let out = f();
+                libc::dup2(saved, 2);
+                libc::close(saved);
+                return out;
+            }
+            if null >= 0 {
+                libc::close(null);
+            }
+            if saved >= 0 {
+                libc::close(saved);
+            }
+        }
+    }
+    f()
+}
+
+/// A curve of `input` that the output's writer refused: named by its index
+/// in the input (the `kept`-th curve read, counting past the curves
+/// `--skip-bad` left out), since the input is what a user can go and fix.
+pub fn write_failed(
+    input: &std::path::Path,
+    kept: u64,
+    skipped: &[crate::io::SkippedCurve],
+    e: crate::io::IoError,
+) -> anyhow::Error {
+    let mut index = kept;
+    for s in skipped {
+        if s.index <= index {
+            index += 1;
+        } else {
+            break;
+        }
+    }
+    anyhow::anyhow!("{}, curve {index}: cannot be written: {e}", input.display())
+}

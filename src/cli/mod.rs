@@ -46,6 +46,10 @@ pub struct Cli {
     /// GPU kernel precision (auto: f64 where the adapter has SHADER_F64).
     #[arg(long, global = true, value_enum, default_value_t = PrecisionArg::Auto)]
     pub precision: PrecisionArg,
+    /// Also show what the GPU driver stack prints while the backend is
+    /// chosen (Vulkan loader and driver messages; hidden otherwise).
+    #[arg(long, short = 'v', global = true)]
+    pub verbose: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
@@ -75,7 +79,17 @@ impl Cli {
             PrecisionArg::F32 => PrecisionChoice::F32,
             PrecisionArg::F64 => PrecisionChoice::F64,
         };
-        Ok(Backend::open(choice, precision)?)
+        // Vulkan loaders and drivers write to the process's stderr while
+        // adapters are enumerated (lavapipe: XDG_RUNTIME_DIR complaints),
+        // even when the run then uses the CPU: hidden unless --verbose.
+        let opened = if self.verbose {
+            Backend::open_explained(choice, precision)
+        } else {
+            io_util::with_stderr_hidden(|| Backend::open_explained(choice, precision))
+        };
+        let (backend, why) = opened?;
+        eprintln!("strandfit: {why}");
+        Ok(backend)
     }
 }
 
@@ -274,6 +288,23 @@ pub struct CompressArgs {
     /// Print a machine-readable report (ratio, distances, curves/s) on stdout.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub care: CareArgs,
+}
+
+/// What to do with bad curves and with data the output cannot hold.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct CareArgs {
+    /// Leave out curves holding a point that is not finite or beyond the
+    /// float32 range, and report their indices (default: such a curve is an
+    /// error naming the file, the curve and the point).
+    #[arg(long)]
+    pub skip_bad: bool,
+    /// Treat data that would be dropped (per-point or per-curve values the
+    /// output cannot hold, source content the reader does not carry) as an
+    /// error instead of a warning.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 #[derive(clap::Args, Debug)]
@@ -292,6 +323,10 @@ pub struct DecompressArgs {
     /// Output format (default: from the extension).
     #[arg(long)]
     pub to: Option<String>,
+    /// Treat per-curve data the output format cannot hold as an error
+    /// instead of a warning.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
@@ -409,6 +444,8 @@ pub struct ConvertArgs {
     /// Output format (default: from the extension).
     #[arg(long)]
     pub to: Option<String>,
+    #[command(flatten)]
+    pub care: CareArgs,
 }
 
 #[derive(clap::Args, Debug)]
@@ -428,6 +465,33 @@ pub struct BenchArgs {
 }
 
 /// Run the command line; returns the process exit code.
+/// A process ended by a signal runs no destructors, so the temporaries of
+/// unfinished outputs (`.strandfit-*.tmp` next to each output) are deleted
+/// here before it exits with the shell's 128 + signal code; a panic deletes
+/// them too (unwinding would, but a panic in a thread may not reach it).
+fn clean_up_on_signals_and_panics() {
+    #[cfg(unix)]
+    {
+        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+        match signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) {
+            Ok(mut signals) => {
+                std::thread::spawn(move || {
+                    if let Some(sig) = signals.forever().next() {
+                        crate::io::remove_unfinished_outputs();
+                        std::process::exit(128 + sig);
+                    }
+                });
+            }
+            Err(e) => eprintln!("warning: cannot handle signals ({e}): an interrupted run may leave .strandfit-*.tmp files"),
+        }
+    }
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        crate::io::remove_unfinished_outputs();
+        default_hook(info);
+    }));
+}
+
 pub fn main() -> ExitCode {
     // Rust ignores SIGPIPE, so writing to a closed pipe (`| head`) is an
     // error that println! turns into a panic. Restore the Unix default: the
@@ -438,6 +502,7 @@ pub fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    clean_up_on_signals_and_panics();
     let cli = Cli::parse();
     if let Some(n) = cli.threads {
         if let Err(e) = rayon::ThreadPoolBuilder::new()

@@ -644,7 +644,29 @@ impl ContainerWriter {
                 self.header.source.curve_data_names.len()
             )));
         }
-        encode(&mut self.raw, c, self.header.storage).map_err(err)?;
+        // Never write what cannot be read: the record is decoded back from
+        // the bytes just encoded, and on failure taken out again.
+        let before: [usize; STREAMS] = std::array::from_fn(|k| self.raw[k].len());
+        let checked = encode(&mut self.raw, c, self.header.storage).and_then(|()| {
+            let raw = &self.raw;
+            let mut cs: [Cursor; STREAMS] = std::array::from_fn(|k| Cursor {
+                b: &raw[k],
+                pos: before[k],
+            });
+            let n_cd = self.header.source.curve_data_names.len();
+            decode(&mut cs, self.header.storage, n_cd)
+                .map_err(|e| format!("the record would not read back ({e})"))?;
+            if (0..STREAMS).any(|k| cs[k].pos != raw[k].len()) {
+                return Err("the record would not read back (bytes left over)".into());
+            }
+            Ok(())
+        });
+        if let Err(e) = checked {
+            for (st, &n) in self.raw.iter_mut().zip(&before) {
+                st.truncate(n);
+            }
+            return Err(err(e));
+        }
         self.curves += 1;
         self.in_block += 1;
         let size: usize = self.raw.iter().map(Vec::len).sum();

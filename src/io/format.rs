@@ -99,6 +99,88 @@ impl Format {
     }
 }
 
+impl Format {
+    /// Does a writer of this format keep per-point values named `name`?
+    pub fn keeps_point_data(self, name: &str) -> bool {
+        match self {
+            Format::Tck => false,
+            Format::Trk | Format::Trx | Format::Vtk | Format::Json | Format::Csv => true,
+            // The format's own arrays only (colour needs all three channels,
+            // see `hair`).
+            Format::Hair => matches!(
+                name,
+                "thickness" | "transparency" | "color_r" | "color_g" | "color_b"
+            ),
+        }
+    }
+
+    /// Does a writer of this format keep per-curve values?
+    pub fn keeps_curve_data(self) -> bool {
+        matches!(self, Format::Trk | Format::Trx | Format::Vtk | Format::Json)
+    }
+
+    /// What of `meta`'s per-point and per-curve data a writer of this
+    /// format drops, one line each (empty when it keeps everything).
+    pub fn losses(self, meta: &Metadata) -> Vec<String> {
+        data_losses(
+            meta,
+            |n| self.keeps_point_data(n),
+            self.keeps_curve_data(),
+            self.extension(),
+        )
+    }
+}
+
+/// What of `meta`'s data a destination drops that keeps per-point values
+/// for which `keeps_point` holds, and per-curve values if `keeps_curve`.
+pub fn data_losses(
+    meta: &Metadata,
+    keeps_point: impl Fn(&str) -> bool,
+    keeps_curve: bool,
+    destination: &str,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    let point: Vec<&str> = meta
+        .point_data_names
+        .iter()
+        .map(String::as_str)
+        .filter(|n| !keeps_point(n))
+        .collect();
+    if !point.is_empty() {
+        out.push(format!(
+            "per-point data {} (a {destination} file has no place for them)",
+            quoted(&point)
+        ));
+    }
+    if !keeps_curve && !meta.curve_data_names.is_empty() {
+        let names: Vec<&str> = meta.curve_data_names.iter().map(String::as_str).collect();
+        out.push(format!(
+            "per-curve data {} (a {destination} file has no place for them)",
+            quoted(&names)
+        ));
+    }
+    out
+}
+
+/// What the reader of `meta`'s source saw but does not carry (TRX groups
+/// and data per group, VTK colour scalars and lookup tables, …), one line
+/// each.
+pub fn source_losses(meta: &Metadata) -> Vec<String> {
+    meta.extra
+        .iter()
+        .filter(|(k, _)| k.ends_with(".dropped"))
+        .map(|(_, v)| format!("{v} (found in the {} source, not read)", meta.format))
+        .collect()
+}
+
+fn quoted(names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|n| format!("`{n}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 impl std::fmt::Display for Format {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.extension())

@@ -38,8 +38,8 @@ use std::path::{Path, PathBuf};
 
 use glam::{DMat4, DVec3};
 
-pub use atomic::AtomicFile;
-pub use format::Format;
+pub use atomic::{remove_unfinished_outputs, AtomicFile};
+pub use format::{data_losses, source_losses, Format};
 
 /// One curve as read from a file: points in world space, plus the per-point
 /// and per-curve values the file carried (carried through to writers of the
@@ -133,8 +133,10 @@ pub struct IoError {
     /// Where in the file: "byte 1234", "line 17", "header field `count`".
     pub at: Option<String>,
     pub reason: String,
-    #[source]
-    pub source: Option<std::io::Error>,
+    /// The operating-system error, when there is one. Its text is already
+    /// in `reason`, so it is not the `Error::source` (an error chain would
+    /// print it twice).
+    pub os_error: Option<std::io::Error>,
 }
 
 impl IoError {
@@ -145,7 +147,7 @@ impl IoError {
             curve: None,
             at: None,
             reason: reason.into(),
-            source: None,
+            os_error: None,
         }
     }
 
@@ -153,7 +155,7 @@ impl IoError {
     pub fn os(path: &Path, what: &str, e: std::io::Error) -> Self {
         IoError {
             reason: format!("{what}: {e}"),
-            source: Some(e),
+            os_error: Some(e),
             ..IoError::new(path, "")
         }
     }
@@ -175,6 +177,125 @@ impl IoError {
 /// order. After the first `Err` the iterator ends (returns `None`).
 pub trait CurveReader: Iterator<Item = Result<Curve, IoError>> {
     fn metadata(&self) -> &Metadata;
+    /// Curves left out so far under [`BadCurves::Skip`], in file order
+    /// (none for a reader that skips nothing).
+    fn skipped(&self) -> &[SkippedCurve] {
+        &[]
+    }
+}
+
+/// The largest coordinate magnitude a point may have: `f32`'s largest
+/// finite value. Several formats and the `.sfh` container store `f32`, so a
+/// point beyond it could be read but never written back; it is refused at
+/// reading, where the file and curve can still be named.
+pub const MAX_COORDINATE: f64 = f32::MAX as f64;
+
+/// Why a point cannot be used (a non-finite coordinate, or one beyond
+/// [`MAX_COORDINATE`]), or `None` when it can.
+pub fn point_problem(p: DVec3) -> Option<String> {
+    let a = p.to_array();
+    if let Some(k) = a.iter().position(|x| !x.is_finite()) {
+        return Some(format!(
+            "coordinate {} is {} ({}, {}, {})",
+            ["x", "y", "z"][k],
+            a[k],
+            a[0],
+            a[1],
+            a[2]
+        ));
+    }
+    if let Some(k) = a.iter().position(|x| x.abs() > MAX_COORDINATE) {
+        return Some(format!(
+            "coordinate {} = {:e} is beyond the float32 range (|x| ≤ {:e}) that the \
+             output formats store",
+            ["x", "y", "z"][k],
+            a[k],
+            MAX_COORDINATE
+        ));
+    }
+    None
+}
+
+/// Why `points` cannot be used, naming the first bad point, or `None`.
+pub fn curve_problem(points: &[DVec3]) -> Option<String> {
+    points
+        .iter()
+        .enumerate()
+        .find_map(|(k, &p)| point_problem(p).map(|why| format!("point {k}: {why}")))
+}
+
+/// What a reader does with a curve holding a point that cannot be used
+/// (see [`point_problem`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BadCurves {
+    /// Stop with an error naming the file, the curve and the point.
+    #[default]
+    Fail,
+    /// Leave the curve out and go on; [`CurveReader::skipped`] lists it.
+    Skip,
+}
+
+/// A curve left out under [`BadCurves::Skip`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SkippedCurve {
+    /// 0-based index of the curve in the file.
+    pub index: u64,
+    /// Why, naming the point.
+    pub reason: String,
+}
+
+/// Every reader [`open_reader`] returns goes through this check, so that
+/// no reader hands on a point that a writer could not store: one place
+/// decides what a usable point is, whatever the format.
+struct Checked {
+    inner: Box<dyn CurveReader>,
+    path: PathBuf,
+    policy: BadCurves,
+    /// Index of the next curve the inner reader gives.
+    index: u64,
+    skipped: Vec<SkippedCurve>,
+    done: bool,
+}
+
+impl Iterator for Checked {
+    type Item = Result<Curve, IoError>;
+    fn next(&mut self) -> Option<Self::Item> {
+        while !self.done {
+            let item = match self.inner.next() {
+                None => {
+                    self.done = true;
+                    return None;
+                }
+                Some(Err(e)) => {
+                    self.done = true;
+                    return Some(Err(e));
+                }
+                Some(Ok(c)) => c,
+            };
+            let index = self.index;
+            self.index += 1;
+            match curve_problem(&item.points) {
+                None => return Some(Ok(item)),
+                Some(reason) => match self.policy {
+                    BadCurves::Skip => self.skipped.push(SkippedCurve { index, reason }),
+                    BadCurves::Fail => {
+                        self.done = true;
+                        return Some(Err(IoError::new(&self.path, reason).curve(index)));
+                    }
+                },
+            }
+        }
+        None
+    }
+}
+
+impl CurveReader for Checked {
+    fn metadata(&self) -> &Metadata {
+        self.inner.metadata()
+    }
+    fn skipped(&self) -> &[SkippedCurve] {
+        &self.skipped
+    }
 }
 
 /// A streaming writer. Curves are written in order; [`finish`](Self::finish)
@@ -205,13 +326,31 @@ pub(crate) fn fuse<T>(
 }
 
 /// Open `path` for reading as `format` (or by its extension, see
-/// [`Format::from_path`]).
+/// [`Format::from_path`]). A curve with a point that cannot be used (see
+/// [`point_problem`]) is an error naming the file, the curve and the point.
 pub fn open_reader(path: &Path, format: Option<Format>) -> Result<Box<dyn CurveReader>, IoError> {
+    open_reader_with(path, format, BadCurves::Fail)
+}
+
+/// [`open_reader`], with a choice of what to do with curves holding
+/// unusable points.
+pub fn open_reader_with(
+    path: &Path,
+    format: Option<Format>,
+    bad: BadCurves,
+) -> Result<Box<dyn CurveReader>, IoError> {
     let format = match format {
         Some(f) => f,
         None => Format::from_path(path)?,
     };
-    format.open_reader(path)
+    Ok(Box::new(Checked {
+        inner: format.open_reader(path)?,
+        path: path.to_path_buf(),
+        policy: bad,
+        index: 0,
+        skipped: Vec::new(),
+        done: false,
+    }))
 }
 
 /// Create a writer for `path` as `format` (or by its extension). `meta`

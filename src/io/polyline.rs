@@ -18,7 +18,9 @@
 //! CSV, streamed: a header `curve,x,y,z[,name…]` (extra columns are per-point
 //! values), then one row per point; consecutive rows with the same `curve`
 //! value form one curve. The header is required (a file without one is not
-//! guessed at), so that a column shift cannot go unnoticed.
+//! guessed at), so that a column shift cannot go unnoticed. A curve with no
+//! points is one row with its id and every other field empty (`c7,,,`), so
+//! that it survives a round trip instead of vanishing.
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -29,6 +31,9 @@ use serde::Deserialize;
 
 use super::bytes::ByteSource;
 use super::{AtomicFile, Curve, CurveReader, CurveWriter, Format, IoError, Metadata};
+
+/// A CSV row's point and per-point values.
+type Row = (DVec3, Vec<f32>);
 
 /// Longest CSV line accepted (a guard against binary input).
 const CSV_MAX_LINE: usize = 1 << 16;
@@ -45,10 +50,11 @@ struct JsonCurve {
     #[serde(default)]
     id: Option<serde_json::Value>,
     points: Vec<[f64; 3]>,
+    /// `null` is a NaN value (what the writer writes for one).
     #[serde(default)]
-    point_data: BTreeMap<String, Vec<f64>>,
+    point_data: BTreeMap<String, Vec<Option<f64>>>,
     #[serde(default)]
-    curve_data: BTreeMap<String, f64>,
+    curve_data: BTreeMap<String, Option<f64>>,
 }
 
 /// Open a JSON polyline file (read whole; see the module docs).
@@ -96,19 +102,28 @@ pub fn open_json(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
             }
         }
         for k in 0..n {
-            point_data.extend(c.point_data.values().map(|v| v[k] as f32));
+            point_data.extend(
+                c.point_data
+                    .values()
+                    .map(|v| v[k].map_or(f32::NAN, |x| x as f32)),
+            );
         }
         let id = c.id.map(|v| match v {
             serde_json::Value::String(s) => s,
             other => other.to_string(),
         });
+        // JSON has no NaN or Inf literal and serde refuses numbers beyond
+        // f64; the range check is `io::open_reader`'s.
         let points: Vec<DVec3> = c.points.iter().map(|p| DVec3::from_array(*p)).collect();
-        check_finite(&points).map_err(|k| err(format!("point {k} is not finite")))?;
         curves.push(Curve {
             id,
             points,
             point_data,
-            curve_data: c.curve_data.values().map(|&v| v as f32).collect(),
+            curve_data: c
+                .curve_data
+                .values()
+                .map(|v| v.map_or(f32::NAN, |x| x as f32))
+                .collect(),
         });
     }
     Ok(Box::new(VecReader {
@@ -181,6 +196,16 @@ impl CurveWriter for JsonWriter {
         let i = self.written;
         let err = |r: String| IoError::new(self.out.target(), r).curve(i);
         check_finite(&c.points).map_err(|k| err(format!("point {k} is not finite")))?;
+        // NaN data are written as `null` and read back as NaN; JSON has no
+        // way to write an infinity.
+        if let Some(v) = c
+            .point_data
+            .iter()
+            .chain(&c.curve_data)
+            .find(|v| v.is_infinite())
+        {
+            return Err(err(format!("a data value is {v}, which JSON cannot hold")));
+        }
         let np = self.meta.point_data_names.len();
         if c.point_data.len() != c.points.len() * np
             || c.curve_data.len() != self.meta.curve_data_names.len()
@@ -259,7 +284,7 @@ struct CsvReader {
     line_no: u64,
     /// The first row of the next curve, already read (and its line).
     #[allow(clippy::type_complexity)]
-    pending: Option<(String, Result<(DVec3, Vec<f32>), String>)>,
+    pending: Option<(String, Result<Option<Row>, String>)>,
     /// Curve ids seen, to catch a curve split over non-consecutive rows.
     seen: std::collections::HashSet<String>,
     index: u64,
@@ -305,7 +330,7 @@ impl CsvReader {
     /// The next non-blank row: its curve id and the parsed values, or the
     /// reason it does not parse (the caller knows which curve it is in).
     #[allow(clippy::type_complexity)]
-    fn row(&mut self) -> Result<Option<(String, Result<(DVec3, Vec<f32>), String>)>, IoError> {
+    fn row(&mut self) -> Result<Option<(String, Result<Option<Row>, String>)>, IoError> {
         loop {
             let Some(line) = self
                 .src
@@ -323,7 +348,8 @@ impl CsvReader {
         }
     }
 
-    fn parse(&self, fields: &[&str]) -> Result<(DVec3, Vec<f32>), String> {
+    /// A point and its values, or `None` for the row of an empty curve.
+    fn parse(&self, fields: &[&str]) -> Result<Option<Row>, String> {
         let want = 4 + self.meta.point_data_names.len();
         if fields.len() != want {
             return Err(format!(
@@ -331,14 +357,16 @@ impl CsvReader {
                 fields.len()
             ));
         }
+        if fields[1..].iter().all(|f| f.is_empty()) {
+            return Ok(None);
+        }
         let mut xyz = [0.0; 3];
         for (k, f) in fields[1..4].iter().enumerate() {
+            // `nan`, `inf` and 1e999 parse; `io::open_reader` refuses (or
+            // skips) the curve, naming the point.
             xyz[k] = f
                 .parse::<f64>()
                 .map_err(|_| format!("`{f}` is not a number"))?;
-            if !xyz[k].is_finite() {
-                return Err(format!("coordinate `{f}` is not finite"));
-            }
         }
         let data = fields[4..]
             .iter()
@@ -347,7 +375,7 @@ impl CsvReader {
                     .map_err(|_| format!("`{f}` is not a number"))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok((DVec3::from_array(xyz), data))
+        Ok(Some((DVec3::from_array(xyz), data)))
     }
 
     fn next_curve(&mut self) -> Result<Option<Curve>, IoError> {
@@ -359,22 +387,34 @@ impl CsvReader {
                 "curve `{id}` continues here after other curves' rows; rows of a curve must be consecutive"
             )));
         }
-        let (p, d) = first.map_err(|r| self.err(r))?;
+        let first = first.map_err(|r| self.err(r))?;
+        let empty = first.is_none();
         let mut curve = Curve {
             id: Some(id.clone()),
-            points: vec![p],
-            point_data: d,
-            curve_data: Vec::new(),
+            ..Default::default()
         };
+        if let Some((p, d)) = first {
+            curve.points.push(p);
+            curve.point_data = d;
+        }
         while let Some((next_id, row)) = self.row()? {
             if next_id != id {
                 // The next curve's first row: its errors are that curve's.
                 self.pending = Some((next_id, row));
                 break;
             }
-            let (p, d) = row.map_err(|r| self.err(r))?;
-            curve.points.push(p);
-            curve.point_data.extend(d);
+            match row.map_err(|r| self.err(r))? {
+                Some((p, d)) if !empty => {
+                    curve.points.push(p);
+                    curve.point_data.extend(d);
+                }
+                _ => {
+                    return Err(self.err(format!(
+                        "curve `{id}` has both an empty row (no point) and other rows; \
+                         an empty curve is one row with every field but the id empty"
+                    )))
+                }
+            }
         }
         Ok(Some(curve))
     }
@@ -450,11 +490,22 @@ impl CurveWriter for CsvWriter {
             None => i.to_string(),
         };
         let mut s = String::with_capacity(48 * c.points.len());
+        if c.points.is_empty() {
+            // The empty-curve row (see the module docs).
+            s.push_str(&id);
+            s.push_str(&",".repeat(3 + self.np));
+            s.push('\n');
+        }
         for (k, p) in c.points.iter().enumerate() {
             s.push_str(&format!("{id},{},{},{}", num(p.x), num(p.y), num(p.z)));
             for v in &c.point_data[k * self.np..(k + 1) * self.np] {
                 s.push(',');
-                s.push_str(&num(*v as f64));
+                // NaN and ±Inf as `NaN`/`inf`/`-inf`, which read back.
+                if v.is_finite() {
+                    s.push_str(&num(*v as f64));
+                } else {
+                    s.push_str(&v.to_string());
+                }
             }
             s.push('\n');
         }
@@ -489,7 +540,7 @@ mod tests {
         (meta, vec![c("a", 3, 1.5), c("b,", 0, 1.0), c("c", 1, -2.0)])
     }
 
-    fn roundtrip(format: Format, mut cs: Vec<Curve>, meta: &Metadata) {
+    fn roundtrip(format: Format, cs: Vec<Curve>, meta: &Metadata) {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join(format!("x.{format}"));
         let mut w = format.create_writer(&path, meta).unwrap();
@@ -499,10 +550,7 @@ mod tests {
         w.finish().unwrap();
         let (m2, back) = super::super::read_all(&path, None).unwrap();
         assert_eq!(m2.point_data_names, meta.point_data_names);
-        if format == Format::Csv {
-            // CSV cannot hold a curve without points.
-            cs.retain(|c| !c.points.is_empty());
-        }
+        // Empty curves too (CSV: the `id,,,` row).
         assert_eq!(back, cs, "{format} round trip");
     }
 
@@ -517,6 +565,50 @@ mod tests {
         let (meta, mut cs) = curves();
         cs[1].id = Some("b".into()); // a comma cannot be a CSV field
         roundtrip(Format::Csv, cs, &meta);
+    }
+
+    #[test]
+    fn nan_data_values_read_back_and_infinities_are_refused() {
+        for format in [Format::Json, Format::Csv] {
+            let (mut meta, mut cs) = curves();
+            cs[1].id = Some("b".into());
+            cs[0].point_data[3] = f32::NAN;
+            if format == Format::Json {
+                meta.curve_data_names = vec!["w".into()];
+                for (k, c) in cs.iter_mut().enumerate() {
+                    c.curve_data = vec![if k == 2 { f32::NAN } else { k as f32 }];
+                }
+            }
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join(format!("x.{format}"));
+            let mut w = format.create_writer(&path, &meta).unwrap();
+            for c in &cs {
+                w.write_curve(c).unwrap();
+            }
+            w.finish().unwrap();
+            let (_, back) = super::super::read_all(&path, None).unwrap();
+            let bits = |cs: &[Curve]| -> Vec<Vec<u32>> {
+                cs.iter()
+                    .map(|c| {
+                        c.point_data
+                            .iter()
+                            .chain(&c.curve_data)
+                            .map(|v| v.to_bits())
+                            .collect()
+                    })
+                    .collect()
+            };
+            assert_eq!(bits(&back), bits(&cs), "{format}");
+        }
+        // JSON cannot write an infinity: an error, not a file that fails
+        // to read back.
+        let (meta, mut cs) = curves();
+        cs[0].point_data[0] = f32::INFINITY;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("x.json");
+        let mut w = create_json(&path, &meta).unwrap();
+        let e = w.write_curve(&cs[0]).unwrap_err().to_string();
+        assert!(e.contains("curve 0") && e.contains("inf"), "{e}");
     }
 
     #[test]
@@ -581,7 +673,16 @@ mod tests {
         let e = read_err("a.csv", "curve,x,y,z\na,1,2,3\na,1,2\n");
         assert!(e.contains("line 3") && e.contains("3 fields"), "{e}");
         let e = read_err("a.csv", "curve,x,y,z\na,1,2,3\nb,1,2,3\nc,1,2,nan\n");
-        assert!(e.contains("curve 2") && e.contains("not finite"), "{e}");
+        assert!(e.contains("curve 2: point 0: coordinate z is NaN"), "{e}");
+        let e = read_err("a.csv", "curve,x,y,z\na,1,2,3\nb,1,2,3\nb,1,1e300,3\n");
+        assert!(
+            e.contains("curve 1: point 1: coordinate y = 1e300 is beyond the float32 range"),
+            "{e}"
+        );
+        let e = read_err("a.json", "{\"curves\":[{\"points\":[[0,0,0],[4e38,0,0]]}]}");
+        assert!(e.contains("curve 0: point 1: coordinate x = 4e38"), "{e}");
+        let e = read_err("a.csv", "curve,x,y,z\na,,,\na,1,2,3\n");
+        assert!(e.contains("both an empty row"), "{e}");
         let e = read_err("a.csv", "curve,x,y,z\na,1,2,3\nb,1,2,3\na,1,2,4\n");
         assert!(e.contains("consecutive") && e.contains("line 4"), "{e}");
         let e = read_err("a.csv", "");

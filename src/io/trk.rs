@@ -684,27 +684,20 @@ impl TrkReader {
         let mut left = n;
         while left > 0 {
             let k = left.min(per_chunk) as usize;
-            let chunk_at = self.src.pos();
             self.buf.resize(k * stride, 0);
             self.src
                 .read_exact(&mut self.buf, "points")
                 .map_err(|err| err.curve(i))?;
             points.reserve(k);
             point_data.reserve(k * self.n_scalars);
-            for (q, rec) in self.buf.chunks_exact(stride).enumerate() {
+            for rec in self.buf.chunks_exact(stride) {
                 let v = DVec3::new(
                     f64::from(get_f32(rec, 0, e)),
                     f64::from(get_f32(rec, 4, e)),
                     f64::from(get_f32(rec, 8, e)),
                 );
-                if !v.is_finite() {
-                    return Err(IoError::new(
-                        &self.path(),
-                        format!("point {} has a non-finite coordinate ({v})", points.len()),
-                    )
-                    .curve(i)
-                    .at(format!("byte {}", chunk_at + (q * stride) as u64)));
-                }
+                // Non-finite points are refused (or skipped) by the one
+                // check every reader goes through (`io::open_reader`).
                 points.push(self.voxmm_to_ras.transform_point3(v));
                 point_data.extend((0..self.n_scalars).map(|s| get_f32(rec, 12 + 4 * s, e)));
             }
