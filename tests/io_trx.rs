@@ -112,15 +112,19 @@ fn complex_fixture_carries_per_vertex_and_per_streamline_data() {
                 "mean_colors_1",
                 "mean_colors_2",
                 "mean_curvature",
-                "mean_torsion"
+                "mean_torsion",
+                "group:odd"
             ]
         );
+        // The group `odd` (streamlines 0 and 2, as trx-python wrote it) as
+        // a membership column; its data per group carried verbatim.
+        let odd: Vec<f32> = curves.iter().map(|c| c.curve_data[5]).collect();
+        assert_eq!(odd, [1.0, 0.0, 1.0]);
+        assert!(meta.extra("trx.entry.dpg/odd/weight.float32").is_some());
+        assert_eq!(meta.extra("trx.dropped"), None);
         assert_eq!(meta.extra("trx.dpv.colors"), Some("3.uint8"));
         assert_eq!(meta.extra("trx.dpv.fa"), Some("float16"));
         assert_eq!(meta.extra("trx.dps.mean_curvature"), Some("float64"));
-        let dropped = meta.extra("trx.dropped").unwrap();
-        assert!(dropped.contains("groups/odd.uint32"), "{dropped}");
-        assert!(dropped.contains("dpg/odd/weight.float32"), "{dropped}");
         // The .trk's values: colors [1,0,0 | 0,1,0 0,1,0 | 0,0,1 ×5], fa 0.2…0.8.
         let tc = &curves;
         let fa: Vec<f32> = tc
@@ -139,6 +143,9 @@ fn complex_fixture_carries_per_vertex_and_per_streamline_data() {
             io::read_all(&data("fibres/nibabel_fixtures/complex.trk"), None).unwrap();
         // The .trk reader names components `x[0]`, TRX (like VTK) `x_0`.
         for (j, n) in meta.curve_data_names.iter().enumerate() {
+            if n.starts_with("group:") {
+                continue; // no .trk counterpart
+            }
             let k = tmeta
                 .curve_data_names
                 .iter()

@@ -31,8 +31,18 @@
 //! - [`Metadata::extra`] records the dtypes so that TRX → TRX writes the
 //!   same ones: `trx.positions_dtype`, `trx.offsets_dtype`, and
 //!   `trx.dpv.NAME` / `trx.dps.NAME` = the entry's suffix (`3.uint8`,
-//!   `float16`). `groups/` and `dpg/` (and any entry outside the layout) are
-//!   not read: `trx.dropped` lists them.
+//!   `float16`).
+//! - **Groups** (`groups/NAME.DTYPE`, lists of streamline indices) become
+//!   per-curve values `group:NAME`, 1 for a member and 0 otherwise, after
+//!   the dps values; the writer turns such columns back into
+//!   `groups/NAME.uint32` entries, so TRX → TRX keeps them, and formats
+//!   with per-curve values (`.trk` properties, VTK cell data, JSON, the
+//!   container) carry the membership. Each group's membership is held as a
+//!   bit set (`NB_STREAMLINES / 8` bytes).
+//! - **Data per group** (`dpg/GROUP/NAME.DTYPE`, a few values each) are
+//!   kept verbatim, hex-encoded in `extra` under `trx.entry.dpg/…` (at most
+//!   1 MiB an entry), and written back by the writer. Any other entry
+//!   outside the layout is not read: `trx.dropped` lists it.
 //!
 //! The writer spools positions, lengths and data to unnamed temporary files
 //! (counts are known only at the end) and assembles a **stored**
@@ -56,6 +66,10 @@ use super::{AtomicFile, Curve, CurveReader, CurveWriter, IoError, Metadata};
 
 /// Largest `header.json` accepted.
 const MAX_HEADER: u64 = 1 << 20;
+/// Largest `dpg/` entry carried verbatim in [`Metadata::extra`].
+const MAX_DPG_ENTRY: u64 = 1 << 20;
+/// Prefix of the per-curve values that stand for a TRX group.
+pub const GROUP_PREFIX: &str = "group:";
 /// Deflate expands at most ~1032:1; an entry claiming more is corrupt.
 const MAX_DEFLATE_RATIO: u64 = 1040;
 
@@ -587,6 +601,8 @@ struct TrxReader {
     positions: Option<ArrayStream>,
     dpv: Vec<ArrayStream>,
     dps: Vec<ArrayStream>,
+    /// Membership of each group, a bit per streamline.
+    groups: Vec<Vec<u64>>,
     index: u64,
     done: bool,
 }
@@ -689,6 +705,7 @@ impl TrxReader {
         let mut offsets = None;
         let mut dpv = Vec::new();
         let mut dps = Vec::new();
+        let mut groups = Vec::new();
         let mut dropped = Vec::new();
         let mut entries: Vec<&Entry> = src.entries.iter().collect();
         entries.sort_by(|a, b| a.name.cmp(&b.name));
@@ -705,6 +722,16 @@ impl TrxReader {
                 "" if file.starts_with("offsets.") => 'o',
                 "dpv" => 'v',
                 "dps" => 's',
+                "groups" => 'g',
+                d if d.starts_with("dpg/") && e.size <= MAX_DPG_ENTRY => {
+                    let mut bytes = vec![0u8; e.size as usize];
+                    src.stream(e)?
+                        .read_exact(&mut bytes)
+                        .map_err(|m| err(m).at(format!("entry `{}`", e.name)))?;
+                    let hex: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
+                    meta.extra.push((format!("trx.entry.{}", e.name), hex));
+                    continue;
+                }
                 _ => {
                     dropped.push(e.name.clone());
                     continue;
@@ -724,6 +751,7 @@ impl TrxReader {
                     }
                 }
                 'v' => dpv.push((e, an)),
+                'g' => groups.push((e, an)),
                 _ => dps.push((e, an)),
             }
         }
@@ -844,6 +872,11 @@ impl TrxReader {
             "dps",
             &mut cnames,
         )?;
+        let mut members = Vec::with_capacity(groups.len());
+        for (e, an) in groups {
+            members.push(read_group(&src, e, &an, nb_streamlines)?);
+            cnames.push(format!("{GROUP_PREFIX}{}", an.base));
+        }
         meta.point_data_names = pnames;
         meta.curve_data_names = cnames;
         if !dropped.is_empty() {
@@ -856,6 +889,7 @@ impl TrxReader {
             positions,
             dpv,
             dps,
+            groups: members,
             index: 0,
             done: false,
         })
@@ -899,9 +933,58 @@ impl TrxReader {
             s.rows(1, &mut |x| curve.curve_data.push(x as f32))
                 .map_err(err)?;
         }
+        for g in &self.groups {
+            let member = g[i / 64] >> (i % 64) & 1 == 1;
+            curve.curve_data.push(if member { 1.0 } else { 0.0 });
+        }
         self.index += 1;
         Ok(Some(curve))
     }
+}
+
+/// A group's members (`groups/NAME.DTYPE`: streamline indices, one integer
+/// each) as a bit set over the streamlines.
+fn read_group(
+    src: &Source,
+    e: &Entry,
+    an: &ArrayName,
+    nb_streamlines: u64,
+) -> Result<Vec<u64>, IoError> {
+    let bad = |why: String| IoError::new(&src.path, why).at(format!("entry `{}`", e.name));
+    if an.ncomp != 1 || an.dtype.is_float() {
+        return Err(bad(
+            "a group must be one integer (a streamline index) a member".into(),
+        ));
+    }
+    let w = an.dtype.size() as u64;
+    if e.size % w != 0 || e.size / w > nb_streamlines {
+        return Err(bad(format!(
+            "{} bytes are not whole {} indices, or list more members than the {nb_streamlines} streamlines",
+            e.size,
+            an.dtype.name()
+        )));
+    }
+    let mut bits = vec![0u64; (nb_streamlines as usize).div_ceil(64)];
+    let mut r = src.stream(e)?;
+    let mut buf = vec![0u8; 8192 * w as usize];
+    let mut left = e.size / w;
+    while left > 0 {
+        let k = left.min(8192) as usize;
+        r.read_exact(&mut buf[..k * w as usize]).map_err(bad)?;
+        for b in buf[..k * w as usize].chunks_exact(w as usize) {
+            let v = an.dtype.decode(b);
+            if !(v >= 0.0 && v < nb_streamlines as f64) {
+                return Err(bad(format!(
+                    "member {v} is not a streamline index (0 to {})",
+                    nb_streamlines.saturating_sub(1)
+                )));
+            }
+            let i = v as usize;
+            bits[i / 64] |= 1 << (i % 64);
+        }
+        left -= k as u64;
+    }
+    Ok(bits)
 }
 
 /// Read and check `n` offsets (with the sentinel appended when the file has
@@ -1105,11 +1188,42 @@ pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoEr
         None => DType::F32,
     };
     let wide_offsets = recorded("trx.offsets_dtype").as_deref() == Some("uint64");
+    // Per-curve values named `group:NAME` are groups, the rest dps arrays.
+    let (group_cols, dps_cols): (Vec<usize>, Vec<usize>) = (0..meta.curve_data_names.len())
+        .partition(|&c| meta.curve_data_names[c].starts_with(GROUP_PREFIX));
+    let dps_names: Vec<String> = dps_cols
+        .iter()
+        .map(|&c| meta.curve_data_names[c].clone())
+        .collect();
+    let mut groups = Vec::with_capacity(group_cols.len());
+    for &c in &group_cols {
+        let base = &meta.curve_data_names[c][GROUP_PREFIX.len()..];
+        if base.is_empty() || base.contains(['/', '\\', '\0']) || base.starts_with('.') {
+            return Err(IoError::new(
+                path,
+                format!("group name {base:?} cannot be a TRX entry name"),
+            ));
+        }
+        groups.push(OutGroup {
+            entry: format!("groups/{base}.uint32"),
+            column: c,
+            members: Spool::new(path)?,
+            count: 0,
+        });
+    }
+    let verbatim: Vec<(String, Vec<u8>)> = meta
+        .extra
+        .iter()
+        .filter_map(|(k, v)| {
+            let name = k.strip_prefix("trx.entry.")?;
+            let bytes = (0..v.len() / 2)
+                .map(|i| u8::from_str_radix(v.get(2 * i..2 * i + 2)?, 16).ok())
+                .collect::<Option<Vec<u8>>>()?;
+            (name.starts_with("dpg/") && !name.contains("..")).then(|| (name.to_string(), bytes))
+        })
+        .collect();
     let mut arrays = Vec::new();
-    for (kind, names) in [
-        ("dpv", &meta.point_data_names),
-        ("dps", &meta.curve_data_names),
-    ] {
+    for (kind, names) in [("dpv", &meta.point_data_names), ("dps", &dps_names)] {
         for (entry, dtype, ncomp) in plan_arrays(path, meta, names, kind)? {
             arrays.push((
                 kind == "dpv",
@@ -1133,12 +1247,24 @@ pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoEr
         lengths: Spool::new(path)?,
         dpv: dpv.into_iter().map(|(_, a)| a).collect(),
         dps: dps.into_iter().map(|(_, a)| a).collect(),
+        dps_cols,
+        groups,
+        verbatim,
         n_point_data: meta.point_data_names.len(),
         n_curve_data: meta.curve_data_names.len(),
         count: 0,
         vertices: 0,
         buf: Vec::new(),
     }))
+}
+
+/// A group the writer produces from a `group:NAME` per-curve column: the
+/// indices of the curves whose value is non-zero, as uint32.
+struct OutGroup {
+    entry: String,
+    column: usize,
+    members: Spool,
+    count: u64,
 }
 
 struct TrxWriter {
@@ -1152,6 +1278,11 @@ struct TrxWriter {
     lengths: Spool,
     dpv: Vec<OutArray>,
     dps: Vec<OutArray>,
+    /// The per-curve columns that feed `dps`, in order.
+    dps_cols: Vec<usize>,
+    groups: Vec<OutGroup>,
+    /// `dpg/` entries carried from a TRX source, written as they were.
+    verbatim: Vec<(String, Vec<u8>)>,
     n_point_data: usize,
     n_curve_data: usize,
     count: u64,
@@ -1219,7 +1350,7 @@ impl CurveWriter for TrxWriter {
         for a in &mut self.dps {
             self.buf.clear();
             for c in 0..a.ncomp {
-                let x = curve.curve_data[col + c];
+                let x = curve.curve_data[self.dps_cols[col + c]];
                 a.dtype.encode(f64::from(x), &mut self.buf).ok_or_else(|| {
                     IoError::new(
                         &self.path,
@@ -1230,6 +1361,19 @@ impl CurveWriter for TrxWriter {
             }
             a.spool.write(&self.buf)?;
             col += a.ncomp;
+        }
+        for g in &mut self.groups {
+            let v = curve.curve_data[g.column];
+            if v != 0.0 && !v.is_nan() {
+                let i = u32::try_from(index).map_err(|_| {
+                    err(format!(
+                        "a member of `{}` beyond the 2^32 streamlines a uint32 group can name",
+                        g.entry
+                    ))
+                })?;
+                g.members.write(&i.to_le_bytes())?;
+                g.count += 1;
+            }
         }
         self.lengths.write(&(n as u64).to_le_bytes())?;
         self.count += 1;
@@ -1295,6 +1439,17 @@ impl CurveWriter for TrxWriter {
                     zip.start_file(a.entry.as_str(), opts(size)).map_err(zerr)?;
                     a.spool.copy_into(&mut zip)?;
                 }
+            }
+            for g in w.groups {
+                zip.start_file(g.entry.as_str(), opts(4 * g.count))
+                    .map_err(zerr)?;
+                g.members.copy_into(&mut zip)?;
+            }
+            for (name, bytes) in &w.verbatim {
+                zip.start_file(name.as_str(), opts(bytes.len() as u64))
+                    .map_err(zerr)?;
+                zip.write_all(bytes)
+                    .map_err(|e| IoError::os(&path, "cannot write", e))?;
             }
         }
         let out = zip.finish().map_err(zerr)?;
