@@ -6,6 +6,8 @@
 //! decompressed polyline (sampled every 0.01 input units), in the ordered
 //! vertex distance the tolerance promises (`metrics::ordered_distance`).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -36,16 +38,7 @@ fn bundled(rel: &str) -> PathBuf {
 }
 
 fn shared(rel: &str) -> Option<PathBuf> {
-    let root = std::env::var_os("STRANDFIT_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
-    let p = root.join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("SKIPPED: shared data file {} not found", p.display());
-        None
-    }
+    common::shared_data(rel)
 }
 
 /// Compress `input` at `tol`, decompress to `ext`, and check every curve.

@@ -4,6 +4,8 @@
 //! (when `../shared/data` or `STRANDFIT_SHARED_DATA` has them), round
 //! trips, truncated / corrupted / hostile files.
 
+mod common;
+
 use std::io::{Seek, SeekFrom, Write};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
@@ -17,19 +19,7 @@ use strandfit::io::{self, Curve, Format, IoError, Metadata};
 // Where the data is
 
 fn shared(rel: &str) -> Option<PathBuf> {
-    let base = std::env::var_os("STRANDFIT_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
-    let p = base.join(rel);
-    if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!(
-            "SKIPPED: shared data file {} not found (set STRANDFIT_SHARED_DATA to the shared data folder)",
-            p.display()
-        );
-        None
-    }
+    common::shared_data(rel)
 }
 
 fn fixture(rel: &str) -> PathBuf {

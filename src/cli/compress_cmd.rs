@@ -15,7 +15,7 @@ use super::io_util::{check_losses, report_skipped, write_failed};
 use super::{CompressArgs, DistanceArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
 use crate::compress::{compress_curve, CompressOptions};
-use crate::io::container::{ContainerWriter, Header, SourceMeta, Storage, StoredCurve};
+use crate::io::container::{ContainerWriter, Header, Shape, SourceMeta, Storage, StoredCurve};
 use crate::io::{data_losses, open_reader_with, source_losses, BadCurves, Curve};
 
 /// Curves fitted per parallel batch (bounds memory; keeps order).
@@ -181,14 +181,33 @@ pub fn run(args: &CompressArgs) -> Result<()> {
             if !o.within {
                 report.over_tolerance += 1;
             }
-            writer
-                .write(&StoredCurve {
-                    id: c.id.clone(),
-                    source_points: c.points.len() as u64,
-                    curve_data: c.curve_data.clone(),
-                    shape: o.shape,
-                })
-                .map_err(|e| write_failed(&args.input, index, reader.skipped(), e))?;
+            let mut record = StoredCurve {
+                id: c.id.clone(),
+                source_points: c.points.len() as u64,
+                curve_data: c.curve_data.clone(),
+                shape: o.shape,
+            };
+            if let Err(e) = writer.write(&record) {
+                // A chain the container refuses (it would not decode to
+                // usable points: degenerate scales) is stored as its
+                // points; anything else is an error.
+                if matches!(record.shape, Shape::Points(_) | Shape::Empty) {
+                    return Err(write_failed(&args.input, index, reader.skipped(), e));
+                }
+                record.shape = Shape::Points(c.points.clone());
+                writer
+                    .write(&record)
+                    .map_err(|e| write_failed(&args.input, index, reader.skipped(), e))?;
+                report.verbatim += 1;
+                if notes < 10 {
+                    eprintln!(
+                        "note: {}, curve {index}: stored verbatim: {}",
+                        args.input.display(),
+                        e.reason
+                    );
+                    notes += 1;
+                }
+            }
         }
         bar.inc(batch.len() as u64);
     }

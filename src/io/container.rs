@@ -498,8 +498,12 @@ fn decode(
         KIND_POINTS => {
             let n = c.count(psize, "the point count")?;
             let mut p = Vec::with_capacity(n);
-            for _ in 0..n {
-                p.push(c.vec(point_storage, "a point")?);
+            for k in 0..n {
+                let x = c.vec(point_storage, "a point")?;
+                if let Some(why) = crate::io::point_problem(x) {
+                    return Err(format!("point {k}: {why}"));
+                }
+                p.push(x);
             }
             Shape::Points(p)
         }
@@ -528,12 +532,14 @@ fn decode(
             if tangent.length() < 0.5 || normal.length() < 0.5 {
                 return Err("a start frame that is not unit".into());
             }
-            Shape::Chain(ChainParams {
+            let ch = ChainParams {
                 start,
                 tangent,
                 normal,
                 elements,
-            })
+            };
+            check_chain(&ch)?;
+            Shape::Chain(ch)
         }
         KIND_QCHAIN if storage == Storage::Compact => {
             let n = el0.count_of(c, 1, "the element count")?;
@@ -574,6 +580,7 @@ fn decode(
             if !ch.start.is_finite() || ch.elements.iter().any(|e| !e.length.is_finite()) {
                 return Err("a quantised chain out of range".into());
             }
+            check_chain(&ch)?;
             Shape::Chain(ch)
         }
         k => return Err(format!("unknown curve kind {k} for {storage:?} storage")),
@@ -584,6 +591,43 @@ fn decode(
         curve_data,
         shape,
     })
+}
+
+/// Largest turning angle (`κL`, `|τL|`, radians) of one element, and
+/// largest curvature and torsion: far beyond any fitted chain (a million
+/// radians is 160,000 turns in one element), and small enough that the
+/// helix formulas (`κ² + τ²`, `sin(ωs)`) stay finite.
+const MAX_TURNING: f64 = 1e6;
+const MAX_RATE: f64 = 1e150;
+
+/// A decoded chain must sample to usable points (see
+/// [`crate::io::point_problem`]): every sample lies within the chain's
+/// length of its start, so a start that far inside the float32 range keeps
+/// all of them in it; and its elements' rates and turnings must keep the
+/// helix formulas finite.
+fn check_chain(ch: &ChainParams) -> Result<(), String> {
+    let length: f64 = ch.elements.iter().map(|e| e.length).sum();
+    let reach = |x: f64| x.abs() + length <= crate::io::MAX_COORDINATE;
+    if !ch.start.to_array().into_iter().all(reach) {
+        return Err(format!(
+            "a chain from {} of length {length:e} reaches beyond the float32 range",
+            ch.start
+        ));
+    }
+    for (k, e) in ch.elements.iter().enumerate() {
+        let ok = e.curvature <= MAX_RATE
+            && e.torsion.abs() <= MAX_RATE
+            && e.curvature * e.length <= MAX_TURNING
+            && (e.torsion * e.length).abs() <= MAX_TURNING
+            && e.twist.is_finite();
+        if !ok {
+            return Err(format!(
+                "element {k} (curvature {:e}, torsion {:e}, length {:e}) turns too fast to evaluate",
+                e.curvature, e.torsion, e.length
+            ));
+        }
+    }
+    Ok(())
 }
 
 // ---------------------------------------------------------------- writing

@@ -411,7 +411,7 @@ impl Src {
     }
 
     /// The next token, which must exist: `what` names it for the error.
-    fn expect(&mut self, what: &str) -> Result<(), IoError> {
+    fn expect_token(&mut self, what: &str) -> Result<(), IoError> {
         if self.next_token()? {
             Ok(())
         } else {
@@ -429,7 +429,7 @@ impl Src {
 
     /// A non-negative count.
     fn count(&mut self, what: &str) -> Result<u64, IoError> {
-        self.expect(what)?;
+        self.expect_token(what)?;
         self.parse::<u64>().ok_or_else(|| {
             self.err(format!(
                 "{what}: expected a non-negative integer, found `{}`",
@@ -440,7 +440,7 @@ impl Src {
 
     /// A data type name.
     fn dtype(&mut self, what: &str) -> Result<TypeName, IoError> {
-        self.expect(what)?;
+        self.expect_token(what)?;
         Ok(DType::parse(&self.tok))
     }
 
@@ -600,7 +600,7 @@ impl Src {
             }
         } else {
             for _ in 0..n {
-                self.expect(what)?;
+                self.expect_token(what)?;
                 match std::str::from_utf8(&self.tok).ok().and_then(&txt) {
                     Some(v) => out.push(v),
                     None => {
@@ -687,7 +687,7 @@ impl Src {
             self.seek(to, line)
         } else {
             for _ in 0..n {
-                self.expect(what)?;
+                self.expect_token(what)?;
             }
             Ok(())
         }
@@ -1063,7 +1063,7 @@ fn scan(src: &mut Src) -> Result<Scan, IoError> {
         Some(t) => String::from_utf8_lossy(&t).into_owned(),
         None => return Err(src.err("file truncated: it ends before the title line")),
     };
-    src.expect("ASCII or BINARY")?;
+    src.expect_token("ASCII or BINARY")?;
     if src.tok_is("BINARY") {
         src.binary = true;
     } else if !src.tok_is("ASCII") {
@@ -1072,11 +1072,11 @@ fn scan(src: &mut Src) -> Result<Scan, IoError> {
             shown(&src.tok)
         )));
     }
-    src.expect("DATASET")?;
+    src.expect_token("DATASET")?;
     if !src.tok_is("DATASET") {
         return Err(src.err(format!("expected DATASET, found `{}`", shown(&src.tok))));
     }
-    src.expect("the dataset type")?;
+    src.expect_token("the dataset type")?;
     if !src.tok_is("POLYDATA") {
         return Err(src.err(format!(
             "the dataset is {}, not POLYDATA (only polylines are read)",
@@ -1157,7 +1157,7 @@ fn scan(src: &mut Src) -> Result<Scan, IoError> {
                 let size = src.count(&format!("the {name} size"))?;
                 if src.peek_is("OFFSETS")? {
                     // 5.1 layout: n offsets (n - 1 cells), size connectivity.
-                    src.expect("OFFSETS")?;
+                    src.expect_token("OFFSETS")?;
                     let t = index_type(src, "OFFSETS")?;
                     src.begin_payload()?;
                     let mut off = Vec::new();
@@ -1197,11 +1197,19 @@ fn scan(src: &mut Src) -> Result<Scan, IoError> {
                     }
                 }
             }
+            // One section of each: a second would re-declare the count
+            // that the first section's arrays were checked against.
             b"POINT_DATA" => {
+                if s.point_data.is_some() {
+                    return Err(src.err("a second POINT_DATA section"));
+                }
                 s.point_data = Some((src.count("the POINT_DATA count")?, at));
                 assoc = Assoc::Point;
             }
             b"CELL_DATA" => {
+                if s.cell_data.is_some() {
+                    return Err(src.err("a second CELL_DATA section"));
+                }
                 s.cell_data = Some((src.count("the CELL_DATA count")?, at));
                 assoc = Assoc::Cell;
             }
@@ -1230,7 +1238,7 @@ fn skip_ascii_cells(
 ) -> Result<(), IoError> {
     let mut used = 0u64;
     for cell in 0..n {
-        src.expect(&format!("{name} cell {cell}"))?;
+        src.expect_token(&format!("{name} cell {cell}"))?;
         let at = src.here();
         let c = src.parse::<i64>().ok_or_else(|| {
             src.err(format!(
@@ -1238,7 +1246,18 @@ fn skip_ascii_cells(
                 shown(&src.tok)
             ))
         })?;
-        let left = size - used - 1;
+        // `used < size` is not guaranteed: earlier cells may have used the
+        // whole section (`LINES 2 2` / `1 0` / `1 1`).
+        let Some(left) = size.checked_sub(used + 1) else {
+            let e = IoError::new(
+                &src.path,
+                format!(
+                    "{name} {n} {size}: cell {cell} starts after the {size} values are used up"
+                ),
+            )
+            .at(at);
+            return Err(if lines { e.curve(cell) } else { e });
+        };
         if c < 0 || c as u64 > left {
             let e = IoError::new(
                 &src.path,
@@ -1251,7 +1270,7 @@ fn skip_ascii_cells(
         }
         used += 1 + c as u64;
         for _ in 0..c {
-            src.expect(&format!("{name} cell {cell}"))?;
+            src.expect_token(&format!("{name} cell {cell}"))?;
         }
     }
     if used != size {
@@ -1407,7 +1426,7 @@ fn read_attribute(src: &mut Src, s: &mut Scan, assoc: Assoc, kw: &[u8]) -> Resul
         | b"PEDIGREE_IDS"
         | b"EDGE_FLAGS"
         | b"TEXTURE_COORDINATES" => {
-            src.expect(&format!("the {kw_s} name"))?;
+            src.expect_token(&format!("the {kw_s} name"))?;
             let name = decode_name(&src.tok);
             let mut ncomp = match kw {
                 b"VECTORS" | b"NORMALS" => 3,
@@ -1428,7 +1447,7 @@ fn read_attribute(src: &mut Src, s: &mut Scan, assoc: Assoc, kw: &[u8]) -> Resul
             };
             if kw == b"SCALARS" {
                 // `SCALARS name type [ncomp]` then `LOOKUP_TABLE table`.
-                src.expect("LOOKUP_TABLE")?;
+                src.expect_token("LOOKUP_TABLE")?;
                 if !src.tok_is("LOOKUP_TABLE") {
                     ncomp = src.parse::<u64>().filter(|c| (1..=MAX_COMPONENTS).contains(c)).ok_or_else(
                         || {
@@ -1438,7 +1457,7 @@ fn read_attribute(src: &mut Src, s: &mut Scan, assoc: Assoc, kw: &[u8]) -> Resul
                             ))
                         },
                     )?;
-                    src.expect("LOOKUP_TABLE")?;
+                    src.expect_token("LOOKUP_TABLE")?;
                     if !src.tok_is("LOOKUP_TABLE") {
                         return Err(src.err(format!(
                             "SCALARS `{name}` must be followed by LOOKUP_TABLE, found `{}`",
@@ -1446,7 +1465,7 @@ fn read_attribute(src: &mut Src, s: &mut Scan, assoc: Assoc, kw: &[u8]) -> Resul
                         )));
                     }
                 }
-                src.expect("the lookup table name")?;
+                src.expect_token("the lookup table name")?;
             }
             let what = format!("{} {kw_s} `{name}`", assoc.label());
             if let Some(v) = array_values(src, t, tuples, ncomp, &what, true)? {
@@ -1454,7 +1473,7 @@ fn read_attribute(src: &mut Src, s: &mut Scan, assoc: Assoc, kw: &[u8]) -> Resul
             }
         }
         b"COLOR_SCALARS" => {
-            src.expect("the COLOR_SCALARS name")?;
+            src.expect_token("the COLOR_SCALARS name")?;
             let name = decode_name(&src.tok);
             let ncomp = src.count("the COLOR_SCALARS component count")?;
             if !(1..=MAX_COMPONENTS).contains(&ncomp) {
@@ -1467,7 +1486,7 @@ fn read_attribute(src: &mut Src, s: &mut Scan, assoc: Assoc, kw: &[u8]) -> Resul
             s.dropped.push(what);
         }
         b"LOOKUP_TABLE" => {
-            src.expect("the LOOKUP_TABLE name")?;
+            src.expect_token("the LOOKUP_TABLE name")?;
             let name = decode_name(&src.tok);
             let size = src.count("the LOOKUP_TABLE size")?;
             let t = if src.binary { DType::U8 } else { DType::F32 };
@@ -1489,7 +1508,7 @@ fn read_attribute(src: &mut Src, s: &mut Scan, assoc: Assoc, kw: &[u8]) -> Resul
 /// `FIELD name k` and its k arrays: carried when they have one tuple per
 /// point (cell) of the section, dropped otherwise (and at dataset level).
 fn read_field(src: &mut Src, s: &mut Scan, assoc: Assoc) -> Result<(), IoError> {
-    src.expect("the FIELD name")?;
+    src.expect_token("the FIELD name")?;
     let field = decode_name(&src.tok);
     let k = src.count("the FIELD array count")?;
     let tuples = match assoc {
@@ -1498,7 +1517,7 @@ fn read_field(src: &mut Src, s: &mut Scan, assoc: Assoc) -> Result<(), IoError> 
         Assoc::Dataset => None,
     };
     for _ in 0..k {
-        src.expect("a FIELD array name")?;
+        src.expect_token("a FIELD array name")?;
         if src.tok == b"NULL_ARRAY" {
             continue;
         }
