@@ -28,6 +28,7 @@ pub mod adaptive;
 pub mod atph;
 pub mod backend;
 pub mod cli;
+pub mod codec;
 pub mod compress;
 pub mod euler;
 pub mod fit;

@@ -1,0 +1,465 @@
+//! Per-curve encoding: arcs grown along the curve, each accepted only by the
+//! two-sided test, with quantised points as the fallback.
+//!
+//! From the current end of the chain, the element that reaches furthest
+//! along the input is found by galloping (1, 2, 4, … vertices) and then
+//! bisection, so a curve of `n` vertices costs `O(n log m)` checks of
+//! `O(m)` each for elements of `m` vertices: linear in the curve's length.
+//! Every candidate is quantised *before* it is checked, and the chain is
+//! continued from the decoded element (closed loop), so quantisation errors
+//! never accumulate and the decoder reproduces exactly what was checked.
+//!
+//! A G1 element (tangent inherited) is tried first; a corner element
+//! (tangent reset by a coded bulge) where that reaches less far. Where no
+//! element passes, or the arcs would cost more than the curve's points on a
+//! grid of step `2T/√3` with second-order prediction (the baseline's own
+//! representation, error `≤ T` by construction), the points are stored.
+
+use glam::DVec3;
+
+use super::check::all_within;
+use super::predict::{corner_tangent, perpendicular_part, Arc, ChainState};
+use super::quantise::Quantiser;
+use super::{CurveCode, ElementCode, ElementKind};
+
+/// What the encoder needs for one curve.
+pub struct CurveEncoder<'a> {
+    pub points: &'a [DVec3],
+    pub q: Quantiser,
+    /// Squared acceptance distance (the tolerance less a rounding margin).
+    pub tol2: f64,
+    /// Points-mode grid step.
+    pub grid: f64,
+}
+
+/// A checked candidate element.
+struct Candidate {
+    code: ElementCode,
+    arc: Arc,
+    samples: Vec<DVec3>,
+    /// Last input vertex it covers.
+    reach: usize,
+}
+
+/// Rounding margin for the acceptance test: output points are written as
+/// `f32` (relative rounding `2^-24`), and arcs are evaluated in `f64`.
+pub fn acceptance_tolerance(tolerance: f64, points: &[DVec3]) -> f64 {
+    let scale = points
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0.0, f64::max);
+    tolerance * (1.0 - 1e-9) - 4.0 * scale * f32::EPSILON as f64
+}
+
+impl<'a> CurveEncoder<'a> {
+    /// The start point on its grid (`None` if not codable).
+    fn start_index(&self) -> Option<[i64; 3]> {
+        let p = self.points[0];
+        Some([
+            Quantiser::index(p.x, self.q.start)?,
+            Quantiser::index(p.y, self.q.start)?,
+            Quantiser::index(p.z, self.q.start)?,
+        ])
+    }
+
+    /// Bulge estimate for an arc from `q` to `e` following input vertices
+    /// `from..=to`: the sagitta vector of the circle through `q`, the middle
+    /// vertex and `e` (parabolic approximation `y = 4hλ(1 − λ)`).
+    fn bulge_estimate(&self, q: DVec3, e: DVec3, from: usize, to: usize) -> DVec3 {
+        let d = e - q;
+        let c2 = d.length_squared();
+        if c2 == 0.0 || to <= from + 1 {
+            return DVec3::ZERO;
+        }
+        let mid = self.points[(from + to) / 2];
+        let w = mid - q;
+        let lambda = w.dot(d) / c2;
+        if !(0.1..=0.9).contains(&lambda) {
+            return DVec3::ZERO;
+        }
+        let perp = w - d * lambda;
+        perp / (4.0 * lambda * (1.0 - lambda))
+    }
+
+    /// Accepts `arc` for input vertices `(from, to]` if the two-sided test
+    /// passes; returns its decoder samples.
+    fn accept(&self, arc: &Arc, from: usize, to: usize) -> Option<Vec<DVec3>> {
+        let mut samples = Vec::with_capacity(8);
+        samples.push(arc.start);
+        arc.sample_into(self.q.sagitta, &mut samples);
+        let n = self.points.len();
+        // Input vertices covered by this element are near its samples.
+        if !all_within(&self.points[from + 1..=to], &samples, self.tol2) {
+            return None;
+        }
+        // Samples are near the input window around the element.
+        let lo = from.saturating_sub(1);
+        let hi = (to + 1).min(n - 1);
+        if !all_within(&samples[1..], &self.points[lo..=hi], self.tol2) {
+            return None;
+        }
+        samples.remove(0);
+        Some(samples)
+    }
+
+    /// The G1 element from `state` towards input vertex `j` (or a corner,
+    /// with its bulge), quantised and checked. The chord length is rounded
+    /// to the nearest step first, then to the other neighbour: a coarse
+    /// length step slides the end along the curve, and one of the two
+    /// usually stays within the input.
+    fn candidate(
+        &self,
+        state: &ChainState,
+        from: usize,
+        j: usize,
+        kind: ElementKind,
+    ) -> Option<Candidate> {
+        let d = self.points[j] - state.point;
+        let (u, _, _) = state.predicted_frame(state.frame_chord(self.q.length));
+        let x = d.dot(u) / self.q.length;
+        let near = x.round();
+        let other = if x >= near { near + 1.0 } else { near - 1.0 };
+        for steps in [near, other] {
+            if steps.abs() >= (1u64 << super::entropy::MAX_BITS) as f64 {
+                continue;
+            }
+            if let Some(c) = self.candidate_with_length(state, from, j, kind, steps as i64) {
+                return Some(c);
+            }
+        }
+        None
+    }
+
+    fn candidate_with_length(
+        &self,
+        state: &ChainState,
+        from: usize,
+        j: usize,
+        kind: ElementKind,
+        steps: i64,
+    ) -> Option<Candidate> {
+        let d = self.points[j] - state.point;
+        let (_, e1, e2) = state.predicted_frame(state.frame_chord(self.q.length));
+        let a1 = Quantiser::index(d.dot(e1), self.q.offset)?;
+        let a2 = Quantiser::index(d.dot(e2), self.q.offset)?;
+        let end = element_end(state, steps, a1, a2, &self.q);
+        let mut code = ElementCode {
+            kind,
+            length: steps - state.chord_steps,
+            offset: [a1, a2],
+            bulge: [0, 0],
+        };
+        if kind == ElementKind::Corner {
+            let (tries, count) = self.corner_bulges(state.point, end, state.normal, from, j)?;
+            // The estimated bulge, then a straight segment.
+            for b in tries.into_iter().take(count) {
+                let t = corner_from_code(state.point, end, state.normal, b, self.q.offset)?;
+                let arc = Arc::new(state.point, t, end).ok()?;
+                if let Some(samples) = self.accept(&arc, from, j) {
+                    code.bulge = b;
+                    return Some(Candidate {
+                        code,
+                        arc,
+                        samples,
+                        reach: j,
+                    });
+                }
+            }
+            return None;
+        }
+        let tangent = match kind {
+            ElementKind::Straight => (end - state.point).normalize(),
+            _ => state.tangent,
+        };
+        let arc = Arc::new(state.point, tangent, end).ok()?;
+        let samples = self.accept(&arc, from, j)?;
+        Some(Candidate {
+            code,
+            arc,
+            samples,
+            reach: j,
+        })
+    }
+
+    /// Bulge codes to try for a corner from `q` to `end`: the estimate, then
+    /// zero (how many of the two are distinct).
+    fn corner_bulges(
+        &self,
+        q: DVec3,
+        end: DVec3,
+        normal: DVec3,
+        from: usize,
+        to: usize,
+    ) -> Option<([[i64; 2]; 2], usize)> {
+        let h = self.bulge_estimate(q, end, from, to);
+        let (f1, f2) = bulge_frame(q, end, normal)?;
+        let b = [
+            Quantiser::index(h.dot(f1), self.q.offset)?,
+            Quantiser::index(h.dot(f2), self.q.offset)?,
+        ];
+        if b == [0, 0] {
+            Some(([b, b], 1))
+        } else {
+            Some(([b, [0, 0]], 2))
+        }
+    }
+
+    /// Furthest-reaching element from `state` past input vertex `from`.
+    fn furthest(&self, state: &ChainState, from: usize, kind: ElementKind) -> Option<Candidate> {
+        let last = self.points.len() - 1;
+        // The nearest vertex may be too close for the length step: take the
+        // first of the next few that passes.
+        let mut good = None;
+        for j in from + 1..=(from + 4).min(last) {
+            good = self.candidate(state, from, j, kind);
+            if good.is_some() {
+                break;
+            }
+        }
+        let mut good = good?;
+        let mut step = 1;
+        let mut bad = None;
+        loop {
+            let next = (good.reach + step).min(last);
+            if next == good.reach {
+                break;
+            }
+            match self.candidate(state, from, next, kind) {
+                Some(c) => {
+                    good = c;
+                    step *= 2;
+                }
+                None => {
+                    bad = Some(next);
+                    break;
+                }
+            }
+        }
+        if let Some(mut bad) = bad {
+            while bad - good.reach > 1 {
+                let mid = (good.reach + bad) / 2;
+                match self.candidate(state, from, mid, kind) {
+                    Some(c) => good = c,
+                    None => bad = mid,
+                }
+            }
+        }
+        Some(good)
+    }
+
+    /// The arcs for this curve, or `None` where some stretch has no element
+    /// that passes.
+    pub fn arcs(&self) -> Option<(CurveCode, usize)> {
+        let n = self.points.len();
+        let start = self.start_index()?;
+        let q0 = DVec3::new(
+            start[0] as f64 * self.q.start,
+            start[1] as f64 * self.q.start,
+            start[2] as f64 * self.q.start,
+        );
+        if q0.distance_squared(self.points[0]) > self.tol2 {
+            return None;
+        }
+        let mut out_points = 1usize;
+        // First element: its end on the start grid, and a bulge.
+        let first = self.first_element(q0)?;
+        out_points += first.samples.len();
+        let mut state = first.arc.next_state(self.q.length);
+        let mut from = first.reach;
+        let mut elements = Vec::new();
+        let first_end = first.code.offset;
+        let first_end_z = first.code.length;
+        let first_bulge = first.code.bulge;
+        while from < n - 1 {
+            // Cheapest kind first; a costlier one only where it reaches
+            // further (a straight segment costs a kind flag, a corner also
+            // a bulge).
+            let mut chosen = self.furthest(&state, from, ElementKind::G1);
+            if chosen.as_ref().is_none_or(|g| g.reach - from <= 2) {
+                for (kind, margin) in [(ElementKind::Straight, 0), (ElementKind::Corner, 1)] {
+                    if let Some(c) = self.furthest(&state, from, kind) {
+                        if chosen.as_ref().is_none_or(|g| c.reach > g.reach + margin) {
+                            chosen = Some(c);
+                        }
+                    }
+                }
+            }
+            let chosen = chosen?;
+            out_points += chosen.samples.len();
+            state = next_state(&chosen.arc, &state, chosen.code.kind, self.q.length);
+            from = chosen.reach;
+            elements.push(chosen.code);
+        }
+        Some((
+            CurveCode::Arcs {
+                start,
+                first_end: [first_end[0], first_end[1], first_end_z],
+                first_bulge,
+                elements,
+            },
+            out_points,
+        ))
+    }
+
+    /// The first element: end on the start grid relative to `q0`, furthest
+    /// reach by galloping as for the others.
+    fn first_element(&self, q0: DVec3) -> Option<Candidate> {
+        let last = self.points.len() - 1;
+        let try_j = |j: usize| -> Option<Candidate> {
+            let d = self.points[j] - q0;
+            let k = [
+                Quantiser::index(d.x, self.q.start)?,
+                Quantiser::index(d.y, self.q.start)?,
+                Quantiser::index(d.z, self.q.start)?,
+            ];
+            if k == [0, 0, 0] {
+                return None;
+            }
+            let end = first_end(q0, k, self.q.start);
+            let h = self.bulge_estimate(q0, end, 0, j);
+            let (f1, f2) = bulge_frame(q0, end, DVec3::ZERO)?;
+            let b = [
+                Quantiser::index(h.dot(f1), self.q.offset)?,
+                Quantiser::index(h.dot(f2), self.q.offset)?,
+            ];
+            for bulge in [b, [0, 0]] {
+                let t = corner_from_code(q0, end, DVec3::ZERO, bulge, self.q.offset)?;
+                let arc = Arc::new(q0, t, end).ok()?;
+                if let Some(samples) = self.accept(&arc, 0, j) {
+                    return Some(Candidate {
+                        code: ElementCode {
+                            kind: ElementKind::Corner,
+                            length: k[2],
+                            offset: [k[0], k[1]],
+                            bulge,
+                        },
+                        arc,
+                        samples,
+                        reach: j,
+                    });
+                }
+                if b == [0, 0] {
+                    break;
+                }
+            }
+            None
+        };
+        // The nearest vertex may round onto the start: take the first
+        // codable one.
+        let mut good = None;
+        let mut j = 1;
+        while good.is_none() && j <= last.min(8) {
+            good = try_j(j);
+            j += 1;
+        }
+        let mut good = good?;
+        let mut step = 1;
+        let mut bad = None;
+        loop {
+            let next = (good.reach + step).min(last);
+            if next == good.reach {
+                break;
+            }
+            match try_j(next) {
+                Some(c) => {
+                    good = c;
+                    step *= 2;
+                }
+                None => {
+                    bad = Some(next);
+                    break;
+                }
+            }
+        }
+        if let Some(mut bad) = bad {
+            while bad - good.reach > 1 {
+                let mid = (good.reach + bad) / 2;
+                match try_j(mid) {
+                    Some(c) => good = c,
+                    None => bad = mid,
+                }
+            }
+        }
+        Some(good)
+    }
+
+    /// The points on the grid of step `2T/√3`, second-order residuals.
+    pub fn points_code(&self) -> Option<CurveCode> {
+        let mut idx = Vec::with_capacity(self.points.len());
+        for p in self.points {
+            idx.push([
+                Quantiser::index(p.x, self.grid)?,
+                Quantiser::index(p.y, self.grid)?,
+                Quantiser::index(p.z, self.grid)?,
+            ]);
+        }
+        Some(CurveCode::Points { grid: idx })
+    }
+}
+
+/// End of a G1 or corner element from its code: `steps` length steps along
+/// the predicted chord direction (the previous arc continued for the
+/// previous chord's length) and the perpendicular offsets.
+pub fn element_end(state: &ChainState, steps: i64, a1: i64, a2: i64, q: &Quantiser) -> DVec3 {
+    let (u, e1, e2) = state.predicted_frame(state.frame_chord(q.length));
+    state.point + u * (steps as f64 * q.length) + (e1 * a1 as f64 + e2 * a2 as f64) * q.offset
+}
+
+/// End of a curve's first element: `q0 + k·step`.
+pub fn first_end(q0: DVec3, k: [i64; 3], step: f64) -> DVec3 {
+    q0 + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * step
+}
+
+/// The bulge frame of a corner from `q` to `e`: two unit vectors
+/// perpendicular to the chord, the first towards `normal`'s perpendicular
+/// part (a deterministic perpendicular when `normal` is zero).
+pub fn bulge_frame(q: DVec3, e: DVec3, normal: DVec3) -> Option<(DVec3, DVec3)> {
+    let d = e - q;
+    let c = d.length();
+    if c == 0.0 || !c.is_finite() {
+        return None;
+    }
+    let u = d / c;
+    let f1 = if normal == DVec3::ZERO {
+        super::predict::any_perpendicular(u)
+    } else {
+        perpendicular_part(normal, u)
+    };
+    Some((f1, u.cross(f1)))
+}
+
+/// Start tangent of a corner element from its bulge code.
+pub fn corner_from_code(
+    q: DVec3,
+    e: DVec3,
+    normal: DVec3,
+    bulge: [i64; 2],
+    step: f64,
+) -> Option<DVec3> {
+    let (f1, f2) = bulge_frame(q, e, normal)?;
+    let d = e - q;
+    let c = d.length();
+    let h = (f1 * bulge[0] as f64 + f2 * bulge[1] as f64) * step;
+    Some(corner_tangent(d / c, c, h))
+}
+
+/// The chain state after an element. After a straight segment the
+/// prediction turns on by the angle it turned (a polyline's discrete
+/// curvature), in the same direction.
+pub fn next_state(
+    arc: &Arc,
+    before: &ChainState,
+    kind: ElementKind,
+    length_step: f64,
+) -> ChainState {
+    let mut st = arc.next_state(length_step);
+    if kind == ElementKind::Straight {
+        let turn = arc.tangent - before.tangent;
+        let sin_turn = arc.tangent.cross(before.tangent).length();
+        if sin_turn > 1e-12 {
+            st.normal = perpendicular_part(turn, arc.tangent);
+            st.curvature = 2.0 * sin_turn / st.frame_chord(length_step);
+        }
+    }
+    st
+}

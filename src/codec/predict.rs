@@ -1,0 +1,334 @@
+//! The codec's primitive and predictor: a G1 chain of circular arcs, each
+//! fixed by its end point.
+//!
+//! A circular arc that leaves `q` along the unit tangent `t` and ends at `e`
+//! is unique (the `τ = 0` member of the short helices of
+//! [`crate::helix`]): with the chord `d = e − q`, `c = |d|`, `u = d/c` and
+//! `α = ∠(t, u)`, it lies in the plane of `t` and `u`, turns by `2α`, has
+//! curvature `κ = 2 sin α / c` and length `L = c·α / sin α`, and its end
+//! tangent is `t` reflected in the chord, `t' = 2(t·u)u − t`. So a chain of
+//! arcs is coded by its end points alone, and an end point is cheap when it
+//! is close to where the previous arc, continued with the same curvature in
+//! the same plane, would have gone: that continuation is the prediction.
+//!
+//! A *corner* element does not inherit the tangent: it carries a bulge, the
+//! arc's sagitta vector `h ⊥ u`, from which `tan(α/2) = 2|h|/c` and the start
+//! tangent `t = cos α·u + sin α·ĥ`. The first element of a curve is a
+//! corner; a bulge of zero is a straight segment.
+//!
+//! Everything here is plain `f64` arithmetic (`+ − × ÷ √`, `sin`, `cos`,
+//! `atan2`) done in the same order by the encoder and the decoder, so the
+//! encoder checks exactly the points that the decoder writes.
+
+use glam::DVec3;
+
+/// Chain state at the end of an element, from which the next is predicted.
+#[derive(Clone, Copy, Debug)]
+pub struct ChainState {
+    /// The current point (end of the previous element).
+    pub point: DVec3,
+    /// Unit tangent at `point`.
+    pub tangent: DVec3,
+    /// Unit normal `⊥ tangent`: towards the centre of the previous arc, or
+    /// carried over (projected) when it was straight. The prediction bends
+    /// towards it and the residual frame is built on it.
+    pub normal: DVec3,
+    /// Curvature of the previous arc (0 for a straight one or at the start).
+    pub curvature: f64,
+    /// Chord length of the previous element, in length steps (the length
+    /// residual is coded against it).
+    pub chord_steps: i64,
+}
+
+/// A unit vector perpendicular to the unit vector `v`, chosen
+/// deterministically (Duff et al. 2017, "Building an orthonormal basis,
+/// revisited").
+pub fn any_perpendicular(v: DVec3) -> DVec3 {
+    let sign = 1f64.copysign(v.z);
+    let a = -1.0 / (sign + v.z);
+    let b = v.x * v.y * a;
+    DVec3::new(1.0 + sign * v.x * v.x * a, sign * b, -sign * v.x)
+}
+
+/// Unit component of `n` perpendicular to the unit vector `t`, or a
+/// deterministic perpendicular when `n` is (nearly) parallel to `t`.
+pub fn perpendicular_part(n: DVec3, t: DVec3) -> DVec3 {
+    let p = n - t * n.dot(t);
+    let l = p.length();
+    if l > 1e-9 {
+        p / l
+    } else {
+        any_perpendicular(t)
+    }
+}
+
+impl ChainState {
+    /// The state at the start of a curve: the first element is a corner,
+    /// so only `point` and the reference direction matter.
+    pub fn start(point: DVec3, direction: DVec3) -> Self {
+        let tangent = direction;
+        ChainState {
+            point,
+            tangent,
+            normal: any_perpendicular(tangent),
+            curvature: 0.0,
+            chord_steps: 0,
+        }
+    }
+
+    /// Chord length the prediction assumes: the previous chord's (at least
+    /// one length step).
+    pub fn frame_chord(&self, length_step: f64) -> f64 {
+        self.chord_steps.max(1) as f64 * length_step
+    }
+
+    /// Predicted chord direction for a chord of length `c` (G1: continue
+    /// the previous arc, same curvature, same plane) and the residual frame
+    /// `(u, e1, e2)`: `e1` towards the predicted bend, `e2 = u × e1`.
+    pub fn predicted_frame(&self, c: f64) -> (DVec3, DVec3, DVec3) {
+        // The chord of an arc of curvature κ makes the angle α with the
+        // start tangent, sin α = cκ/2 (arcs beyond a half turn are not
+        // predicted: α ≤ π/2).
+        let s = (0.5 * c * self.curvature).min(1.0);
+        let co = (1.0 - s * s).sqrt();
+        let u = self.tangent * co + self.normal * s;
+        let e1 = self.normal * co - self.tangent * s;
+        let e2 = u.cross(e1);
+        (u, e1, e2)
+    }
+}
+
+/// One circular arc from `start` along `tangent` to `end`.
+#[derive(Clone, Copy, Debug)]
+pub struct Arc {
+    pub start: DVec3,
+    pub tangent: DVec3,
+    pub end: DVec3,
+    /// Unit in-plane normal at the start, towards the centre (any
+    /// perpendicular for a straight arc).
+    pub normal: DVec3,
+    /// `α`, the angle between the start tangent and the chord, in [0, π).
+    pub half_turn: f64,
+    pub curvature: f64,
+    pub length: f64,
+}
+
+/// Why an element cannot be built (the encoder skips such candidates; the
+/// decoder reports a corrupt stream).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ArcError {
+    /// The end coincides with the start.
+    ZeroChord,
+    /// The chord points (nearly) backwards: the arc would be almost a full
+    /// circle.
+    Backwards,
+    /// Not finite.
+    NonFinite,
+}
+
+/// Largest turning `2α` the encoder uses (and the decoder accepts): 0.95
+/// of a full turn.
+pub const MAX_HALF_TURN: f64 = 0.95 * std::f64::consts::PI;
+
+impl Arc {
+    /// The arc from `start` along the unit `tangent` to `end`.
+    pub fn new(start: DVec3, tangent: DVec3, end: DVec3) -> Result<Arc, ArcError> {
+        let d = end - start;
+        let c = d.length();
+        if !c.is_finite() || !tangent.is_finite() {
+            return Err(ArcError::NonFinite);
+        }
+        if c == 0.0 {
+            return Err(ArcError::ZeroChord);
+        }
+        let u = d / c;
+        // α from atan2 of the perpendicular and parallel parts: accurate
+        // for small and large angles alike.
+        let along = tangent.dot(u);
+        let perp = u - tangent * along;
+        let sin_a = perp.length();
+        let half_turn = sin_a.atan2(along);
+        if half_turn > MAX_HALF_TURN {
+            return Err(ArcError::Backwards);
+        }
+        let normal = if sin_a > 1e-300 {
+            perp / sin_a
+        } else {
+            any_perpendicular(tangent)
+        };
+        let curvature = 2.0 * sin_a / c;
+        let length = if half_turn < 1e-8 {
+            c
+        } else {
+            c * half_turn / sin_a
+        };
+        Ok(Arc {
+            start,
+            tangent,
+            end,
+            normal,
+            half_turn,
+            curvature,
+            length,
+        })
+    }
+
+    /// Tangent at the end: the start tangent reflected in the chord.
+    pub fn end_tangent(&self) -> DVec3 {
+        let (s, c) = (2.0 * self.half_turn).sin_cos();
+        (self.tangent * c + self.normal * s).normalize()
+    }
+
+    /// Normal at the end (towards the centre), in the arc's plane.
+    pub fn end_normal(&self) -> DVec3 {
+        let (s, c) = (2.0 * self.half_turn).sin_cos();
+        (self.normal * c - self.tangent * s).normalize()
+    }
+
+    /// Point at arc length `s`: `start + t·sin(κs)/κ + n·(1 − cos κs)/κ`,
+    /// written with `2 sin²(κs/2)` so that it is accurate as `κ → 0`.
+    pub fn point_at(&self, s: f64) -> DVec3 {
+        let phi = self.curvature * s;
+        let (along, across) = if phi.abs() < 1e-6 {
+            // Taylor: sin φ/κ = s(1 − φ²/6), (1 − cos φ)/κ = s φ/2 (1 − φ²/12).
+            (
+                s * (1.0 - phi * phi / 6.0),
+                0.5 * s * phi * (1.0 - phi * phi / 12.0),
+            )
+        } else {
+            let h = (0.5 * phi).sin();
+            (phi.sin() / self.curvature, 2.0 * h * h / self.curvature)
+        };
+        self.start + self.tangent * along + self.normal * across
+    }
+
+    /// Number of equal pieces the decoder cuts the arc into so that each
+    /// chord is within `sagitta` of the arc: a chord of length `ℓ` on a
+    /// circle of curvature `κ` is at most `κℓ²/8` from it (sagitta bound).
+    pub fn pieces(&self, sagitta: f64) -> usize {
+        let need = self.length * (self.curvature / (8.0 * sagitta)).sqrt();
+        if need.is_finite() && need > 1.0 {
+            need.ceil().min(1e7) as usize
+        } else {
+            1
+        }
+    }
+
+    /// Appends the decoder's points of this arc, without its start point
+    /// (the previous element's end), ending exactly at `end`.
+    pub fn sample_into(&self, sagitta: f64, out: &mut Vec<DVec3>) {
+        let n = self.pieces(sagitta);
+        for k in 1..n {
+            out.push(self.point_at(self.length * k as f64 / n as f64));
+        }
+        out.push(self.end);
+    }
+
+    /// The chain state after this arc; its chord is kept in length steps
+    /// (`length_step`) as the next prediction's chord.
+    pub fn next_state(&self, length_step: f64) -> ChainState {
+        let chord_steps = ((self.end - self.start).length() / length_step).round();
+        let chord_steps = if chord_steps.is_finite() && chord_steps < 1e12 {
+            chord_steps as i64
+        } else {
+            0
+        };
+        ChainState {
+            point: self.end,
+            tangent: self.end_tangent(),
+            normal: if self.curvature > 0.0 {
+                self.end_normal()
+            } else {
+                self.normal
+            },
+            curvature: self.curvature,
+            chord_steps,
+        }
+    }
+}
+
+/// Start tangent of a corner element from its chord direction `u`, chord
+/// length `c` and bulge (sagitta vector) `h ⊥ u`: `tan(α/2) = 2|h|/c`.
+pub fn corner_tangent(u: DVec3, c: f64, h: DVec3) -> DVec3 {
+    let hl = h.length();
+    if hl == 0.0 || c == 0.0 {
+        return u;
+    }
+    let a = 2.0 * (2.0 * hl / c).atan();
+    let (s, co) = a.sin_cos();
+    (u * co + h / hl * s).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arc_through_circle_points_has_the_circle_curvature_and_tangents() {
+        // Unit circle in the xy plane, from angle 0 to 1.3 rad.
+        let r = 2.5;
+        let p = |a: f64| DVec3::new(r * a.cos(), r * a.sin(), 1.0);
+        let t0 = DVec3::new(0.0, 1.0, 0.0);
+        let arc = Arc::new(p(0.0), t0, p(1.3)).unwrap();
+        assert!((arc.curvature - 1.0 / r).abs() < 1e-14);
+        assert!((arc.length - 1.3 * r).abs() < 1e-13);
+        let te = DVec3::new(-(1.3f64).sin(), (1.3f64).cos(), 0.0);
+        assert!((arc.end_tangent() - te).length() < 1e-14);
+        for k in 0..=10 {
+            let s = arc.length * k as f64 / 10.0;
+            assert!((arc.point_at(s) - p(s / r)).length() < 1e-13);
+        }
+        // End normal points to the centre.
+        let centre = DVec3::new(0.0, 0.0, 1.0);
+        assert!((arc.end_normal() - (centre - p(1.3)) / r).length() < 1e-14);
+    }
+
+    #[test]
+    fn straight_and_tiny_arcs_are_accurate() {
+        let arc = Arc::new(DVec3::ZERO, DVec3::X, DVec3::new(3.0, 0.0, 0.0)).unwrap();
+        assert_eq!(arc.curvature, 0.0);
+        assert_eq!(arc.point_at(1.5), DVec3::new(1.5, 0.0, 0.0));
+        let eps = 1e-9;
+        let arc = Arc::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, eps, 0.0)).unwrap();
+        assert!((arc.curvature - 2.0 * eps).abs() < 1e-20);
+        assert!((arc.point_at(arc.length) - arc.end).length() < 1e-15);
+    }
+
+    #[test]
+    fn sampled_chords_stay_within_the_sagitta() {
+        let arc = Arc::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.3)).unwrap();
+        let mut pts = vec![arc.start];
+        let sag = 1e-3;
+        arc.sample_into(sag, &mut pts);
+        assert_eq!(*pts.last().unwrap(), arc.end);
+        let centre = arc.start + arc.normal / arc.curvature;
+        for w in pts.windows(2) {
+            let mid = 0.5 * (w[0] + w[1]);
+            let dev = 1.0 / arc.curvature - (mid - centre).length();
+            assert!(dev <= sag * (1.0 + 1e-9), "sagitta {dev}");
+        }
+    }
+
+    #[test]
+    fn prediction_continues_the_previous_arc() {
+        let r = 4.0;
+        let p = |a: f64| DVec3::new(r * a.cos(), r * a.sin(), 0.0);
+        let arc = Arc::new(p(0.0), DVec3::Y, p(0.4)).unwrap();
+        let st = arc.next_state(1.0);
+        let c = (p(0.9) - p(0.4)).length();
+        let (u, e1, e2) = st.predicted_frame(c);
+        assert!((st.point + u * c - p(0.9)).length() < 1e-12);
+        assert!(u.dot(e1).abs() < 1e-15 && u.dot(e2).abs() < 1e-15);
+        assert!((e1.length() - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn corner_bulge_gives_the_arc_with_that_sagitta() {
+        let u = DVec3::X;
+        let h = DVec3::new(0.0, 0.2, 0.0);
+        let t = corner_tangent(u, 2.0, h);
+        let arc = Arc::new(DVec3::ZERO, t, DVec3::new(2.0, 0.0, 0.0)).unwrap();
+        let mid = arc.point_at(0.5 * arc.length);
+        assert!((mid - DVec3::new(1.0, 0.2, 0.0)).length() < 1e-12);
+    }
+}

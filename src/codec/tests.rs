@@ -1,0 +1,185 @@
+//! The codec's guarantee, checked by the independent O(nm) Hausdorff of
+//! `metrics` on many kinds of curves.
+
+use super::*;
+use crate::metrics::hausdorff;
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Curves of many characters: smooth helices, noisy tracts, random walks,
+/// zigzags, straight lines, dense and sparse sampling, far from the origin.
+fn curve(rng: &mut ChaCha8Rng, kind: usize) -> Vec<DVec3> {
+    let n = rng.gen_range(2..300);
+    let offset = DVec3::new(
+        rng.gen_range(-100.0..100.0),
+        rng.gen_range(-100.0..100.0),
+        rng.gen_range(-100.0..100.0),
+    );
+    let step = rng.gen_range(0.05..2.0);
+    match kind % 5 {
+        0 => {
+            let r = rng.gen_range(0.5..20.0);
+            let pitch = rng.gen_range(-3.0..3.0);
+            (0..n)
+                .map(|k| {
+                    let s = k as f64 * step / r;
+                    offset + DVec3::new(r * s.cos(), r * s.sin(), pitch * s)
+                })
+                .collect()
+        }
+        1 => {
+            let noise = rng.gen_range(0.0..0.3);
+            let mut p = offset;
+            let mut d = DVec3::X;
+            (0..n)
+                .map(|_| {
+                    d = (d + DVec3::new(
+                        rng.gen_range(-0.2..0.2),
+                        rng.gen_range(-0.2..0.2),
+                        rng.gen_range(-0.2..0.2),
+                    ))
+                    .normalize();
+                    p += d * step;
+                    p + DVec3::new(
+                        rng.gen_range(-noise..=noise),
+                        rng.gen_range(-noise..=noise),
+                        rng.gen_range(-noise..=noise),
+                    )
+                })
+                .collect()
+        }
+        2 => {
+            let mut p = offset;
+            (0..n)
+                .map(|_| {
+                    p += DVec3::new(
+                        rng.gen_range(-1.0..1.0),
+                        rng.gen_range(-1.0..1.0),
+                        rng.gen_range(-1.0..1.0),
+                    ) * step;
+                    p
+                })
+                .collect()
+        }
+        3 => (0..n)
+            .map(|k| offset + DVec3::new(k as f64 * step, if k % 2 == 0 { 0.0 } else { step }, 0.0))
+            .collect(),
+        _ => (0..n)
+            .map(|k| offset + DVec3::new(0.3, 0.5, 0.8) * (k as f64 * step))
+            .collect(),
+    }
+}
+
+fn check_block(curves: &[Vec<DVec3>], tol: f64) -> EncodedBlock {
+    let params = CodecParams::new(tol);
+    let block = encode_block(curves, &params).unwrap();
+    let back = decode_block(&block.bytes, curves.len(), &params).unwrap();
+    assert_eq!(back.len(), curves.len());
+    let mut total = 0;
+    for (k, (a, b)) in curves.iter().zip(&back).enumerate() {
+        total += b.len();
+        if a.is_empty() {
+            assert!(b.is_empty());
+            continue;
+        }
+        // Written as f32, as every output format does.
+        let b32: Vec<DVec3> = b.iter().map(|p| p.as_vec3().as_dvec3()).collect();
+        let h = hausdorff(a, &b32).unwrap();
+        assert!(h <= tol, "curve {k} (kind {}): {h} > {tol}", block.kinds[k]);
+    }
+    assert_eq!(total, block.output_points);
+    block
+}
+
+#[test]
+fn every_kind_of_curve_comes_back_within_tolerance() {
+    let mut rng = ChaCha8Rng::seed_from_u64(19);
+    for tol in [0.01, 0.1, 0.5, 2.0] {
+        let curves: Vec<Vec<DVec3>> = (0..100).map(|k| curve(&mut rng, k)).collect();
+        check_block(&curves, tol);
+    }
+}
+
+#[test]
+fn smooth_curves_are_arcs_and_small() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let curves: Vec<Vec<DVec3>> = (0..50).map(|_| curve(&mut rng, 0)).collect();
+    let points: usize = curves.iter().map(|c| c.len()).sum();
+    let block = check_block(&curves, 0.1);
+    let arcs = block.kinds.iter().filter(|&&k| k == 2).count();
+    assert!(arcs >= 45, "{arcs} of 50 helices coded as arcs");
+    // Helices are one primitive: under 4 bits per point (f32 takes 96),
+    // tight ones with a few points per turn included.
+    assert!(
+        block.bytes.len() * 2 < points,
+        "{} bytes for {points} points",
+        block.bytes.len()
+    );
+}
+
+#[test]
+fn empty_single_and_repeated_points() {
+    let p = DVec3::new(1.0, 2.0, 3.0);
+    let curves = vec![
+        vec![],
+        vec![p],
+        vec![p, p],
+        vec![p, p, p, p + DVec3::X, p + DVec3::X],
+        vec![p, p + DVec3::X * 1e-9, p + DVec3::X * 2e-9],
+    ];
+    check_block(&curves, 0.1);
+}
+
+#[test]
+fn huge_coordinates_and_tiny_tolerances_fall_back_to_raw() {
+    // f32 values, as every reader delivers.
+    let big = 1e30f32 as f64;
+    let curves = vec![
+        vec![DVec3::splat(big), DVec3::new(big, 2.0 * big, 0.0)],
+        vec![DVec3::ZERO, DVec3::X, DVec3::Y],
+    ];
+    let block = check_block(&curves, 1e-12);
+    assert_eq!(block.kinds[0], 3);
+}
+
+#[test]
+fn bad_input_is_an_error_not_a_panic() {
+    let params = CodecParams::new(0.1);
+    let e = encode_block(&[vec![DVec3::ZERO], vec![DVec3::NAN]], &params).unwrap_err();
+    assert_eq!(e, EncodeError::NonFinite { curve: 1, point: 0 });
+    assert!(encode_block(&[], &CodecParams::new(0.0)).is_err());
+    assert!(encode_block(&[], &CodecParams::new(f64::NAN)).is_err());
+}
+
+#[test]
+fn corrupt_streams_are_errors_or_decode_finite_points() {
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let curves: Vec<Vec<DVec3>> = (0..20).map(|k| curve(&mut rng, k)).collect();
+    let params = CodecParams::new(0.1);
+    let block = encode_block(&curves, &params).unwrap();
+    for trial in 0..300 {
+        let mut b = block.bytes.clone();
+        if trial % 3 == 0 {
+            b.truncate(rng.gen_range(0..b.len()));
+        } else {
+            for _ in 0..rng.gen_range(1..4) {
+                let at = rng.gen_range(0..b.len());
+                b[at] ^= 1 << rng.gen_range(0..8);
+            }
+        }
+        if let Ok(c) = decode_block(&b, curves.len(), &params) {
+            assert!(c.iter().flatten().all(|p| p.is_finite()));
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    #[test]
+    fn guarantee_holds_for_random_curves(seed in any::<u64>(), kind in 0usize..5, tol in 0.01f64..1.0) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let curves: Vec<Vec<DVec3>> = (0..4).map(|_| curve(&mut rng, kind)).collect();
+        check_block(&curves, tol);
+    }
+}
