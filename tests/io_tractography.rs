@@ -569,11 +569,13 @@ fn hand_made_bad_trk_files_say_why() {
     );
     assert_eq!(e.curve, Some(1));
     // simple.trk: curve 1 starts at 1016 with 2 points; its second x at 1032.
+    // Every reader's points go through one check (io::point_problem) that
+    // names the file, the curve and the point.
     let e = expect_err(
         d,
         "a.trk",
         &set(1032, &f32::NAN.to_le_bytes()),
-        &["non-finite", "point 1", "byte 1032"],
+        &["coordinate x is NaN", "curve 1", "point 1"],
     );
     assert_eq!(e.curve, Some(1));
     // n_count says 3: a fourth streamline is an error, and so is a missing third.

@@ -965,7 +965,7 @@ fn hostile_vtk_files() {
         (
             "nan_point",
             format!("{HEAD}ASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 nan 0 0 2 0 0\nLINES 2 6\n2 0 2\n2 1 2\n").into_bytes(),
-            vec!["not finite", "curve 1"],
+            vec!["not finite", "curve 1", "point 0"],
             Some(1),
         ),
         (
@@ -1150,7 +1150,7 @@ fn hostile_hair_files() {
         (
             "nan",
             nan,
-            vec!["not finite", "curve 1", "byte 158"],
+            vec!["coordinate x is NaN", "curve 1", "point 0"],
             Some(1),
         ),
         (
@@ -1221,9 +1221,11 @@ fn writers_reject_bad_curves_and_leave_nothing_behind() {
 #[test]
 fn vtk_writer_double_points_and_ascii_output() {
     let dir = tempfile::tempdir().unwrap();
+    // Doubles that float32 cannot hold exactly (1/3, 1e-300, 1e30 + 1/7)
+    // but within its range: readers refuse values beyond it (below).
     let c = Curve::from_points(vec![
         DVec3::new(0.1, 1e-300, -3.0),
-        DVec3::new(1.0 / 3.0, 2.0, 1e300),
+        DVec3::new(1.0 / 3.0, 2.0, 1e30 + 1.0 / 7.0),
     ]);
     for enc in ["BINARY", "ASCII"] {
         let meta = with_extra(
@@ -1238,5 +1240,12 @@ fn vtk_writer_double_points_and_ascii_output() {
         assert_same(&back, std::slice::from_ref(&c), enc);
         let text = std::fs::read(&p).unwrap();
         assert!(text.starts_with(format!("# vtk DataFile Version 3.0\ncurves written by strandfit\n{enc}\nDATASET POLYDATA\nPOINTS 2 double\n").as_bytes()));
+        // A double beyond float32's range is written, and refused on reading
+        // with the curve and point named: no output format could hold it.
+        let huge = Curve::from_points(vec![DVec3::ZERO, DVec3::new(0.0, 0.0, 1e300)]);
+        let p = dir.path().join(format!("huge_{enc}.vtk"));
+        write(&p, &meta, std::slice::from_ref(&huge));
+        let e = read_err(&p);
+        assert_error(&e, &p, &["curve 0", "point 1", "beyond the float32 range"]);
     }
 }

@@ -383,15 +383,30 @@ impl<'a> CurveEncoder<'a> {
         Some(good)
     }
 
-    /// The points on the grid of step `2T/√3`, second-order residuals.
+    /// The points on the grid (step just under `2T/√3`, so rounding moves
+    /// a point by less than `T`); `None` if a point is not codable or lands
+    /// so near a cell's corner that the output's `f32` rounding could take
+    /// it past the tolerance. Every decoded point within `T` of its input
+    /// point puts each output segment within `T` of its input segment
+    /// (distance to a segment is convex), both ways.
+    ///
+    /// Rounding towards the prediction on a finer grid (steps 0.35, 0.5 and
+    /// 0.7 T, the residual shrunk by what the tolerance ball leaves) was
+    /// measured and lost: 10-15 % larger on the sparse bundles and hair.
     pub fn points_code(&self) -> Option<CurveCode> {
-        let mut idx = Vec::with_capacity(self.points.len());
+        let g = self.grid;
+        let mut idx: Vec<[i64; 3]> = Vec::with_capacity(self.points.len());
         for p in self.points {
-            idx.push([
-                Quantiser::index(p.x, self.grid)?,
-                Quantiser::index(p.y, self.grid)?,
-                Quantiser::index(p.z, self.grid)?,
-            ]);
+            let q = [
+                Quantiser::index(p.x, g)?,
+                Quantiser::index(p.y, g)?,
+                Quantiser::index(p.z, g)?,
+            ];
+            let back = DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64) * g;
+            if back.distance_squared(*p) > self.tol2 {
+                return None;
+            }
+            idx.push(q);
         }
         Some(CurveCode::Points { grid: idx })
     }

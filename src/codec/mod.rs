@@ -82,10 +82,9 @@ impl CodecParams {
         Quantiser::new(self.tolerance, self.steps)
     }
 
-    /// Grid step of points-mode curves: `2T/√3` less a margin, so that
-    /// rounding to it moves a point by at most `T`.
+    /// Grid step of points-mode curves.
     fn grid(&self) -> f64 {
-        2.0 * self.tolerance / 3f64.sqrt() * (1.0 - 1e-9)
+        self.steps.points * self.tolerance
     }
 }
 
@@ -182,17 +181,13 @@ pub fn encode_curve(points: &[DVec3], params: &CodecParams) -> (CurveCode, usize
     if tol <= 0.0 {
         return raw();
     }
-    let pts = match enc.points_code() {
-        Some(c) => c,
-        None => return raw(),
-    };
-    if points.len() < 3 {
-        return (pts, points.len());
-    }
-    let a = enc.arcs();
-    match a {
-        Some((arcs, n)) if estimated_bits(&arcs) < estimated_bits(&pts) => (arcs, n),
-        _ => (pts, points.len()),
+    let pts = enc.points_code();
+    let arcs = if points.len() >= 3 { enc.arcs() } else { None };
+    match (arcs, pts) {
+        (Some((a, n)), Some(p)) if estimated_bits(&a) < estimated_bits(&p) => (a, n),
+        (_, Some(p)) => (p, points.len()),
+        (Some((a, n)), None) => (a, n),
+        (None, None) => raw(),
     }
 }
 

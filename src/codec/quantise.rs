@@ -24,6 +24,9 @@ pub struct Steps {
     pub start: f64,
     /// Sagitta of the decoder's chords to its arcs.
     pub sagitta: f64,
+    /// Grid of points-mode curves: just under `2/√3`, the largest step
+    /// whose rounding moves a point by at most `T`.
+    pub points: f64,
 }
 
 impl Default for Steps {
@@ -37,6 +40,7 @@ impl Default for Steps {
             length: 1.1,
             start: 0.4,
             sagitta: 0.15,
+            points: 1.1547,
         }
     }
 }
