@@ -210,7 +210,7 @@ fn whatever_compress_accepts_decompress_reads_back() {
     let dir = tempfile::tempdir().unwrap();
     runner
         .run(
-            &(prop::collection::vec(curve, 1..8), any::<bool>(), 0usize..3),
+            &(prop::collection::vec(curve, 1..8), any::<bool>(), 0usize..4),
             |(curves, skip, storage)| {
                 let csv = dir.path().join("in.csv");
                 let mut text = String::from("curve,x,y,z\n");
@@ -225,18 +225,21 @@ fn whatever_compress_accepts_decompress_reads_back() {
                 std::fs::write(&csv, text).unwrap();
                 let sfh = dir.path().join("x.sfh");
                 let _ = std::fs::remove_file(&sfh);
-                let storage = ["compact", "f32", "f64"][storage];
+                // 0: the default (version 2, the arc codec); 1-3: the
+                // version-1 helix container in each storage.
                 let mut args = vec![
                     "compress",
                     s(&csv),
                     "--tolerance",
                     "0.5",
-                    "--storage",
-                    storage,
                     "-o",
                     s(&sfh),
                     "--json",
                 ];
+                if storage > 0 {
+                    args.extend(["--distance", "ordered", "--storage"]);
+                    args.push(["compact", "f32", "f64"][storage - 1]);
+                }
                 if skip {
                     args.push("--skip-bad");
                 }
@@ -267,6 +270,22 @@ fn whatever_compress_accepts_decompress_reads_back() {
                     .collect();
                 let ids: Vec<String> = got.iter().map(|c| c.id.clone().unwrap()).collect();
                 prop_assert_eq!(ids, want);
+                if storage == 0 {
+                    // Version 2: every curve within the tolerance, two-sided.
+                    let kept = (0..curves.len()).filter(|i| !bad.contains(i));
+                    for (i, g) in kept.zip(&got) {
+                        let want: Vec<strandfit::DVec3> = curves[i]
+                            .iter()
+                            .map(|p| strandfit::DVec3::from_array(*p))
+                            .collect();
+                        if want.is_empty() {
+                            prop_assert!(g.points.is_empty());
+                        } else {
+                            let h = strandfit::metrics::hausdorff(&want, &g.points).unwrap();
+                            prop_assert!(h <= 0.5, "curve {i}: {h}");
+                        }
+                    }
+                }
                 Ok(())
             },
         )

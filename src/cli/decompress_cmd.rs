@@ -20,6 +20,9 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
         bail!("--points must be at least 2");
     }
     let to = args.to.as_deref().map(parse_format).transpose()?;
+    if crate::codec::container::container_version(&args.input) == Some(2) {
+        return run_v2(args, to);
+    }
     let reader = ContainerReader::open(&args.input)?;
     let meta = reader.header().source.to_metadata();
     let target = match to {
@@ -95,4 +98,89 @@ fn sample_chain(
         (None, None) => (source_points as usize).clamp(2, 1 << 24),
     };
     chain.sample(m.max(2))
+}
+
+/// A version-2 container: the codec's points (the guarantee's), or a
+/// resampling of them when asked.
+fn run_v2(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
+    use crate::codec::container::ReaderV2;
+    use crate::codec::stream::decompress_stream;
+
+    let mut reader = ReaderV2::open(&args.input)?;
+    let header = reader.header().clone();
+    let meta = header.source.to_metadata();
+    let target = match to {
+        Some(f) => f,
+        None => Format::from_path(&args.output)?,
+    };
+    check_losses(
+        &args.input,
+        &args.output,
+        &target.losses(&meta),
+        args.strict,
+    )?;
+    if args.points.is_some() || args.step.is_some() {
+        eprintln!(
+            "warning: {}: resampling with --points/--step gives up the guarantee that every \
+             curve is within {} of its input (it holds for the default points)",
+            args.input.display(),
+            header.tolerance
+        );
+    }
+    let mut writer = create_writer(&args.output, Some(target), &meta)?;
+    let (points, step) = (args.points, args.step);
+    let map = move |c: crate::codec::container::DecodedCurve| Curve {
+        id: c.id,
+        points: match (points, step) {
+            (None, None) => c.points,
+            (m, s) => resample_polyline(&c.points, m, s),
+        },
+        point_data: Vec::new(),
+        curve_data: c.curve_data,
+    };
+    let n = decompress_stream(&mut reader, &mut *writer, &map, &mut |_| {})
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    writer.finish()?;
+    eprintln!(
+        "{} -> {}: {n} curves",
+        args.input.display(),
+        args.output.display()
+    );
+    Ok(())
+}
+
+/// `m` points equally spaced in arc length along the polyline (or points
+/// `step` apart, both ends kept).
+fn resample_polyline(p: &[glam::DVec3], m: Option<usize>, step: Option<f64>) -> Vec<glam::DVec3> {
+    if p.len() < 2 {
+        return p.to_vec();
+    }
+    let mut cum = Vec::with_capacity(p.len());
+    let mut total = 0.0;
+    cum.push(0.0);
+    for w in p.windows(2) {
+        total += w[0].distance(w[1]);
+        cum.push(total);
+    }
+    let m = match (m, step) {
+        (Some(m), _) => m.max(2),
+        (None, Some(s)) => ((total / s).ceil() as usize + 1).clamp(2, 1 << 24),
+        (None, None) => p.len(),
+    };
+    let mut out = Vec::with_capacity(m);
+    let mut seg = 0;
+    for k in 0..m {
+        let s = total * k as f64 / (m - 1) as f64;
+        while seg + 2 < p.len() && cum[seg + 1] < s {
+            seg += 1;
+        }
+        let len = cum[seg + 1] - cum[seg];
+        let t = if len > 0.0 {
+            ((s - cum[seg]) / len).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        out.push(p[seg].lerp(p[seg + 1], t));
+    }
+    out
 }

@@ -242,10 +242,16 @@ pub enum StorageArg {
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
 pub enum DistanceArg {
-    /// The input's points lie within the tolerance of the chain, in order
+    /// Two-sided: every input point within the tolerance of the output
+    /// polyline and every output point within it of the input polyline
+    /// (container version 2, the arc codec; guaranteed at default
+    /// decompression).
+    Hausdorff,
+    /// Version-1 helix container: the input's points lie within the
+    /// tolerance of the chain, in order
     /// (Fréchet distance with the input taken as its samples).
     Ordered,
-    /// Continuous Fréchet distance to the input polyline (also charges the
+    /// Version-1 helix container: continuous Fréchet distance to the input polyline (also charges the
     /// input's chords: h²/8R on a bend of radius R sampled every h).
     Frechet,
 }
@@ -269,8 +275,11 @@ pub struct CompressArgs {
     /// How parameters are stored.
     #[arg(long, value_enum, default_value_t = StorageArg::Compact)]
     pub storage: StorageArg,
-    /// The distance --tolerance is measured in.
-    #[arg(long, value_enum, default_value_t = DistanceArg::Ordered)]
+    /// The distance --tolerance is measured in. `hausdorff` writes a
+    /// version-2 container (the arc codec); `ordered` and `frechet`, and
+    /// --elements, --element-length and --storage f32|f64, write version 1
+    /// (helix chains).
+    #[arg(long, value_enum, default_value_t = DistanceArg::Hausdorff)]
     pub distance: DistanceArg,
     /// Cap on elements per curve.
     #[arg(long, default_value_t = 4096)]
@@ -314,10 +323,14 @@ pub struct DecompressArgs {
     /// Output curve file. Written atomically.
     #[arg(short, long)]
     pub output: std::path::PathBuf,
-    /// Sample each curve every S (input units) along its arc length.
+    /// Sample each curve every S (input units) along its arc length. For a
+    /// version-2 container this gives up the tolerance guarantee (which is
+    /// about the default points), and says so.
     #[arg(long, conflicts_with = "points")]
     pub step: Option<f64>,
-    /// Sample each curve at M points (default: as many as the input had).
+    /// Sample each curve at M points equally spaced in arc length (default:
+    /// version 2, the points the tolerance is guaranteed for; version 1, as
+    /// many as the input had). Gives up a version-2 guarantee, and says so.
     #[arg(short = 'm', long)]
     pub points: Option<usize>,
     /// Output format (default: from the extension).

@@ -47,10 +47,12 @@
 //! ```
 
 pub mod check;
+pub mod container;
 pub mod encoder;
 pub mod entropy;
 pub mod predict;
 pub mod quantise;
+pub mod stream;
 
 use glam::DVec3;
 use rayon::prelude::*;

@@ -1,0 +1,154 @@
+//! Whole files through the codec: [`compress_stream`] reads curves from any
+//! [`CurveReader`] into a version-2 container, block by block;
+//! [`decompress_stream`] writes a container's curves to any
+//! [`CurveWriter`], decoding several blocks at once. Memory is bounded by a
+//! few blocks whatever the file's size; neither prints (progress goes to a
+//! callback).
+
+use std::path::Path;
+
+use rayon::prelude::*;
+
+use super::container::{
+    encode_block_bytes, CurveIn, DecodedCurve, HeaderV2, ReaderV2, WriterV2, BLOCK_CURVES,
+};
+use crate::io::{Curve, CurveReader, CurveWriter, IoError};
+
+/// What [`compress_stream`] did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CompressSummary {
+    pub curves: u64,
+    pub points: u64,
+    /// Points the default decompression writes.
+    pub output_points: u64,
+    /// Curves by how they are coded: empty, points, arcs, raw.
+    pub kinds: [u64; 4],
+    pub bytes: u64,
+}
+
+/// Compresses every curve of `reader` into a version-2 container at `out`
+/// (written atomically). `progress` gets the number of curves done after
+/// each block. Errors name the input file and curve for bad input, the
+/// output for write failures.
+pub fn compress_stream(
+    reader: &mut dyn CurveReader,
+    input: &Path,
+    out: &Path,
+    header: &HeaderV2,
+    progress: &mut dyn FnMut(u64),
+) -> Result<CompressSummary, IoError> {
+    let params = header.params();
+    let n_cd = header.source.curve_data_names.len();
+    let mut writer = WriterV2::create(out, header)?;
+    let mut summary = CompressSummary::default();
+    let mut batch: Vec<Curve> = Vec::with_capacity(BLOCK_CURVES);
+    let mut done = false;
+    while !done {
+        batch.clear();
+        while batch.len() < BLOCK_CURVES {
+            match reader.next() {
+                Some(c) => batch.push(c?),
+                None => {
+                    done = true;
+                    break;
+                }
+            }
+        }
+        if batch.is_empty() {
+            break;
+        }
+        let ins: Vec<CurveIn> = batch
+            .iter()
+            .map(|c| CurveIn {
+                id: c.id.as_deref(),
+                points: &c.points,
+                curve_data: &c.curve_data,
+            })
+            .collect();
+        let block = encode_block_bytes(&ins, &params, n_cd).map_err(|(k, why)| {
+            IoError::new(input, format!("cannot be compressed: {why}"))
+                .curve(summary.curves + k as u64)
+        })?;
+        writer.write_block(&block)?;
+        summary.curves += batch.len() as u64;
+        summary.points += batch.iter().map(|c| c.points.len() as u64).sum::<u64>();
+        summary.output_points += block.encoded.output_points as u64;
+        for &k in &block.encoded.kinds {
+            summary.kinds[k as usize] += 1;
+        }
+        progress(summary.curves);
+    }
+    summary.bytes = writer.finish()?;
+    Ok(summary)
+}
+
+/// Blocks decoded at once (in parallel) by [`decompress_stream`].
+const BLOCKS_AT_ONCE: usize = 8;
+
+/// Writes every curve of the container to `writer` (which the caller
+/// finishes), `map` turning each decoded curve into the curve written
+/// (e.g. resampling it). Returns the number of curves written.
+pub fn decompress_stream(
+    reader: &mut ReaderV2,
+    writer: &mut dyn CurveWriter,
+    map: &(dyn Fn(DecodedCurve) -> Curve + Sync),
+    progress: &mut dyn FnMut(u64),
+) -> Result<u64, IoError> {
+    let header = reader.header().clone();
+    let path = reader.path().to_path_buf();
+    let mut written = 0u64;
+    let n = reader.block_count();
+    let mut k = 0;
+    while k < n {
+        let end = (k + BLOCKS_AT_ONCE).min(n);
+        let raw = (k..end)
+            .map(|b| reader.read_block_bytes(b))
+            .collect::<Result<Vec<_>, _>>()?;
+        let decoded: Vec<Result<Vec<Curve>, IoError>> = raw
+            .par_iter()
+            .map(|b| {
+                b.decode(&path, &header)
+                    .map(|cs| cs.into_iter().map(map).collect())
+            })
+            .collect();
+        for block in decoded {
+            for c in block? {
+                writer.write_curve(&c)?;
+                written += 1;
+            }
+        }
+        progress(written);
+        k = end;
+    }
+    Ok(written)
+}
+
+/// Curves `first..first + count` of the container, reading only the
+/// blocks that hold them (random access through the index).
+pub fn read_range(
+    reader: &mut ReaderV2,
+    first: u64,
+    count: u64,
+) -> Result<Vec<DecodedCurve>, IoError> {
+    let header = reader.header().clone();
+    let path = reader.path().to_path_buf();
+    let end = first.saturating_add(count).min(reader.curve_count());
+    let mut out = Vec::new();
+    for b in 0..reader.block_count() {
+        let raw = {
+            let (b_first, b_count) = reader.block_span(b);
+            if b_first + b_count <= first || b_first >= end {
+                continue;
+            }
+            reader.read_block_bytes(b)?
+        };
+        let curves = raw.decode(&path, &header)?;
+        for (k, c) in curves.into_iter().enumerate() {
+            let i = raw.first + k as u64;
+            if i >= first && i < end {
+                out.push(c);
+            }
+        }
+    }
+    Ok(out)
+}
