@@ -52,11 +52,18 @@ pub struct HeaderV2 {
     pub codec: String,
     /// The two-sided Hausdorff tolerance every curve was compressed to.
     pub tolerance: f64,
+    /// Left out of the JSON when they are the defaults.
+    #[serde(default, skip_serializing_if = "is_default_steps")]
     pub steps: Steps,
     pub source: SourceMeta,
     /// Per-point data names of the input that are not stored.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub dropped_point_data: Vec<String>,
     pub written_by: String,
+}
+
+fn is_default_steps(s: &Steps) -> bool {
+    *s == Steps::default()
 }
 
 impl HeaderV2 {

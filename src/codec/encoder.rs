@@ -28,7 +28,7 @@ pub struct CurveEncoder<'a> {
     pub q: Quantiser,
     /// Squared acceptance distance (the tolerance less a rounding margin).
     pub tol2: f64,
-    /// Points-mode grid step.
+    /// Points-mode lattice half step.
     pub grid: f64,
 }
 
@@ -247,9 +247,9 @@ impl<'a> CurveEncoder<'a> {
         Some(good)
     }
 
-    /// The arcs for this curve, or `None` where some stretch has no element
-    /// that passes.
-    pub fn arcs(&self) -> Option<(CurveCode, usize)> {
+    /// The arcs for this curve and the points they decode to, or `None`
+    /// where some stretch has no element that passes.
+    pub fn arcs(&self) -> Option<(CurveCode, Vec<DVec3>)> {
         let n = self.points.len();
         let start = self.start_index()?;
         let q0 = DVec3::new(
@@ -260,10 +260,10 @@ impl<'a> CurveEncoder<'a> {
         if q0.distance_squared(self.points[0]) > self.tol2 {
             return None;
         }
-        let mut out_points = 1usize;
+        let mut decoded = vec![q0];
         // First element: its end on the start grid, and a bulge.
         let first = self.first_element(q0)?;
-        out_points += first.samples.len();
+        decoded.extend_from_slice(&first.samples);
         let mut state = first.arc.next_state(self.q.length);
         let mut from = first.reach;
         let mut elements = Vec::new();
@@ -285,7 +285,7 @@ impl<'a> CurveEncoder<'a> {
                 }
             }
             let chosen = chosen?;
-            out_points += chosen.samples.len();
+            decoded.extend_from_slice(&chosen.samples);
             state = next_state(&chosen.arc, &state, chosen.code.kind, self.q.length);
             from = chosen.reach;
             elements.push(chosen.code);
@@ -297,7 +297,7 @@ impl<'a> CurveEncoder<'a> {
                 first_bulge,
                 elements,
             },
-            out_points,
+            decoded,
         ))
     }
 
@@ -383,10 +383,10 @@ impl<'a> CurveEncoder<'a> {
         Some(good)
     }
 
-    /// The points on the grid (step just under `2T/√3`, so rounding moves
-    /// a point by less than `T`); `None` if a point is not codable or lands
-    /// so near a cell's corner that the output's `f32` rounding could take
-    /// it past the tolerance. Every decoded point within `T` of its input
+    /// The points on the body-centred cubic lattice (nearest point within
+    /// `T`); `None` if a point is not codable or lands so near the edge of
+    /// its cell that the output's `f32` rounding could take it past the
+    /// tolerance. Every decoded point within `T` of its input
     /// point puts each output segment within `T` of its input segment
     /// (distance to a segment is convex), both ways.
     ///
@@ -394,21 +394,19 @@ impl<'a> CurveEncoder<'a> {
     /// 0.7 T, the residual shrunk by what the tolerance ball leaves) was
     /// measured and lost: 10-15 % larger on the sparse bundles and hair.
     pub fn points_code(&self) -> Option<CurveCode> {
-        let g = self.grid;
+        let half = self.grid;
         let mut idx: Vec<[i64; 3]> = Vec::with_capacity(self.points.len());
         for p in self.points {
-            let q = [
-                Quantiser::index(p.x, g)?,
-                Quantiser::index(p.y, g)?,
-                Quantiser::index(p.z, g)?,
-            ];
-            let back = DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64) * g;
-            if back.distance_squared(*p) > self.tol2 {
+            let q = super::quantise::bcc_nearest(*p, half)?;
+            if super::quantise::bcc_point(q, half).distance_squared(*p) > self.tol2 {
                 return None;
             }
             idx.push(q);
         }
-        Some(CurveCode::Points { grid: idx })
+        Some(CurveCode::Points {
+            grid: idx,
+            reference: None,
+        })
     }
 }
 

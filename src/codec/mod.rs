@@ -52,6 +52,7 @@ pub mod encoder;
 pub mod entropy;
 pub mod predict;
 pub mod quantise;
+pub mod reference;
 pub mod stream;
 
 use glam::DVec3;
@@ -63,6 +64,7 @@ use encoder::{
 use entropy::{Bit, Decoder, Encoder, IntModel};
 use predict::Arc;
 use quantise::{Quantiser, Steps};
+use reference::Reference;
 
 /// How a block is coded: the tolerance and the steps (both stored in the
 /// container's header).
@@ -84,9 +86,9 @@ impl CodecParams {
         Quantiser::new(self.tolerance, self.steps)
     }
 
-    /// Grid step of points-mode curves.
+    /// Half the cube side of the points-mode lattice.
     fn grid(&self) -> f64 {
-        self.steps.points * self.tolerance
+        0.5 * self.steps.points * self.tolerance
     }
 }
 
@@ -117,9 +119,11 @@ pub struct ElementCode {
 #[derive(Clone, Debug, PartialEq)]
 pub enum CurveCode {
     Empty,
-    /// Points on the grid of step `2T/√3` (indices).
+    /// Points on the grid of step `2T/√3` (indices), predicted from their
+    /// own last step or from a neighbour's ([`reference`]).
     Points {
         grid: Vec<[i64; 3]>,
+        reference: Option<Reference>,
     },
     /// Start point on the start grid, the first element's end relative to
     /// it on the same grid, its bulge, then the elements.
@@ -166,30 +170,40 @@ pub struct EncodedBlock {
 /// must not make the decoder allocate without bound).
 pub const MAX_DECODED_POINTS: usize = 1 << 28;
 
-/// Encodes one curve (no entropy coding): the code and its decoded point
-/// count.
-pub fn encode_curve(points: &[DVec3], params: &CodecParams) -> (CurveCode, usize) {
+/// The ways one curve can be coded, before the block chooses (the choice
+/// depends on the curves before it, through [`reference`]).
+pub struct CurveOptions {
+    /// Grid points (points mode), if every point is codable.
+    pub points: Option<Vec<[i64; 3]>>,
+    /// Arcs and the points they decode to.
+    pub arcs: Option<(CurveCode, Vec<DVec3>)>,
+}
+
+/// Fits one curve both ways (no entropy coding; curves in parallel).
+pub fn curve_options(points: &[DVec3], params: &CodecParams) -> CurveOptions {
+    let none = CurveOptions {
+        points: None,
+        arcs: None,
+    };
     if points.is_empty() {
-        return (CurveCode::Empty, 0);
+        return none;
     }
     let tol = acceptance_tolerance(params.tolerance, points);
+    if tol <= 0.0 {
+        return none;
+    }
     let enc = CurveEncoder {
         points,
         q: params.quantiser(),
-        tol2: if tol > 0.0 { tol * tol } else { -1.0 },
+        tol2: tol * tol,
         grid: params.grid(),
     };
-    let raw = || (CurveCode::Raw(points.to_vec()), points.len());
-    if tol <= 0.0 {
-        return raw();
-    }
-    let pts = enc.points_code();
-    let arcs = if points.len() >= 3 { enc.arcs() } else { None };
-    match (arcs, pts) {
-        (Some((a, n)), Some(p)) if estimated_bits(&a) < estimated_bits(&p) => (a, n),
-        (_, Some(p)) => (p, points.len()),
-        (Some((a, n)), None) => (a, n),
-        (None, None) => raw(),
+    CurveOptions {
+        points: match enc.points_code() {
+            Some(CurveCode::Points { grid, .. }) => Some(grid),
+            _ => None,
+        },
+        arcs: if points.len() >= 3 { enc.arcs() } else { None },
     }
 }
 
@@ -208,17 +222,11 @@ fn estimated_bits(code: &CurveCode) -> u64 {
     match code {
         CurveCode::Empty => 2,
         CurveCode::Raw(p) => 192 * p.len() as u64,
-        CurveCode::Points { grid } => {
+        CurveCode::Points { grid, .. } => {
             let mut bits = 8;
             for k in 1..grid.len() {
-                for a in 0..3 {
-                    let pred = if k >= 2 {
-                        2 * grid[k - 1][a] - grid[k - 2][a]
-                    } else {
-                        grid[k - 1][a]
-                    };
-                    bits += eg_bits(grid[k][a] - pred);
-                }
+                let p = own_prediction(grid, k);
+                bits += lattice_bits([0, 1, 2].map(|a| grid[k][a] - p[a]));
             }
             bits
         }
@@ -244,6 +252,90 @@ fn estimated_bits(code: &CurveCode) -> u64 {
     }
 }
 
+/// Codes a difference of two lattice points (coordinates of one parity):
+/// the parity, then each coordinate halved.
+fn put_lattice(enc: &mut Encoder, parity: &mut Bit, m: &mut [IntModel; 3], d: [i64; 3]) {
+    let b = d[0] & 1;
+    enc.bit(parity, b != 0);
+    for a in 0..3 {
+        m[a].put(enc, (d[a] - b) / 2);
+    }
+}
+
+fn get_lattice(dec: &mut Decoder, parity: &mut Bit, m: &mut [IntModel; 3]) -> [i64; 3] {
+    let b = dec.bit(parity) as i64;
+    [0, 1, 2].map(|a| m[a].get(dec).wrapping_mul(2).wrapping_add(b))
+}
+
+/// Static cost of a lattice difference (for the encoder's choices).
+fn lattice_bits(d: [i64; 3]) -> u64 {
+    let b = d[0] & 1;
+    1 + (0..3).map(|a| eg_bits((d[a] - b) / 2)).sum::<u64>()
+}
+
+/// Second-order prediction of grid point `k ≥ 1` from the curve's own
+/// previous points (first order for the second point).
+fn own_prediction(g: &[[i64; 3]], k: usize) -> [i64; 3] {
+    if k >= 2 {
+        [0, 1, 2].map(|a| g[k - 1][a].wrapping_mul(2).wrapping_sub(g[k - 2][a]))
+    } else {
+        g[k - 1]
+    }
+}
+
+/// Chooses one curve's code given the block so far: arcs, or points with
+/// their own or a neighbour's prediction, whichever is estimated cheaper;
+/// returns the code, its decoded points on the grid (a reference for the
+/// curves after it) and its decoded point count.
+fn choose(
+    points: &[DVec3],
+    opt: CurveOptions,
+    grids: &[Vec<[i64; 3]>],
+    prev: &Previous,
+    grid_step: f64,
+) -> (CurveCode, Vec<[i64; 3]>, usize) {
+    if points.is_empty() {
+        return (CurveCode::Empty, Vec::new(), 0);
+    }
+    let pts = opt.points.map(|g| {
+        let own_start = lattice_bits([0, 1, 2].map(|a| g[0][a].wrapping_sub(prev.point_start[a])));
+        let own = own_start
+            + (1..g.len())
+                .map(|k| {
+                    let p = own_prediction(&g, k);
+                    lattice_bits([0, 1, 2].map(|a| g[k][a].wrapping_sub(p[a])))
+                })
+                .sum::<u64>();
+        match reference::best_reference(&g, grids, lattice_bits) {
+            Some((rf, bits)) if bits < own => (g, Some(rf), bits),
+            _ => (g, None, own),
+        }
+    });
+    match (opt.arcs, pts) {
+        (Some((a, decoded)), Some((_, _, bits))) if estimated_bits(&a) < bits => {
+            let n = decoded.len();
+            (a, reference::regrid(&decoded, grid_step), n)
+        }
+        (_, Some((g, reference, _))) => {
+            let n = g.len();
+            let decoded = g.clone();
+            (CurveCode::Points { grid: g, reference }, decoded, n)
+        }
+        (Some((a, decoded)), None) => {
+            let n = decoded.len();
+            (a, reference::regrid(&decoded, grid_step), n)
+        }
+        (None, None) => {
+            let n = points.len();
+            (
+                CurveCode::Raw(points.to_vec()),
+                reference::regrid(points, grid_step),
+                n,
+            )
+        }
+    }
+}
+
 /// The adaptive models of one block: one per coded field.
 #[derive(Default)]
 struct Models {
@@ -259,6 +351,15 @@ struct Models {
     bulge: [IntModel; 2],
     residual: [IntModel; 3],
     raw_count: IntModel,
+    has_reference: Bit,
+    point_start: [IntModel; 3],
+    /// Parity of lattice differences: reference start, reference
+    /// residual, own start, own residual.
+    parity: [Bit; 4],
+    back: IntModel,
+    reversed: Bit,
+    ref_start: [IntModel; 3],
+    ref_residual: [IntModel; 3],
 }
 
 /// Cross-curve predictions: the previous curve's start and first end.
@@ -320,16 +421,23 @@ pub fn encode_block(
             return Err(EncodeError::NonFinite { curve: c, point: k });
         }
     }
-    let codes: Vec<(CurveCode, usize)> = curves
+    let options: Vec<CurveOptions> = curves
         .par_iter()
-        .map(|pts| encode_curve(pts, params))
+        .map(|pts| curve_options(pts, params))
         .collect();
+    let grid_step = params.grid();
     let mut enc = Encoder::new();
     let mut m = Models::default();
     let mut prev = Previous::default();
-    let mut kinds = Vec::with_capacity(codes.len());
+    let mut kinds = Vec::with_capacity(curves.len());
     let mut output_points = 0;
-    for (code, n) in &codes {
+    // The block's decoded curves on the points grid: the references.
+    let mut grids: Vec<Vec<[i64; 3]>> = Vec::with_capacity(curves.len());
+    for (points, opt) in curves.iter().zip(options) {
+        // The choice, in order: a points-mode curve may lean on those before.
+        let (code, decoded_grid, n) = choose(points, opt, &grids, &prev, grid_step);
+        grids.push(decoded_grid);
+        let code = &code;
         output_points += n;
         let kind = kind_of(code);
         kinds.push(kind);
@@ -342,22 +450,39 @@ pub fn encode_block(
                     enc.direct(v.to_bits(), 64);
                 }
             }
-            CurveCode::Points { grid } => {
+            CurveCode::Points { grid, reference } => {
                 m.count.put_unsigned(&mut enc, grid.len() as u64 - 1);
-                for a in 0..3 {
-                    m.start[a].put(&mut enc, grid[0][a] - prev.point_start[a]);
+                if grids.len() > 1 {
+                    enc.bit(&mut m.has_reference, reference.is_some());
                 }
-                prev.point_start = grid[0];
-                for k in 1..grid.len() {
-                    for a in 0..3 {
-                        let pred = if k >= 2 {
-                            2 * grid[k - 1][a] - grid[k - 2][a]
-                        } else {
-                            grid[k - 1][a]
-                        };
-                        m.residual[a].put(&mut enc, grid[k][a] - pred);
+                match reference {
+                    Some(rf) => {
+                        m.back.put_unsigned(&mut enc, rf.back as u64 - 1);
+                        enc.bit(&mut m.reversed, rf.reversed);
+                        // `grids` holds this curve last: its reference is
+                        // `back` before that.
+                        let r = &grids[grids.len() - 1 - rf.back];
+                        let start = reference::at(r, 0, rf.reversed);
+                        let d = [0, 1, 2].map(|a| grid[0][a] - start[a]);
+                        put_lattice(&mut enc, &mut m.parity[0], &mut m.ref_start, d);
+                        let n = grid.len();
+                        for k in 1..n {
+                            let pred = reference::predict(grid[k - 1], k, n, r, rf.reversed);
+                            let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
+                            put_lattice(&mut enc, &mut m.parity[1], &mut m.ref_residual, d);
+                        }
+                    }
+                    None => {
+                        let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
+                        put_lattice(&mut enc, &mut m.parity[2], &mut m.point_start, d);
+                        for k in 1..grid.len() {
+                            let pred = own_prediction(grid, k);
+                            let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
+                            put_lattice(&mut enc, &mut m.parity[3], &mut m.residual, d);
+                        }
                     }
                 }
+                prev.point_start = grid[0];
             }
             CurveCode::Arcs {
                 start,
@@ -410,8 +535,11 @@ pub fn decode_block(
     let q = params.quantiser();
     let grid = params.grid();
     let mut out = Vec::with_capacity(count);
+    // Decoded curves on the points grid, for points-mode references.
+    let mut grids: Vec<Vec<[i64; 3]>> = Vec::with_capacity(count);
     for curve in 0..count {
         let bad = |why: String| DecodeError::Curve { curve, why };
+        let mut pushed = false;
         let kind = get_kind(&mut dec, &mut m);
         let pts = match kind {
             0 => Vec::new(),
@@ -441,29 +569,43 @@ pub fn decode_block(
                         bytes.len()
                     )));
                 }
-                let mut g = [[0i64; 3]; 2];
-                let mut p = Vec::with_capacity(n);
-                for a in 0..3 {
-                    g[1][a] = prev.point_start[a].wrapping_add(m.start[a].get(&mut dec));
-                }
-                prev.point_start = g[1];
-                p.push(g[1]);
-                for k in 1..n {
-                    let mut next = [0i64; 3];
-                    for a in 0..3 {
-                        let pred = if k >= 2 {
-                            (2 * g[1][a]).wrapping_sub(g[0][a])
-                        } else {
-                            g[1][a]
-                        };
-                        next[a] = pred.wrapping_add(m.residual[a].get(&mut dec));
+                let with_reference = !grids.is_empty() && dec.bit(&mut m.has_reference);
+                let mut g: Vec<[i64; 3]> = Vec::with_capacity(n);
+                if with_reference {
+                    let back = m.back.get_unsigned(&mut dec) as usize + 1;
+                    let reversed = dec.bit(&mut m.reversed);
+                    if back > grids.len() || back > reference::MAX_BACK {
+                        return Err(bad(format!("reference {back} curves back")));
                     }
-                    g = [g[1], next];
-                    p.push(next);
+                    let r = &grids[grids.len() - back];
+                    if r.len() < 2 {
+                        return Err(bad("a reference of fewer than two points".into()));
+                    }
+                    let start = reference::at(r, 0, reversed);
+                    let d = get_lattice(&mut dec, &mut m.parity[0], &mut m.ref_start);
+                    g.push([0, 1, 2].map(|a| start[a].wrapping_add(d[a])));
+                    for k in 1..n {
+                        let pred = reference::predict(g[k - 1], k, n, r, reversed);
+                        let d = get_lattice(&mut dec, &mut m.parity[1], &mut m.ref_residual);
+                        g.push([0, 1, 2].map(|a| pred[a].wrapping_add(d[a])));
+                    }
+                } else {
+                    let d = get_lattice(&mut dec, &mut m.parity[2], &mut m.point_start);
+                    g.push([0, 1, 2].map(|a| prev.point_start[a].wrapping_add(d[a])));
+                    for k in 1..n {
+                        let pred = own_prediction(&g, k);
+                        let d = get_lattice(&mut dec, &mut m.parity[3], &mut m.residual);
+                        g.push([0, 1, 2].map(|a| pred[a].wrapping_add(d[a])));
+                    }
                 }
-                p.iter()
+                prev.point_start = g[0];
+                let p = g
+                    .iter()
                     .map(|k| DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * grid)
-                    .collect()
+                    .collect();
+                grids.push(g);
+                pushed = true;
+                p
             }
             2 => {
                 let n = m.count.get_unsigned(&mut dec) as usize;
@@ -528,6 +670,9 @@ pub fn decode_block(
         }
         if let Some(k) = pts.iter().position(|p| !p.is_finite()) {
             return Err(bad(format!("point {k} decodes to a non-finite value")));
+        }
+        if !pushed {
+            grids.push(reference::regrid(&pts, grid));
         }
         out.push(pts);
     }

@@ -75,25 +75,48 @@ pub struct Header {
     pub written_by: String,
 }
 
-/// [`Metadata`] in a serialisable form.
+/// [`Metadata`] in a serialisable form. Fields at their defaults (no file
+/// name, the identity affine, no sizes, no names) are left out of the JSON:
+/// on a small tractogram the header is a noticeable share of the file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SourceMeta {
     pub format: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub file: Option<String>,
     /// Row-major 4×4.
+    #[serde(default = "identity", skip_serializing_if = "is_identity")]
     pub vox_to_world: [[f64; 4]; 4],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub voxel_size: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dimensions: Option<[u32; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub units: Option<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub curve_data_names: Vec<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub extra: Vec<(String, String)>,
+}
+
+fn identity() -> [[f64; 4]; 4] {
+    DMat4::IDENTITY.to_cols_array_2d()
+}
+
+fn is_identity(m: &[[f64; 4]; 4]) -> bool {
+    *m == identity()
 }
 
 impl SourceMeta {
     pub fn from_metadata(m: &Metadata, file: Option<&Path>) -> Self {
         SourceMeta {
             format: m.format.extension().to_string(),
-            file: file.map(|f| f.display().to_string()),
+            // The name, not the path: where the input lived is the
+            // writer's business, and a path is bytes in every file.
+            file: file.map(|f| {
+                f.file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| f.display().to_string())
+            }),
             vox_to_world: m.vox_to_world.transpose().to_cols_array_2d(),
             voxel_size: m.voxel_size,
             dimensions: m.dimensions,

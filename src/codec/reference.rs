@@ -1,0 +1,179 @@
+//! Inter-curve prediction: a curve's points predicted from a neighbour.
+//!
+//! Fibres of a bundle, hairs of a clump and field lines of an active region
+//! run side by side: a curve's next step is better predicted by the step
+//! its neighbour takes at the same place than by its own last step. A
+//! points-mode curve may name one of the [`MAX_BACK`] curves before it in
+//! its block (either direction) as its *reference*; its step `i` is then
+//! predicted as the reference's step between the matching points
+//! `j(i − 1)` and `j(i)`, with `j(i) = round(i (m − 1) / (n − 1))` for a
+//! curve of `n` and a reference of `m` points, and its start by the
+//! reference's start. The reference is the decoded curve rounded to the
+//! points grid, which the decoder computes exactly as the encoder does.
+//!
+//! On the resampled bundles of the shared data (20 points 4–11 mm apart)
+//! the best of the 32 previous curves cuts the residuals' entropy from 3.5
+//! to 2.4 bits per coordinate at 0.5 mm (benches note in the README); the
+//! encoder picks by estimated cost, so a curve with no good neighbour
+//! keeps its own second-order prediction.
+
+use glam::DVec3;
+
+use super::quantise::bcc_nearest;
+
+/// How far back a reference may be, in curves of the same block.
+pub const MAX_BACK: usize = 32;
+/// References whose end points are nearest are costed in full; the others
+/// are not tried (the search stays `O(n)` per curve).
+const SHORTLIST: usize = 4;
+
+/// A curve's reference: `back` curves before it, maybe reversed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Reference {
+    pub back: usize,
+    pub reversed: bool,
+}
+
+/// The points of a decoded curve on the points lattice (half step
+/// `half`; empty when a coordinate is beyond what the lattice codes: such a
+/// curve is no reference).
+pub fn regrid(points: &[DVec3], half: f64) -> Vec<[i64; 3]> {
+    let mut out = Vec::with_capacity(points.len());
+    for p in points {
+        match bcc_nearest(*p, half) {
+            Some(k) => out.push(k),
+            None => return Vec::new(),
+        }
+    }
+    out
+}
+
+/// Index into a reference of `m` points matching point `i` of `n`.
+#[inline]
+pub fn matching(i: usize, n: usize, m: usize) -> usize {
+    if n <= 1 {
+        0
+    } else {
+        (i * (m - 1) + (n - 1) / 2) / (n - 1)
+    }
+}
+
+/// Point `j` of `r`, counted from the end when `reversed`.
+#[inline]
+pub fn at(r: &[[i64; 3]], j: usize, reversed: bool) -> [i64; 3] {
+    if reversed {
+        r[r.len() - 1 - j]
+    } else {
+        r[j]
+    }
+}
+
+/// Prediction of point `i ≥ 1` of a curve of `n` points from its decoded
+/// previous point and the reference.
+#[inline]
+pub fn predict(prev: [i64; 3], i: usize, n: usize, r: &[[i64; 3]], reversed: bool) -> [i64; 3] {
+    let m = r.len();
+    let a = at(r, matching(i - 1, n, m), reversed);
+    let b = at(r, matching(i, n, m), reversed);
+    [0, 1, 2].map(|k| prev[k].wrapping_add(b[k].wrapping_sub(a[k])))
+}
+
+fn l1(a: [i64; 3], b: [i64; 3]) -> i64 {
+    (0..3)
+        .map(|k| (a[k].wrapping_sub(b[k])).wrapping_abs())
+        .fold(0i64, i64::wrapping_add)
+}
+
+/// The cheapest reference for the grid points `g` (curve `k` of its block,
+/// `grids[r]` the regridded decoded curves before it), with its estimated
+/// cost in bits (`cost` of one residual vector).
+pub fn best_reference(
+    g: &[[i64; 3]],
+    grids: &[Vec<[i64; 3]>],
+    cost: impl Fn([i64; 3]) -> u64,
+) -> Option<(Reference, u64)> {
+    let k = grids.len();
+    let n = g.len();
+    if n < 2 {
+        return None;
+    }
+    // Shortlist by how near the reference's ends are to the curve's.
+    let mut short: Vec<(i64, Reference)> = Vec::with_capacity(2 * MAX_BACK);
+    for back in 1..=MAX_BACK.min(k) {
+        let r = &grids[k - back];
+        if r.len() < 2 {
+            continue;
+        }
+        for reversed in [false, true] {
+            let d = l1(g[0], at(r, 0, reversed))
+                .saturating_add(l1(g[n - 1], at(r, r.len() - 1, reversed)));
+            short.push((d, Reference { back, reversed }));
+        }
+    }
+    short.sort_by_key(|s| s.0);
+    short
+        .iter()
+        .take(SHORTLIST)
+        .map(|&(_, rf)| {
+            let r = &grids[k - rf.back];
+            let start = at(r, 0, rf.reversed);
+            let mut bits = 8 + cost([0, 1, 2].map(|a| g[0][a].wrapping_sub(start[a])));
+            for i in 1..n {
+                let p = predict(g[i - 1], i, n, r, rf.reversed);
+                bits += cost([0, 1, 2].map(|a| g[i][a].wrapping_sub(p[a])));
+            }
+            (rf, bits)
+        })
+        .min_by_key(|x| x.1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn matching_covers_both_ends_and_is_monotone() {
+        for (n, m) in [(2, 2), (5, 5), (5, 17), (17, 5), (100, 3)] {
+            assert_eq!(matching(0, n, m), 0);
+            assert_eq!(matching(n - 1, n, m), m - 1);
+            for i in 1..n {
+                assert!(matching(i, n, m) >= matching(i - 1, n, m));
+            }
+        }
+    }
+
+    #[test]
+    fn a_parallel_neighbour_predicts_exactly() {
+        // Curve = reference shifted: every residual is zero.
+        let r: Vec<[i64; 3]> = (0..10).map(|i| [i * i, 3 * i, -i]).collect();
+        let g: Vec<[i64; 3]> = r.iter().map(|p| [p[0] + 5, p[1] - 2, p[2] + 7]).collect();
+        for i in 1..10 {
+            assert_eq!(predict(g[i - 1], i, 10, &r, false), g[i]);
+        }
+        // Reversed reference: predict the curve run backwards.
+        let rev: Vec<[i64; 3]> = r.iter().rev().cloned().collect();
+        for i in 1..10 {
+            assert_eq!(predict(g[i - 1], i, 10, &rev, true), g[i]);
+        }
+        let grids = vec![vec![[100, 100, 100], [200, 0, 0]], rev, vec![[0, 0, 0]]];
+        let (rf, _) = best_reference(&g, &grids, |v| if v == [0, 0, 0] { 1 } else { 9 }).unwrap();
+        assert_eq!(
+            rf,
+            Reference {
+                back: 2,
+                reversed: true
+            }
+        );
+    }
+
+    #[test]
+    fn regrid_refuses_uncodable_points() {
+        // x/half = (0.52, -0.48, 2): the odd point (1, -1, 1) is 1.2 away
+        // (squared 0.23 + 0.27 + 1), the even (0, 0, 2) 0.71 (squared 0.5).
+        assert_eq!(
+            regrid(&[DVec3::new(0.26, -0.24, 1.0)], 0.5),
+            vec![[0, 0, 2]]
+        );
+        assert!(regrid(&[DVec3::ZERO, DVec3::splat(1e30)], 1e-6).is_empty());
+    }
+}
