@@ -29,9 +29,6 @@ pub fn dist2_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
     (w - d * t).length_squared()
 }
 
-/// Segments searched either side of the running nearest one.
-const REACH: usize = 2;
-
 /// Whether every point of `points` is within `sqrt(tol2)` of the polyline
 /// `poly` (a single point is a polyline of one point).
 pub fn all_within(points: &[DVec3], poly: &[DVec3], tol2: f64) -> bool {
@@ -41,33 +38,40 @@ pub fn all_within(points: &[DVec3], poly: &[DVec3], tol2: f64) -> bool {
         _ => {}
     }
     let segs = poly.len() - 1;
+    let seg = |k: usize, p: DVec3| dist2_to_segment(p, poly[k], poly[k + 1]);
     let mut near = 0usize;
     for &p in points {
-        let lo = near.saturating_sub(REACH);
-        let hi = (near + REACH).min(segs - 1);
-        let mut best = f64::INFINITY;
-        let mut best_k = near;
-        for k in lo..=hi {
-            let d = dist2_to_segment(p, poly[k], poly[k + 1]);
+        // Walk forward while the next segment is nearer, then look one
+        // back: along a curve the nearest segment moves forward.
+        let mut best = seg(near, p);
+        while near + 1 < segs {
+            let d = seg(near + 1, p);
+            if d > best {
+                break;
+            }
+            best = d;
+            near += 1;
+        }
+        if best > tol2 && near > 0 {
+            let d = seg(near - 1, p);
             if d < best {
                 best = d;
-                best_k = k;
+                near -= 1;
             }
         }
         if best > tol2 {
             // The local search missed: scan the whole window.
             for k in 0..segs {
-                let d = dist2_to_segment(p, poly[k], poly[k + 1]);
+                let d = seg(k, p);
                 if d < best {
                     best = d;
-                    best_k = k;
+                    near = k;
                 }
             }
             if best > tol2 {
                 return false;
             }
         }
-        near = best_k;
     }
     true
 }

@@ -150,17 +150,41 @@ pub struct BlockBytes {
     pub side: Vec<u8>,
     pub side_len: u32,
     pub encoded: EncodedBlock,
+    /// Which input curves were empty (for [`verify`](Self::verify)).
+    empty: Vec<bool>,
 }
 
-/// Encodes a block of curves (geometry in parallel over curves), and
-/// decodes it back before it is accepted: a container that was written can
-/// be read. `first` is the index of the block's first curve (for errors).
+impl BlockBytes {
+    /// Never write what cannot be read back: the block is decoded, and must
+    /// give every curve (empty exactly where the input was) and the point
+    /// count the encoder checked. Separate from encoding so that a writer
+    /// can verify one block while the next is fitted.
+    pub fn verify(&self, params: &CodecParams) -> Result<(), (usize, String)> {
+        let back = decode_block(&self.geometry, self.curves as usize, params)
+            .map_err(|e| (0, format!("the block would not decode: {e}")))?;
+        for (k, (b, &e)) in back.iter().zip(&self.empty).enumerate() {
+            if b.is_empty() != e {
+                return Err((k, "the curve would not decode".into()));
+            }
+        }
+        if back.iter().map(Vec::len).sum::<usize>() != self.encoded.output_points {
+            return Err((
+                0,
+                "the block decodes to other points than were checked".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Encodes a block of curves (geometry in parallel over curves); call
+/// [`BlockBytes::verify`] before writing it.
 pub fn encode_block_bytes(
     curves: &[CurveIn],
     params: &CodecParams,
     n_curve_data: usize,
 ) -> Result<BlockBytes, (usize, String)> {
-    let pts: Vec<Vec<DVec3>> = curves.iter().map(|c| c.points.to_vec()).collect();
+    let pts: Vec<&[DVec3]> = curves.iter().map(|c| c.points).collect();
     let encoded = encode_block(&pts, params).map_err(|e| match e {
         super::EncodeError::NonFinite { curve, point } => {
             (curve, format!("point {point} is not finite"))
@@ -191,28 +215,13 @@ pub fn encode_block_bytes(
     }
     let side_len = side.len() as u32;
     let stored = deflate(&side).map_err(|e| (0, e.to_string()))?;
-    // Never write what cannot be read back: the block is decoded, and
-    // must give every curve (empty exactly where the input was) and the
-    // point count the encoder checked.
-    let back = decode_block(&encoded.bytes, curves.len(), params)
-        .map_err(|e| (0, format!("the block would not decode: {e}")))?;
-    for (k, (b, c)) in back.iter().zip(curves).enumerate() {
-        if b.is_empty() != c.points.is_empty() {
-            return Err((k, "the curve would not decode".into()));
-        }
-    }
-    if back.iter().map(Vec::len).sum::<usize>() != encoded.output_points {
-        return Err((
-            0,
-            "the block decodes to other points than were checked".into(),
-        ));
-    }
     Ok(BlockBytes {
         curves: curves.len() as u32,
         geometry: encoded.bytes.clone(),
         side: stored,
         side_len,
         encoded,
+        empty: curves.iter().map(|c| c.points.is_empty()).collect(),
     })
 }
 
@@ -653,6 +662,7 @@ mod tests {
                 })
                 .collect();
             let b = encode_block_bytes(&ins, &h.params(), 2).unwrap();
+            b.verify(&h.params()).unwrap();
             w.write_block(&b).unwrap();
         }
         w.finish().unwrap()

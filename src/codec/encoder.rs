@@ -205,38 +205,58 @@ impl<'a> CurveEncoder<'a> {
     }
 
     /// Furthest-reaching element from `state` past input vertex `from`.
-    fn furthest(&self, state: &ChainState, from: usize, kind: ElementKind) -> Option<Candidate> {
+    /// `guess`: the span of the previous element. Curves change slowly, so
+    /// the search starts there: one check usually confirms it, and the
+    /// galloping or bisection then takes a few more, instead of growing
+    /// from one vertex each time.
+    fn furthest(
+        &self,
+        state: &ChainState,
+        from: usize,
+        kind: ElementKind,
+        guess: usize,
+    ) -> Option<Candidate> {
         let last = self.points.len() - 1;
-        // The nearest vertex may be too close for the length step: take the
-        // first of the next few that passes.
         let mut good = None;
-        for j in from + 1..=(from + 4).min(last) {
-            good = self.candidate(state, from, j, kind);
-            if good.is_some() {
-                break;
+        let mut bad = None;
+        if guess > 4 && from + guess < last {
+            match self.candidate(state, from, from + guess, kind) {
+                Some(c) => good = Some(c),
+                None => bad = Some(from + guess),
             }
         }
-        let mut good = good?;
-        let mut step = 1;
-        let mut bad = None;
-        loop {
-            let next = (good.reach + step).min(last);
-            if next == good.reach {
-                break;
-            }
-            match self.candidate(state, from, next, kind) {
-                Some(c) => {
-                    good = c;
-                    step *= 2;
-                }
-                None => {
-                    bad = Some(next);
+        if good.is_none() {
+            // The nearest vertex may be too close for the length step: take
+            // the first of the next few that passes.
+            for j in from + 1..=(from + 4).min(last) {
+                good = self.candidate(state, from, j, kind);
+                if good.is_some() {
                     break;
                 }
             }
         }
+        let mut good = good?;
+        if bad.is_none() {
+            let mut step = (guess / 2).max(1);
+            loop {
+                let next = (good.reach + step).min(last);
+                if next == good.reach {
+                    break;
+                }
+                match self.candidate(state, from, next, kind) {
+                    Some(c) => {
+                        good = c;
+                        step *= 2;
+                    }
+                    None => {
+                        bad = Some(next);
+                        break;
+                    }
+                }
+            }
+        }
         if let Some(mut bad) = bad {
-            while bad - good.reach > 1 {
+            while bad > good.reach + 1 {
                 let mid = (good.reach + bad) / 2;
                 match self.candidate(state, from, mid, kind) {
                     Some(c) => good = c,
@@ -266,6 +286,7 @@ impl<'a> CurveEncoder<'a> {
         decoded.extend_from_slice(&first.samples);
         let mut state = first.arc.next_state(self.q.length);
         let mut from = first.reach;
+        let mut span = first.reach;
         let mut elements = Vec::new();
         let first_end = first.code.offset;
         let first_end_z = first.code.length;
@@ -274,10 +295,10 @@ impl<'a> CurveEncoder<'a> {
             // Cheapest kind first; a costlier one only where it reaches
             // further (a straight segment costs a kind flag, a corner also
             // a bulge).
-            let mut chosen = self.furthest(&state, from, ElementKind::G1);
+            let mut chosen = self.furthest(&state, from, ElementKind::G1, span);
             if chosen.as_ref().is_none_or(|g| g.reach - from <= 2) {
                 for (kind, margin) in [(ElementKind::Straight, 0), (ElementKind::Corner, 1)] {
-                    if let Some(c) = self.furthest(&state, from, kind) {
+                    if let Some(c) = self.furthest(&state, from, kind, span) {
                         if chosen.as_ref().is_none_or(|g| c.reach > g.reach + margin) {
                             chosen = Some(c);
                         }
@@ -287,6 +308,7 @@ impl<'a> CurveEncoder<'a> {
             let chosen = chosen?;
             decoded.extend_from_slice(&chosen.samples);
             state = next_state(&chosen.arc, &state, chosen.code.kind, self.q.length);
+            span = chosen.reach - from;
             from = chosen.reach;
             elements.push(chosen.code);
         }

@@ -64,7 +64,7 @@ use encoder::{
 use entropy::{Bit, Decoder, Encoder, IntModel};
 use predict::Arc;
 use quantise::{Quantiser, Steps};
-use reference::Reference;
+use reference::{Neighbours, Reference};
 
 /// How a block is coded: the tolerance and the steps (both stored in the
 /// container's header).
@@ -198,12 +198,24 @@ pub fn curve_options(points: &[DVec3], params: &CodecParams) -> CurveOptions {
         tol2: tol * tol,
         grid: params.grid(),
     };
+    let arcs = if points.len() >= 3 { enc.arcs() } else { None };
+    // Points cost about 4 bits each or more on the lattice, even with a
+    // neighbour's prediction (1.3 bits per coordinate on the smoothest
+    // shared data): where the arcs take under 3 bits per point, the points
+    // are not worth quantising.
+    let arcs_small = arcs
+        .as_ref()
+        .is_some_and(|(a, _)| estimated_bits(a) < 3 * points.len() as u64);
     CurveOptions {
-        points: match enc.points_code() {
-            Some(CurveCode::Points { grid, .. }) => Some(grid),
-            _ => None,
+        points: if arcs_small {
+            None
+        } else {
+            match enc.points_code() {
+                Some(CurveCode::Points { grid, .. }) => Some(grid),
+                _ => None,
+            }
         },
-        arcs: if points.len() >= 3 { enc.arcs() } else { None },
+        arcs,
     }
 }
 
@@ -285,17 +297,17 @@ fn own_prediction(g: &[[i64; 3]], k: usize) -> [i64; 3] {
 
 /// Chooses one curve's code given the block so far: arcs, or points with
 /// their own or a neighbour's prediction, whichever is estimated cheaper;
-/// returns the code, its decoded points on the grid (a reference for the
-/// curves after it) and its decoded point count.
+/// returns the code and its decoded point count, and adds the decoded curve
+/// to the `neighbours` of the curves after it.
 fn choose(
     points: &[DVec3],
     opt: CurveOptions,
-    grids: &[Vec<[i64; 3]>],
+    neighbours: &mut Neighbours,
     prev: &Previous,
-    grid_step: f64,
-) -> (CurveCode, Vec<[i64; 3]>, usize) {
+) -> (CurveCode, usize) {
     if points.is_empty() {
-        return (CurveCode::Empty, Vec::new(), 0);
+        neighbours.push_grid(Vec::new());
+        return (CurveCode::Empty, 0);
     }
     let pts = opt.points.map(|g| {
         let own_start = lattice_bits([0, 1, 2].map(|a| g[0][a].wrapping_sub(prev.point_start[a])));
@@ -306,7 +318,16 @@ fn choose(
                     lattice_bits([0, 1, 2].map(|a| g[k][a].wrapping_sub(p[a])))
                 })
                 .sum::<u64>();
-        match reference::best_reference(&g, grids, lattice_bits) {
+        // A neighbour saves at most about a third on bundles: where arcs
+        // cost under half the own prediction, it is not looked for.
+        let arcs_far_cheaper = opt
+            .arcs
+            .as_ref()
+            .is_some_and(|(a, _)| 2 * estimated_bits(a) < own);
+        if arcs_far_cheaper {
+            return (g, None, own);
+        }
+        match reference::best_reference(&g, neighbours.window(), lattice_bits) {
             Some((rf, bits)) if bits < own => (g, Some(rf), bits),
             _ => (g, None, own),
         }
@@ -314,24 +335,22 @@ fn choose(
     match (opt.arcs, pts) {
         (Some((a, decoded)), Some((_, _, bits))) if estimated_bits(&a) < bits => {
             let n = decoded.len();
-            (a, reference::regrid(&decoded, grid_step), n)
+            neighbours.push_points(decoded);
+            (a, n)
         }
         (_, Some((g, reference, _))) => {
             let n = g.len();
-            let decoded = g.clone();
-            (CurveCode::Points { grid: g, reference }, decoded, n)
+            neighbours.push_grid(g.clone());
+            (CurveCode::Points { grid: g, reference }, n)
         }
         (Some((a, decoded)), None) => {
             let n = decoded.len();
-            (a, reference::regrid(&decoded, grid_step), n)
+            neighbours.push_points(decoded);
+            (a, n)
         }
         (None, None) => {
-            let n = points.len();
-            (
-                CurveCode::Raw(points.to_vec()),
-                reference::regrid(points, grid_step),
-                n,
-            )
+            neighbours.push_points(points.to_vec());
+            (CurveCode::Raw(points.to_vec()), points.len())
         }
     }
 }
@@ -409,21 +428,21 @@ fn kind_of(code: &CurveCode) -> u8 {
 
 /// Encodes curves into one block (curves fitted in parallel, then coded in
 /// order).
-pub fn encode_block(
-    curves: &[Vec<DVec3>],
+pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
+    curves: &[C],
     params: &CodecParams,
 ) -> Result<EncodedBlock, EncodeError> {
     if !(params.tolerance.is_finite() && params.tolerance > 0.0) {
         return Err(EncodeError::BadTolerance(params.tolerance));
     }
     for (c, pts) in curves.iter().enumerate() {
-        if let Some(k) = pts.iter().position(|p| !p.is_finite()) {
+        if let Some(k) = pts.as_ref().iter().position(|p| !p.is_finite()) {
             return Err(EncodeError::NonFinite { curve: c, point: k });
         }
     }
     let options: Vec<CurveOptions> = curves
         .par_iter()
-        .map(|pts| curve_options(pts, params))
+        .map(|pts| curve_options(pts.as_ref(), params))
         .collect();
     let grid_step = params.grid();
     let mut enc = Encoder::new();
@@ -431,12 +450,11 @@ pub fn encode_block(
     let mut prev = Previous::default();
     let mut kinds = Vec::with_capacity(curves.len());
     let mut output_points = 0;
-    // The block's decoded curves on the points grid: the references.
-    let mut grids: Vec<Vec<[i64; 3]>> = Vec::with_capacity(curves.len());
+    // The block's decoded curves: the references.
+    let mut neighbours = Neighbours::new(grid_step, curves.len());
     for (points, opt) in curves.iter().zip(options) {
         // The choice, in order: a points-mode curve may lean on those before.
-        let (code, decoded_grid, n) = choose(points, opt, &grids, &prev, grid_step);
-        grids.push(decoded_grid);
+        let (code, n) = choose(points.as_ref(), opt, &mut neighbours, &prev);
         let code = &code;
         output_points += n;
         let kind = kind_of(code);
@@ -452,15 +470,16 @@ pub fn encode_block(
             }
             CurveCode::Points { grid, reference } => {
                 m.count.put_unsigned(&mut enc, grid.len() as u64 - 1);
-                if grids.len() > 1 {
+                if neighbours.len() > 1 {
                     enc.bit(&mut m.has_reference, reference.is_some());
                 }
                 match reference {
                     Some(rf) => {
                         m.back.put_unsigned(&mut enc, rf.back as u64 - 1);
                         enc.bit(&mut m.reversed, rf.reversed);
-                        // `grids` holds this curve last: its reference is
-                        // `back` before that.
+                        // `neighbours` holds this curve last: its reference
+                        // is `back` before that.
+                        let grids = neighbours.window();
                         let r = &grids[grids.len() - 1 - rf.back];
                         let start = reference::at(r, 0, rf.reversed);
                         let d = [0, 1, 2].map(|a| grid[0][a] - start[a]);
@@ -536,7 +555,7 @@ pub fn decode_block(
     let grid = params.grid();
     let mut out = Vec::with_capacity(count);
     // Decoded curves on the points grid, for points-mode references.
-    let mut grids: Vec<Vec<[i64; 3]>> = Vec::with_capacity(count);
+    let mut neighbours = Neighbours::new(grid, count);
     for curve in 0..count {
         let bad = |why: String| DecodeError::Curve { curve, why };
         let mut pushed = false;
@@ -569,14 +588,15 @@ pub fn decode_block(
                         bytes.len()
                     )));
                 }
-                let with_reference = !grids.is_empty() && dec.bit(&mut m.has_reference);
+                let with_reference = !neighbours.is_empty() && dec.bit(&mut m.has_reference);
                 let mut g: Vec<[i64; 3]> = Vec::with_capacity(n);
                 if with_reference {
                     let back = m.back.get_unsigned(&mut dec) as usize + 1;
                     let reversed = dec.bit(&mut m.reversed);
-                    if back > grids.len() || back > reference::MAX_BACK {
+                    if back > neighbours.len() || back > reference::MAX_BACK {
                         return Err(bad(format!("reference {back} curves back")));
                     }
+                    let grids = neighbours.window();
                     let r = &grids[grids.len() - back];
                     if r.len() < 2 {
                         return Err(bad("a reference of fewer than two points".into()));
@@ -603,7 +623,7 @@ pub fn decode_block(
                     .iter()
                     .map(|k| DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * grid)
                     .collect();
-                grids.push(g);
+                neighbours.push_grid(g);
                 pushed = true;
                 p
             }
@@ -672,7 +692,7 @@ pub fn decode_block(
             return Err(bad(format!("point {k} decodes to a non-finite value")));
         }
         if !pushed {
-            grids.push(reference::regrid(&pts, grid));
+            neighbours.push_points(pts.clone());
         }
         out.push(pts);
     }

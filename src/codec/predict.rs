@@ -216,10 +216,33 @@ impl Arc {
 
     /// Appends the decoder's points of this arc, without its start point
     /// (the previous element's end), ending exactly at `end`.
+    ///
+    /// The `k`-th point is `start + t·sin(kδ)/κ + n·(1 − cos kδ)/κ` with
+    /// `δ = κL/n`; `sin kδ` and `1 − cos kδ` come from the angle-addition
+    /// recurrence (one `sin_cos` per arc, not two `sin` per point), the
+    /// latter carried as itself so that it keeps its relative accuracy on
+    /// gentle arcs: `u' = 2 sin²(δ/2) + u cos δ + s sin δ`.
     pub fn sample_into(&self, sagitta: f64, out: &mut Vec<DVec3>) {
         let n = self.pieces(sagitta);
-        for k in 1..n {
-            out.push(self.point_at(self.length * k as f64 / n as f64));
+        out.reserve(n);
+        let step = self.length / n as f64;
+        let delta = self.curvature * step;
+        if delta.abs() < 1e-6 {
+            for k in 1..n {
+                out.push(self.point_at(step * k as f64));
+            }
+        } else {
+            let (sd, cd) = delta.sin_cos();
+            let h = (0.5 * delta).sin();
+            let one_minus_cd = 2.0 * h * h;
+            let (mut s, mut u) = (0.0f64, 0.0f64);
+            let inv = 1.0 / self.curvature;
+            for _ in 1..n {
+                let s_next = s * cd + (1.0 - u) * sd;
+                u = one_minus_cd + u * cd + s * sd;
+                s = s_next;
+                out.push(self.start + self.tangent * (s * inv) + self.normal * (u * inv));
+            }
         }
         out.push(self.end);
     }

@@ -48,6 +48,67 @@ pub fn regrid(points: &[DVec3], half: f64) -> Vec<[i64; 3]> {
     out
 }
 
+/// The decoded curves of a block so far, as references: points-mode curves
+/// as their lattice points, others as decoded points regridded on first use
+/// (most blocks of smooth curves never need them, and regridding every
+/// arc's points would cost a tenth of the encoding time).
+pub struct Neighbours {
+    half: f64,
+    grids: Vec<Vec<[i64; 3]>>,
+    pending: Vec<Option<Vec<DVec3>>>,
+}
+
+impl Neighbours {
+    pub fn new(half: f64, capacity: usize) -> Self {
+        Neighbours {
+            half,
+            grids: Vec::with_capacity(capacity),
+            pending: Vec::with_capacity(capacity),
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.grids.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.grids.is_empty()
+    }
+
+    /// A curve already on the lattice.
+    pub fn push_grid(&mut self, g: Vec<[i64; 3]>) {
+        self.grids.push(g);
+        self.pending.push(None);
+        self.forget_old();
+    }
+
+    /// A curve by its decoded points.
+    pub fn push_points(&mut self, p: Vec<DVec3>) {
+        self.grids.push(Vec::new());
+        self.pending.push(Some(p));
+        self.forget_old();
+    }
+
+    /// Points further back than a reference can reach are dropped.
+    fn forget_old(&mut self) {
+        let n = self.pending.len();
+        if n > MAX_BACK {
+            self.pending[n - MAX_BACK - 1] = None;
+        }
+    }
+
+    /// The grids of all curves so far, the last [`MAX_BACK`] regridded.
+    pub fn window(&mut self) -> &[Vec<[i64; 3]>] {
+        let n = self.grids.len();
+        for k in n.saturating_sub(MAX_BACK)..n {
+            if let Some(p) = self.pending[k].take() {
+                self.grids[k] = regrid(&p, self.half);
+            }
+        }
+        &self.grids
+    }
+}
+
 /// Index into a reference of `m` points matching point `i` of `n`.
 #[inline]
 pub fn matching(i: usize, n: usize, m: usize) -> usize {
@@ -110,10 +171,15 @@ pub fn best_reference(
             short.push((d, Reference { back, reversed }));
         }
     }
-    short.sort_by_key(|s| s.0);
+    // The SHORTLIST nearest (ties: the nearer back first), without sorting
+    // them all.
+    if short.len() > SHORTLIST {
+        short.select_nth_unstable_by_key(SHORTLIST - 1, |s| (s.0, s.1.back, s.1.reversed));
+        short.truncate(SHORTLIST);
+    }
+    short.sort_by_key(|s| (s.0, s.1.back, s.1.reversed));
     short
         .iter()
-        .take(SHORTLIST)
         .map(|&(_, rf)| {
             let r = &grids[k - rf.back];
             let start = at(r, 0, rf.reversed);

@@ -10,7 +10,8 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::container::{
-    encode_block_bytes, CurveIn, DecodedCurve, HeaderV2, ReaderV2, WriterV2, BLOCK_CURVES,
+    encode_block_bytes, BlockBytes, CurveIn, DecodedCurve, HeaderV2, ReaderV2, WriterV2,
+    BLOCK_CURVES,
 };
 use crate::io::{Curve, CurveReader, CurveWriter, IoError};
 
@@ -41,42 +42,70 @@ pub fn compress_stream(
     let n_cd = header.source.curve_data_names.len();
     let mut writer = WriterV2::create(out, header)?;
     let mut summary = CompressSummary::default();
-    let mut batch: Vec<Curve> = Vec::with_capacity(BLOCK_CURVES);
-    let mut done = false;
-    while !done {
-        batch.clear();
-        while batch.len() < BLOCK_CURVES {
-            match reader.next() {
-                Some(c) => batch.push(c?),
-                None => {
-                    done = true;
-                    break;
+    // Blocks go in groups of one per thread: a group is fitted and coded in
+    // parallel (each block's entropy coding is sequential), while the
+    // group before it is verified (decoded back) before being written.
+    let group = rayon::current_num_threads().max(2);
+    let mut pending: Vec<(BlockBytes, u64)> = Vec::new();
+    let mut ended = false;
+    while !ended || !pending.is_empty() {
+        let mut batches: Vec<(Vec<Curve>, u64)> = Vec::with_capacity(group);
+        let mut next = summary.curves;
+        while !ended && batches.len() < group {
+            let mut batch: Vec<Curve> = Vec::with_capacity(BLOCK_CURVES);
+            while batch.len() < BLOCK_CURVES {
+                match reader.next() {
+                    Some(c) => batch.push(c?),
+                    None => {
+                        ended = true;
+                        break;
+                    }
                 }
             }
+            if !batch.is_empty() {
+                let n = batch.len() as u64;
+                batches.push((batch, next));
+                next += n;
+            }
         }
-        if batch.is_empty() {
-            break;
+        let (verified, encoded): (Vec<_>, Vec<_>) = rayon::join(
+            || pending.par_iter().map(|(b, _)| b.verify(&params)).collect(),
+            || {
+                batches
+                    .par_iter()
+                    .map(|(batch, _)| {
+                        let ins: Vec<CurveIn> = batch
+                            .iter()
+                            .map(|c| CurveIn {
+                                id: c.id.as_deref(),
+                                points: &c.points,
+                                curve_data: &c.curve_data,
+                            })
+                            .collect();
+                        encode_block_bytes(&ins, &params, n_cd)
+                    })
+                    .collect()
+            },
+        );
+        for (check, (block, at)) in verified.into_iter().zip(pending.drain(..)) {
+            check.map_err(|(k, why)| {
+                IoError::new(input, format!("cannot be compressed: {why}")).curve(at + k as u64)
+            })?;
+            writer.write_block(&block)?;
+            progress(at + block.curves as u64);
         }
-        let ins: Vec<CurveIn> = batch
-            .iter()
-            .map(|c| CurveIn {
-                id: c.id.as_deref(),
-                points: &c.points,
-                curve_data: &c.curve_data,
-            })
-            .collect();
-        let block = encode_block_bytes(&ins, &params, n_cd).map_err(|(k, why)| {
-            IoError::new(input, format!("cannot be compressed: {why}"))
-                .curve(summary.curves + k as u64)
-        })?;
-        writer.write_block(&block)?;
-        summary.curves += batch.len() as u64;
-        summary.points += batch.iter().map(|c| c.points.len() as u64).sum::<u64>();
-        summary.output_points += block.encoded.output_points as u64;
-        for &k in &block.encoded.kinds {
-            summary.kinds[k as usize] += 1;
+        for (result, (batch, first)) in encoded.into_iter().zip(&batches) {
+            let block = result.map_err(|(k, why)| {
+                IoError::new(input, format!("cannot be compressed: {why}")).curve(first + k as u64)
+            })?;
+            summary.curves += batch.len() as u64;
+            summary.points += batch.iter().map(|c| c.points.len() as u64).sum::<u64>();
+            summary.output_points += block.encoded.output_points as u64;
+            for &k in &block.encoded.kinds {
+                summary.kinds[k as usize] += 1;
+            }
+            pending.push((block, *first));
         }
-        progress(summary.curves);
     }
     summary.bytes = writer.finish()?;
     Ok(summary)

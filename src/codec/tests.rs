@@ -148,8 +148,8 @@ fn bad_input_is_an_error_not_a_panic() {
     let params = CodecParams::new(0.1);
     let e = encode_block(&[vec![DVec3::ZERO], vec![DVec3::NAN]], &params).unwrap_err();
     assert_eq!(e, EncodeError::NonFinite { curve: 1, point: 0 });
-    assert!(encode_block(&[], &CodecParams::new(0.0)).is_err());
-    assert!(encode_block(&[], &CodecParams::new(f64::NAN)).is_err());
+    assert!(encode_block::<Vec<DVec3>>(&[], &CodecParams::new(0.0)).is_err());
+    assert!(encode_block::<Vec<DVec3>>(&[], &CodecParams::new(f64::NAN)).is_err());
 }
 
 #[test]
