@@ -1,6 +1,6 @@
 //! Codec probe: bytes, kinds and two-sided error of the codec on one file.
 //!
-//! `cargo run --release --example codec_probe -- FILE TOL [offset length start sagitta points]`
+//! `cargo run --release --example codec_probe -- FILE TOL [offset length start sagitta]`
 use std::time::Instant;
 
 use glam::DVec3;
@@ -11,14 +11,13 @@ fn main() {
     let path = std::path::Path::new(&args[1]);
     let tol: f64 = args[2].parse().unwrap();
     let mut params = CodecParams::new(tol);
-    if args.len() >= 8 {
-        let v: Vec<f64> = args[3..8].iter().map(|s| s.parse().unwrap()).collect();
+    if args.len() >= 7 {
+        let v: Vec<f64> = args[3..7].iter().map(|s| s.parse().unwrap()).collect();
         params.steps = Steps {
             offset: v[0],
             length: v[1],
             start: v[2],
             sagitta: v[3],
-            points: v[4],
         };
     }
     let (_, curves) = strandfit::io::read_all(path, None).unwrap();

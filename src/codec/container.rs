@@ -132,7 +132,8 @@ fn deflate(raw: &[u8]) -> std::io::Result<Vec<u8>> {
 }
 
 fn inflate(stored: &[u8], len: usize) -> Result<Vec<u8>, String> {
-    let mut out = Vec::with_capacity(len.min(1 << 26));
+    // Capacity from the stored size, not from the claimed length.
+    let mut out = Vec::with_capacity(len.min(16 * stored.len() + 1024));
     flate2::read::DeflateDecoder::new(stored)
         .take(len as u64 + 1)
         .read_to_end(&mut out)
@@ -265,17 +266,19 @@ impl WriterV2 {
 
     /// Appends an encoded block.
     pub fn write_block(&mut self, b: &BlockBytes) -> Result<(), IoError> {
-        let mut crc = crc32fast::Hasher::new();
-        crc.update(&b.geometry);
-        crc.update(&b.side);
-        let crc = crc.finalize();
-        self.crcs.update(&crc.to_le_bytes());
         let mut head = Vec::with_capacity(24);
         head.extend_from_slice(&BLOCK_MAGIC);
         head.extend_from_slice(&b.curves.to_le_bytes());
         head.extend_from_slice(&(b.geometry.len() as u32).to_le_bytes());
         head.extend_from_slice(&(b.side.len() as u32).to_le_bytes());
         head.extend_from_slice(&b.side_len.to_le_bytes());
+        // The CRC covers the header's counts as well as the bytes.
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(&head[4..20]);
+        crc.update(&b.geometry);
+        crc.update(&b.side);
+        let crc = crc.finalize();
+        self.crcs.update(&crc.to_le_bytes());
         head.extend_from_slice(&crc.to_le_bytes());
         for part in [&head[..], &b.geometry, &b.side] {
             self.out.write_all(part).map_err(|e| self.out.err(e))?;
@@ -320,6 +323,8 @@ pub struct ReaderV2 {
     /// Per block: offset, curves, first curve.
     blocks: Vec<(u64, u32, u64)>,
     curves: u64,
+    /// Where the index starts (the end of the last block).
+    index_at: u64,
 }
 
 fn u32_at(b: &[u8], at: usize) -> u32 {
@@ -388,7 +393,7 @@ impl ReaderV2 {
             )));
         }
         let st = header.steps;
-        if ![st.offset, st.length, st.start, st.sagitta, st.points]
+        if ![st.offset, st.length, st.start, st.sagitta]
             .iter()
             .all(|v| v.is_finite() && *v > 0.0 && *v < 1e6)
         {
@@ -429,7 +434,7 @@ impl ReaderV2 {
         if crc32fast::hash(entries) != u32_at(&idx, 8 + 12 * n) {
             return Err(err("index checksum mismatch (the file is corrupt)".into()).at("index"));
         }
-        let mut blocks = Vec::with_capacity(n);
+        let mut blocks = Vec::with_capacity(n.min(1 << 16));
         let mut first = 0u64;
         let mut prev_end = data_start;
         for k in 0..n {
@@ -456,6 +461,7 @@ impl ReaderV2 {
             header,
             blocks,
             curves,
+            index_at,
         })
     }
 
@@ -506,14 +512,15 @@ impl ReaderV2 {
             u32_at(&head, 16),
             u32_at(&head, 20),
         );
-        let next = self.blocks.get(k + 1).map(|b| b.0).unwrap_or(u64::MAX);
+        // The block must end where the next one (or the index) starts.
+        let next = self.blocks.get(k + 1).map_or(self.index_at, |b| b.0);
         if g > MAX_SECTION
             || s > MAX_SECTION
             || s_raw > MAX_SECTION
-            || off + 24 + g as u64 + s as u64 > next.min(u64::MAX - 1)
+            || off + 24 + g as u64 + s as u64 != next
         {
             return Err(err(
-                "block lengths overrun the next block (corrupt file)".into()
+                "block lengths do not end where the next block starts (corrupt file)".into(),
             ));
         }
         let mut geometry = vec![0u8; g as usize];
@@ -523,6 +530,7 @@ impl ReaderV2 {
             .and_then(|_| self.file.read_exact(&mut side))
             .map_err(|e| err(format!("cannot read the block: {e}")))?;
         let mut h = crc32fast::Hasher::new();
+        h.update(&head[4..20]);
         h.update(&geometry);
         h.update(&side);
         if h.finalize() != crc {
@@ -566,7 +574,7 @@ impl RawBlock {
             .map_err(|e| err(self.first, format!("side data: {e}")))?;
         let mut c = Cursor { b: &side, pos: 0 };
         let n_cd = header.source.curve_data_names.len();
-        let mut out = Vec::with_capacity(n);
+        let mut out = Vec::with_capacity(n.min(1 << 16));
         for (k, points) in pts.into_iter().enumerate() {
             let curve = self.first + k as u64;
             let read = || -> Result<DecodedCurve, String> {

@@ -148,6 +148,7 @@ impl<'a> CurveEncoder<'a> {
             length: steps - state.chord_steps,
             offset: [a1, a2],
             bulge: [0, 0],
+            jump: [0; 3],
         };
         if kind == ElementKind::Corner {
             let (tries, count) = self.corner_bulges(state.point, end, state.normal, from, j)?;
@@ -305,7 +306,19 @@ impl<'a> CurveEncoder<'a> {
                     }
                 }
             }
-            let chosen = chosen?;
+            let chosen = match chosen {
+                Some(c) => c,
+                None => match self.jump(&state, from) {
+                    Jump::To(c) => c,
+                    // The next vertex is within a start step of the chain's
+                    // end, which is on the output: already covered.
+                    Jump::Covered => {
+                        from += 1;
+                        continue;
+                    }
+                    Jump::Impossible => return None,
+                },
+            };
             decoded.extend_from_slice(&chosen.samples);
             state = next_state(&chosen.arc, &state, chosen.code.kind, self.q.length);
             span = chosen.reach - from;
@@ -321,6 +334,46 @@ impl<'a> CurveEncoder<'a> {
             },
             decoded,
         ))
+    }
+
+    /// A straight segment from the chain's end to the next input vertex,
+    /// rounded to the start grid relative to it (within `√3/2 · start` of
+    /// the vertex), where no element passes: the vertex is then within the
+    /// tolerance of the segment's end and the end of the vertex, so the test
+    /// passes but for absurd margins.
+    fn jump(&self, state: &ChainState, from: usize) -> Jump {
+        let d = self.points[from + 1] - state.point;
+        let k = [d.x, d.y, d.z].map(|x| Quantiser::index(x, self.q.start));
+        let [Some(a), Some(b), Some(c)] = k else {
+            return Jump::Impossible;
+        };
+        let k = [a, b, c];
+        if k == [0, 0, 0] {
+            return if self.points[from + 1].distance_squared(state.point) <= self.tol2 {
+                Jump::Covered
+            } else {
+                Jump::Impossible
+            };
+        }
+        let end = jump_end(state.point, k, self.q.start);
+        let Ok(arc) = Arc::new(state.point, (end - state.point).normalize(), end) else {
+            return Jump::Impossible;
+        };
+        match self.accept(&arc, from, from + 1) {
+            Some(samples) => Jump::To(Candidate {
+                code: ElementCode {
+                    kind: ElementKind::Jump,
+                    length: 0,
+                    offset: [0, 0],
+                    bulge: [0, 0],
+                    jump: k,
+                },
+                arc,
+                samples,
+                reach: from + 1,
+            }),
+            None => Jump::Impossible,
+        }
     }
 
     /// The first element: end on the start grid relative to `q0`, furthest
@@ -354,6 +407,7 @@ impl<'a> CurveEncoder<'a> {
                             length: k[2],
                             offset: [k[0], k[1]],
                             bulge,
+                            jump: [0; 3],
                         },
                         arc,
                         samples,
@@ -440,6 +494,18 @@ pub fn element_end(state: &ChainState, steps: i64, a1: i64, a2: i64, q: &Quantis
     state.point + u * (steps as f64 * q.length) + (e1 * a1 as f64 + e2 * a2 as f64) * q.offset
 }
 
+/// End of a jump from `q`: `q + k·step`.
+pub fn jump_end(q: DVec3, k: [i64; 3], step: f64) -> DVec3 {
+    q + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * step
+}
+
+/// What [`CurveEncoder::jump`] found.
+enum Jump {
+    To(Candidate),
+    Covered,
+    Impossible,
+}
+
 /// End of a curve's first element: `q0 + k·step`.
 pub fn first_end(q0: DVec3, k: [i64; 3], step: f64) -> DVec3 {
     q0 + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * step
@@ -488,7 +554,7 @@ pub fn next_state(
     length_step: f64,
 ) -> ChainState {
     let mut st = arc.next_state(length_step);
-    if kind == ElementKind::Straight {
+    if matches!(kind, ElementKind::Straight | ElementKind::Jump) {
         let turn = arc.tangent - before.tangent;
         let sin_turn = arc.tangent.cross(before.tangent).length();
         if sin_turn > 1e-12 {

@@ -59,7 +59,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use encoder::{
-    acceptance_tolerance, corner_from_code, element_end, first_end, next_state, CurveEncoder,
+    acceptance_tolerance, corner_from_code, element_end, first_end, jump_end, next_state,
+    CurveEncoder,
 };
 use entropy::{Bit, Decoder, Encoder, IntModel};
 use predict::Arc;
@@ -85,11 +86,6 @@ impl CodecParams {
     fn quantiser(&self) -> Quantiser {
         Quantiser::new(self.tolerance, self.steps)
     }
-
-    /// Half the cube side of the points-mode lattice.
-    fn grid(&self) -> f64 {
-        0.5 * self.steps.points * self.tolerance
-    }
 }
 
 /// How an element's start tangent is set.
@@ -101,6 +97,10 @@ pub enum ElementKind {
     Straight = 1,
     /// Set by a coded bulge.
     Corner = 2,
+    /// A straight segment to the next input vertex on the start grid
+    /// (`jump`, in start steps): where no arc passes, so that a curve is
+    /// never given up as a whole.
+    Jump = 3,
 }
 
 /// One element's code (see [`predict`] for the geometry).
@@ -113,6 +113,9 @@ pub struct ElementCode {
     pub offset: [i64; 2],
     /// Corner bulge (sagitta vector) in offset steps; zero for G1.
     pub bulge: [i64; 2],
+    /// A jump's end relative to its start, in start steps (the other
+    /// fields are then zero).
+    pub jump: [i64; 3],
 }
 
 /// One curve's code.
@@ -180,7 +183,7 @@ pub struct CurveOptions {
 }
 
 /// Fits one curve both ways (no entropy coding; curves in parallel).
-pub fn curve_options(points: &[DVec3], params: &CodecParams) -> CurveOptions {
+pub fn curve_options(points: &[DVec3], params: &CodecParams, half: f64) -> CurveOptions {
     let none = CurveOptions {
         points: None,
         arcs: None,
@@ -196,7 +199,7 @@ pub fn curve_options(points: &[DVec3], params: &CodecParams) -> CurveOptions {
         points,
         q: params.quantiser(),
         tol2: tol * tol,
-        grid: params.grid(),
+        grid: half,
     };
     let arcs = if points.len() >= 3 { enc.arcs() } else { None };
     // Points cost about 4 bits each or more on the lattice, even with a
@@ -251,6 +254,10 @@ fn estimated_bits(code: &CurveCode) -> u64 {
             let mut bits = 8 + first_end.iter().map(|&v| eg_bits(v)).sum::<u64>();
             bits += first_bulge.iter().map(|&v| eg_bits(v)).sum::<u64>();
             for e in elements {
+                if e.kind == ElementKind::Jump {
+                    bits += 2 + e.jump.iter().map(|&v| eg_bits(v)).sum::<u64>();
+                    continue;
+                }
                 bits += 1 + eg_bits(e.length) + eg_bits(e.offset[0]) + eg_bits(e.offset[1]);
                 if e.kind != ElementKind::G1 {
                     bits += 1;
@@ -309,6 +316,7 @@ fn choose(
         neighbours.push_grid(Vec::new());
         return (CurveCode::Empty, 0);
     }
+    let half = neighbours.half();
     let pts = opt.points.map(|g| {
         let own_start = lattice_bits([0, 1, 2].map(|a| g[0][a].wrapping_sub(prev.point_start[a])));
         let own = own_start
@@ -340,7 +348,11 @@ fn choose(
         }
         (_, Some((g, reference, _))) => {
             let n = g.len();
-            neighbours.push_grid(g.clone());
+            let ends = (
+                quantise::bcc_point(g[0], half),
+                quantise::bcc_point(g[n - 1], half),
+            );
+            neighbours.push_grid_with_ends(g.clone(), ends);
             (CurveCode::Points { grid: g, reference }, n)
         }
         (Some((a, decoded)), None) => {
@@ -363,8 +375,10 @@ struct Models {
     start: [IntModel; 3],
     first_end: [IntModel; 3],
     first_bulge: [IntModel; 2],
-    kink: [Bit; 3],
-    corner: [Bit; 3],
+    kink: [Bit; 4],
+    corner: [Bit; 4],
+    jump_kind: [Bit; 4],
+    jump: [IntModel; 3],
     length: IntModel,
     offset: [IntModel; 2],
     bulge: [IntModel; 2],
@@ -378,6 +392,10 @@ struct Models {
     back: IntModel,
     reversed: Bit,
     ref_start: [IntModel; 3],
+    has_anchor: Bit,
+    back_anchor: IntModel,
+    anchor_end: Bit,
+    anchor_start: [IntModel; 3],
     ref_residual: [IntModel; 3],
 }
 
@@ -401,19 +419,27 @@ fn get_kind(dec: &mut Decoder, m: &mut Models) -> u8 {
 }
 
 fn put_element_kind(enc: &mut Encoder, m: &mut Models, prev: ElementKind, kind: ElementKind) {
-    enc.bit(&mut m.kink[prev as usize], kind != ElementKind::G1);
+    let p = prev as usize;
+    enc.bit(&mut m.kink[p], kind != ElementKind::G1);
     if kind != ElementKind::G1 {
-        enc.bit(&mut m.corner[prev as usize], kind == ElementKind::Corner);
+        let rare = matches!(kind, ElementKind::Corner | ElementKind::Jump);
+        enc.bit(&mut m.corner[p], rare);
+        if rare {
+            enc.bit(&mut m.jump_kind[p], kind == ElementKind::Jump);
+        }
     }
 }
 
 fn get_element_kind(dec: &mut Decoder, m: &mut Models, prev: ElementKind) -> ElementKind {
-    if !dec.bit(&mut m.kink[prev as usize]) {
+    let p = prev as usize;
+    if !dec.bit(&mut m.kink[p]) {
         ElementKind::G1
-    } else if dec.bit(&mut m.corner[prev as usize]) {
-        ElementKind::Corner
-    } else {
+    } else if !dec.bit(&mut m.corner[p]) {
         ElementKind::Straight
+    } else if dec.bit(&mut m.jump_kind[p]) {
+        ElementKind::Jump
+    } else {
+        ElementKind::Corner
     }
 }
 
@@ -440,12 +466,22 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
             return Err(EncodeError::NonFinite { curve: c, point: k });
         }
     }
+    // The points lattice of this block, sized by its largest coordinate
+    // (first in the stream; 0 when no lattice fits: raw points then).
+    let scale = curves
+        .iter()
+        .flat_map(|c| c.as_ref().iter())
+        .map(|p| p.abs().max_element())
+        .fold(0.0, f64::max);
+    let half = quantise::lattice_half(params.tolerance, scale).unwrap_or(0.0);
+    let mut enc = Encoder::new();
+    enc.direct(half.to_bits(), 64);
     let options: Vec<CurveOptions> = curves
         .par_iter()
-        .map(|pts| curve_options(pts.as_ref(), params))
+        .map(|pts| curve_options(pts.as_ref(), params, half))
         .collect();
-    let grid_step = params.grid();
-    let mut enc = Encoder::new();
+    let grid_step = half;
+    let q_start = params.quantiser().start;
     let mut m = Models::default();
     let mut prev = Previous::default();
     let mut kinds = Vec::with_capacity(curves.len());
@@ -510,8 +546,36 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
                 elements,
             } => {
                 m.count.put_unsigned(&mut enc, elements.len() as u64);
+                // `neighbours` holds this curve last; its anchors are the
+                // curves before it.
+                let before = neighbours.len() - 1;
+                let own: u64 = (0..3).map(|a| eg_bits(start[a] - prev.arc_start[a])).sum();
+                let anchor = if before > 0 {
+                    let best = neighbours.best_anchor(*start, q_start, before);
+                    let pick = best.filter(|&(_, _, bits)| bits < own);
+                    enc.bit(&mut m.has_anchor, pick.is_some());
+                    pick
+                } else {
+                    None
+                };
+                match anchor {
+                    Some((back, at_end, _)) => {
+                        m.back_anchor.put_unsigned(&mut enc, back as u64 - 1);
+                        enc.bit(&mut m.anchor_end, at_end);
+                        let r = neighbours
+                            .anchor(before - back, at_end, q_start)
+                            .unwrap_or([0; 3]);
+                        for a in 0..3 {
+                            m.anchor_start[a].put(&mut enc, start[a] - r[a]);
+                        }
+                    }
+                    None => {
+                        for a in 0..3 {
+                            m.start[a].put(&mut enc, start[a] - prev.arc_start[a]);
+                        }
+                    }
+                }
                 for a in 0..3 {
-                    m.start[a].put(&mut enc, start[a] - prev.arc_start[a]);
                     m.first_end[a].put(&mut enc, first_end[a] - prev.first_end[a]);
                 }
                 prev.arc_start = *start;
@@ -523,6 +587,12 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
                 for e in elements {
                     put_element_kind(&mut enc, &mut m, prev_kind, e.kind);
                     prev_kind = e.kind;
+                    if e.kind == ElementKind::Jump {
+                        for a in 0..3 {
+                            m.jump[a].put(&mut enc, e.jump[a]);
+                        }
+                        continue;
+                    }
                     m.length.put(&mut enc, e.length);
                     m.offset[0].put(&mut enc, e.offset[0]);
                     m.offset[1].put(&mut enc, e.offset[1]);
@@ -552,8 +622,16 @@ pub fn decode_block(
     let mut m = Models::default();
     let mut prev = Previous::default();
     let q = params.quantiser();
-    let grid = params.grid();
-    let mut out = Vec::with_capacity(count);
+    let grid = f64::from_bits(dec.direct(64));
+    if !(grid.is_finite() && grid >= 0.0 && grid < 1e300) {
+        return Err(DecodeError::Curve {
+            curve: 0,
+            why: format!("a block lattice step of {grid}"),
+        });
+    }
+    // Capacities from counts read off the stream are capped: a count is
+    // only trusted as far as the points it actually decodes.
+    let mut out = Vec::with_capacity(count.min(1 << 16));
     // Decoded curves on the points grid, for points-mode references.
     let mut neighbours = Neighbours::new(grid, count);
     for curve in 0..count {
@@ -570,7 +648,7 @@ pub fn decode_block(
                         bytes.len()
                     )));
                 }
-                let mut p = Vec::with_capacity(n);
+                let mut p = Vec::with_capacity(n.min(1 << 16));
                 for _ in 0..n {
                     let mut v = [0f64; 3];
                     for x in &mut v {
@@ -588,8 +666,11 @@ pub fn decode_block(
                         bytes.len()
                     )));
                 }
+                if grid == 0.0 {
+                    return Err(bad("points in a block without a lattice".into()));
+                }
                 let with_reference = !neighbours.is_empty() && dec.bit(&mut m.has_reference);
-                let mut g: Vec<[i64; 3]> = Vec::with_capacity(n);
+                let mut g: Vec<[i64; 3]> = Vec::with_capacity(n.min(1 << 16));
                 if with_reference {
                     let back = m.back.get_unsigned(&mut dec) as usize + 1;
                     let reversed = dec.bit(&mut m.reversed);
@@ -623,7 +704,11 @@ pub fn decode_block(
                     .iter()
                     .map(|k| DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * grid)
                     .collect();
-                neighbours.push_grid(g);
+                let ends = (
+                    quantise::bcc_point(g[0], grid),
+                    quantise::bcc_point(g[n - 1], grid),
+                );
+                neighbours.push_grid_with_ends(g, ends);
                 pushed = true;
                 p
             }
@@ -637,8 +722,25 @@ pub fn decode_block(
                 }
                 let mut start = [0i64; 3];
                 let mut fe = [0i64; 3];
+                let before = neighbours.len();
+                if before > 0 && dec.bit(&mut m.has_anchor) {
+                    let back = m.back_anchor.get_unsigned(&mut dec) as usize + 1;
+                    let at_end = dec.bit(&mut m.anchor_end);
+                    if back > before || back > reference::MAX_BACK {
+                        return Err(bad(format!("anchor {back} curves back")));
+                    }
+                    let r = neighbours
+                        .anchor(before - back, at_end, q.start)
+                        .ok_or_else(|| bad("an anchor on an empty curve".into()))?;
+                    for a in 0..3 {
+                        start[a] = r[a].wrapping_add(m.anchor_start[a].get(&mut dec));
+                    }
+                } else {
+                    for a in 0..3 {
+                        start[a] = prev.arc_start[a].wrapping_add(m.start[a].get(&mut dec));
+                    }
+                }
                 for a in 0..3 {
-                    start[a] = prev.arc_start[a].wrapping_add(m.start[a].get(&mut dec));
                     fe[a] = prev.first_end[a].wrapping_add(m.first_end[a].get(&mut dec));
                 }
                 prev.arc_start = start;
@@ -659,18 +761,25 @@ pub fn decode_block(
                 for k in 0..n {
                     let kind = get_element_kind(&mut dec, &mut m, prev_kind);
                     prev_kind = kind;
-                    let dl = m.length.get(&mut dec);
-                    let a1 = m.offset[0].get(&mut dec);
-                    let a2 = m.offset[1].get(&mut dec);
-                    let steps = state.chord_steps.wrapping_add(dl);
-                    let end = element_end(&state, steps, a1, a2, &q);
+                    let end = if kind == ElementKind::Jump {
+                        let j = [0, 1, 2].map(|a| m.jump[a].get(&mut dec));
+                        jump_end(state.point, j, q.start)
+                    } else {
+                        let dl = m.length.get(&mut dec);
+                        let a1 = m.offset[0].get(&mut dec);
+                        let a2 = m.offset[1].get(&mut dec);
+                        let steps = state.chord_steps.wrapping_add(dl);
+                        element_end(&state, steps, a1, a2, &q)
+                    };
                     let tangent = match kind {
                         ElementKind::Corner => {
                             let b = [m.bulge[0].get(&mut dec), m.bulge[1].get(&mut dec)];
                             corner_from_code(state.point, end, state.normal, b, q.offset)
                                 .ok_or_else(|| bad(format!("element {k} has zero length")))?
                         }
-                        ElementKind::Straight => (end - state.point).normalize(),
+                        ElementKind::Straight | ElementKind::Jump => {
+                            (end - state.point).normalize()
+                        }
                         ElementKind::G1 => state.tangent,
                     };
                     let arc = Arc::new(state.point, tangent, end)
@@ -688,8 +797,12 @@ pub fn decode_block(
         if dec.overrun() {
             return Err(DecodeError::Truncated);
         }
-        if let Some(k) = pts.iter().position(|p| !p.is_finite()) {
-            return Err(bad(format!("point {k} decodes to a non-finite value")));
+        // Usable points only (finite, within float32, as every reader
+        // guarantees): a corrupt stream could decode to anything.
+        for (k, p) in pts.iter().enumerate() {
+            if let Some(why) = crate::io::point_problem(*p) {
+                return Err(bad(format!("point {k} decodes badly: {why}")));
+            }
         }
         if !pushed {
             neighbours.push_points(pts.clone());

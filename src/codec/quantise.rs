@@ -24,10 +24,6 @@ pub struct Steps {
     pub start: f64,
     /// Sagitta of the decoder's chords to its arcs.
     pub sagitta: f64,
-    /// Cube side of the body-centred cubic lattice of points-mode curves
-    /// ([`bcc_nearest`]): just under `4/√5`, the largest whose nearest
-    /// point is always within `T`.
-    pub points: f64,
 }
 
 impl Default for Steps {
@@ -41,7 +37,6 @@ impl Default for Steps {
             length: 1.1,
             start: 0.4,
             sagitta: 0.15,
-            points: 1.7885,
         }
     }
 }
@@ -85,6 +80,15 @@ impl Quantiser {
             None
         }
     }
+}
+
+/// Half step of a block's points lattice: covering radius `T` less the
+/// margin that writing coordinates up to `scale` as `f32` needs (the same
+/// margin as the arcs' acceptance test), so that the nearest lattice point
+/// of every point passes; `None` when nothing is left.
+pub fn lattice_half(tolerance: f64, scale: f64) -> Option<f64> {
+    let t = tolerance * (1.0 - 1e-9) - 4.0 * scale * f32::EPSILON as f64;
+    (t > 0.0 && t.is_finite()).then(|| 2.0 * t / 5f64.sqrt() * (1.0 - 1e-9))
 }
 
 /// The point of the body-centred cubic (BCC) lattice nearest to `p`, in

@@ -56,6 +56,9 @@ pub struct Neighbours {
     half: f64,
     grids: Vec<Vec<[i64; 3]>>,
     pending: Vec<Option<Vec<DVec3>>>,
+    /// First and last decoded point of each curve (none when empty): the
+    /// anchors an arcs curve's start may be coded against.
+    ends: Vec<Option<(DVec3, DVec3)>>,
 }
 
 impl Neighbours {
@@ -64,7 +67,51 @@ impl Neighbours {
             half,
             grids: Vec::with_capacity(capacity),
             pending: Vec::with_capacity(capacity),
+            ends: Vec::with_capacity(capacity),
         }
+    }
+
+    /// Half step of the points lattice.
+    pub fn half(&self) -> f64 {
+        self.half
+    }
+
+    /// A points curve with its decoded end points.
+    pub fn push_grid_with_ends(&mut self, g: Vec<[i64; 3]>, ends: (DVec3, DVec3)) {
+        self.push_grid(g);
+        if let Some(e) = self.ends.last_mut() {
+            *e = Some(ends);
+        }
+    }
+
+    /// Curve `k`'s start (or end) on the grid of step `step`.
+    pub fn anchor(&self, k: usize, at_end: bool, step: f64) -> Option<[i64; 3]> {
+        let (a, b) = self.ends.get(k).copied().flatten()?;
+        let p = if at_end { b } else { a };
+        let limit = (1u64 << super::entropy::MAX_BITS) as f64;
+        let v = [p.x / step, p.y / step, p.z / step].map(f64::round);
+        v.iter()
+            .all(|x| x.is_finite() && x.abs() < limit)
+            .then(|| v.map(|x| x as i64))
+    }
+
+    /// The anchor among the [`MAX_BACK`] curves before curve `k` (their
+    /// starts and ends) nearest to `start` (on the grid of step `step`):
+    /// `(back, at_end, estimated bits)`.
+    pub fn best_anchor(&self, start: [i64; 3], step: f64, k: usize) -> Option<(usize, bool, u64)> {
+        let mut best: Option<(usize, bool, u64)> = None;
+        for back in 1..=MAX_BACK.min(k) {
+            for at_end in [false, true] {
+                let Some(r) = self.anchor(k - back, at_end, step) else {
+                    continue;
+                };
+                let bits = 6 + (0..3).map(|a| eg(start[a].wrapping_sub(r[a]))).sum::<u64>();
+                if best.is_none_or(|b| bits < b.2) {
+                    best = Some((back, at_end, bits));
+                }
+            }
+        }
+        best
     }
 
     pub fn len(&self) -> usize {
@@ -79,12 +126,17 @@ impl Neighbours {
     pub fn push_grid(&mut self, g: Vec<[i64; 3]>) {
         self.grids.push(g);
         self.pending.push(None);
+        self.ends.push(None);
         self.forget_old();
     }
 
     /// A curve by its decoded points.
     pub fn push_points(&mut self, p: Vec<DVec3>) {
         self.grids.push(Vec::new());
+        self.ends.push(match (p.first(), p.last()) {
+            (Some(&a), Some(&b)) => Some((a, b)),
+            _ => None,
+        });
         self.pending.push(Some(p));
         self.forget_old();
     }
@@ -137,6 +189,15 @@ pub fn predict(prev: [i64; 3], i: usize, n: usize, r: &[[i64; 3]], reversed: boo
     let a = at(r, matching(i - 1, n, m), reversed);
     let b = at(r, matching(i, n, m), reversed);
     [0, 1, 2].map(|k| prev[k].wrapping_add(b[k].wrapping_sub(a[k])))
+}
+
+/// Bits of a signed Exp-Golomb code of `v` (the encoder's static cost).
+fn eg(v: i64) -> u64 {
+    if v == 0 {
+        1
+    } else {
+        1 + 2 * (64 - v.unsigned_abs().leading_zeros() as u64)
+    }
 }
 
 fn l1(a: [i64; 3], b: [i64; 3]) -> i64 {

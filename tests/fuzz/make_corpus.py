@@ -459,15 +459,23 @@ def make_sfh(binary):
     f = "sfh"
     d = os.path.join(OUT, f)
     os.makedirs(d, exist_ok=True)
+    # Version 1 (helix chains: --distance ordered), then version 2 (the
+    # default arc codec; its blocks are mutated byte-wise, under CRCs).
+    v1 = ["--distance", "ordered"]
     jobs = [
-        ("tck/dipy_EuDX_small_25.tck", "eudx_compact.sfh", ["--tolerance", "0.5"]),
-        ("tck/dipy_EuDX_small_25.tck", "eudx_f32.sfh", ["--tolerance", "0.5", "--storage", "f32"]),
-        ("tck/dipy_EuDX_small_25.tck", "eudx_f64.sfh", ["--tolerance", "0.5", "--storage", "f64"]),
-        ("trk/complex.trk", "complex_trk_compact.sfh", ["--tolerance", "0.5"]),
-        ("trk/complex.trk", "complex_trk_f64.sfh", ["--tolerance", "0.5", "--storage", "f64"]),
-        ("json/simple.json", "ids_f32.sfh", ["--tolerance", "0.5", "--storage", "f32"]),
-        ("tck/standard.tck", "standard_compact.sfh", ["--tolerance", "0.1"]),
-        ("tck/empty.tck", "empty.sfh", ["--tolerance", "0.5"]),
+        ("tck/dipy_EuDX_small_25.tck", "eudx_compact.sfh", ["--tolerance", "0.5"] + v1),
+        ("tck/dipy_EuDX_small_25.tck", "eudx_f32.sfh", ["--tolerance", "0.5", "--storage", "f32"] + v1),
+        ("tck/dipy_EuDX_small_25.tck", "eudx_f64.sfh", ["--tolerance", "0.5", "--storage", "f64"] + v1),
+        ("trk/complex.trk", "complex_trk_compact.sfh", ["--tolerance", "0.5"] + v1),
+        ("trk/complex.trk", "complex_trk_f64.sfh", ["--tolerance", "0.5", "--storage", "f64"] + v1),
+        ("json/simple.json", "ids_f32.sfh", ["--tolerance", "0.5", "--storage", "f32"] + v1),
+        ("tck/standard.tck", "standard_compact.sfh", ["--tolerance", "0.1"] + v1),
+        ("tck/empty.tck", "empty.sfh", ["--tolerance", "0.5"] + v1),
+        ("tck/dipy_EuDX_small_25.tck", "eudx_v2.sfh", ["--tolerance", "0.5"]),
+        ("tck/dipy_EuDX_small_25.tck", "eudx_v2_fine.sfh", ["--tolerance", "0.05"]),
+        ("trk/complex.trk", "complex_trk_v2.sfh", ["--tolerance", "0.1"]),
+        ("json/simple.json", "ids_refs_v2.sfh", ["--tolerance", "0.1"]),
+        ("tck/empty.tck", "empty_v2.sfh", ["--tolerance", "0.1"]),
     ]
     for src, name, args in jobs:
         # Relative paths: the source file's name is stored in the header.
