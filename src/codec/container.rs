@@ -214,8 +214,14 @@ pub fn encode_block_bytes(
             side.extend_from_slice(&v.to_le_bytes());
         }
     }
-    let side_len = side.len() as u32;
-    let stored = deflate(&side).map_err(|e| (0, e.to_string()))?;
+    // No ids and no per-curve values (.tck, .vtk, .hair): no side data at
+    // all, rather than a deflated run of zeros and its lengths.
+    let (side_len, stored) = if n_curve_data == 0 && side.iter().all(|&b| b == 0) {
+        (0, Vec::new())
+    } else {
+        let stored = deflate(&side).map_err(|e| (0, e.to_string()))?;
+        (side.len() as u32, stored)
+    };
     Ok(BlockBytes {
         curves: curves.len() as u32,
         geometry: encoded.bytes.clone(),
@@ -570,10 +576,21 @@ impl RawBlock {
             super::DecodeError::Curve { curve, why } => err(self.first + curve as u64, why),
             e => err(self.first, e.to_string()),
         })?;
-        let side = inflate(&self.side, self.side_len as usize)
-            .map_err(|e| err(self.first, format!("side data: {e}")))?;
-        let mut c = Cursor { b: &side, pos: 0 };
         let n_cd = header.source.curve_data_names.len();
+        let side = if self.side_len == 0 && self.side.is_empty() {
+            // No side data: no ids, and no per-curve values to read.
+            if n_cd > 0 {
+                return Err(err(
+                    self.first,
+                    "per-curve values missing from the block".into(),
+                ));
+            }
+            vec![0u8; n]
+        } else {
+            inflate(&self.side, self.side_len as usize)
+                .map_err(|e| err(self.first, format!("side data: {e}")))?
+        };
+        let mut c = Cursor { b: &side, pos: 0 };
         let mut out = Vec::with_capacity(n.min(1 << 16));
         for (k, points) in pts.into_iter().enumerate() {
             let curve = self.first + k as u64;
