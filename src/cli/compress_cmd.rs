@@ -16,7 +16,9 @@ use super::{CompressArgs, DistanceArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
 use crate::compress::{compress_curve, CompressOptions};
 use crate::io::container::{ContainerWriter, Header, Shape, SourceMeta, Storage, StoredCurve};
-use crate::io::{data_losses, open_reader_with, source_losses, BadCurves, Curve};
+use crate::io::{
+    data_losses, open_reader_with, source_losses, BadCurves, Curve, CurveReader, Metadata,
+};
 
 /// Curves fitted per parallel batch (bounds memory; keeps order).
 const BATCH: usize = 4096;
@@ -117,19 +119,8 @@ pub fn run(args: &CompressArgs) -> Result<()> {
         smoothing_share: args.smoothing_share,
         ..CompressOptions::new(count, storage)
     };
-    let from = args.from.as_deref().map(parse_format).transpose()?;
     let started = Instant::now();
-    let bad = if args.care.skip_bad {
-        BadCurves::Skip
-    } else {
-        BadCurves::Fail
-    };
-    let mut reader = open_reader_with(&args.input, from, bad)?;
-    let meta = reader.metadata().clone();
-    // The container keeps per-curve data, not per-point data.
-    let mut dropped = source_losses(&meta);
-    dropped.extend(data_losses(&meta, |_| false, true, "sfh"));
-    check_losses(&args.input, &args.output, &dropped, args.care.strict)?;
+    let (mut reader, meta, dropped) = open_input(args)?;
     let header = Header {
         storage,
         tolerance: args.tolerance,
@@ -280,6 +271,25 @@ pub fn run(args: &CompressArgs) -> Result<()> {
     Ok(())
 }
 
+/// The input's reader (bad curves failing or skipped as asked), its
+/// metadata, and what the container will not hold (warned about, or an
+/// error with `--strict`): per-point data and source content the reader
+/// does not carry.
+fn open_input(args: &CompressArgs) -> Result<(Box<dyn CurveReader>, Metadata, Vec<String>)> {
+    let from = args.from.as_deref().map(parse_format).transpose()?;
+    let bad = if args.care.skip_bad {
+        BadCurves::Skip
+    } else {
+        BadCurves::Fail
+    };
+    let reader = open_reader_with(&args.input, from, bad)?;
+    let meta = reader.metadata().clone();
+    let mut dropped = source_losses(&meta);
+    dropped.extend(data_losses(&meta, |_| false, true, "sfh"));
+    check_losses(&args.input, &args.output, &dropped, args.care.strict)?;
+    Ok((reader, meta, dropped))
+}
+
 /// `compress` with the arc codec into a version-2 container: every curve
 /// within `--tolerance` in the two-sided Hausdorff distance at default
 /// decompression.
@@ -294,18 +304,8 @@ fn run_v2(args: &CompressArgs) -> Result<()> {
     if !(tolerance > 0.0 && tolerance.is_finite()) {
         bail!("--tolerance must be positive, got {tolerance}");
     }
-    let from = args.from.as_deref().map(parse_format).transpose()?;
     let started = Instant::now();
-    let bad = if args.care.skip_bad {
-        BadCurves::Skip
-    } else {
-        BadCurves::Fail
-    };
-    let mut reader = open_reader_with(&args.input, from, bad)?;
-    let meta = reader.metadata().clone();
-    let mut dropped = source_losses(&meta);
-    dropped.extend(data_losses(&meta, |_| false, true, "sfh"));
-    check_losses(&args.input, &args.output, &dropped, args.care.strict)?;
+    let (mut reader, meta, dropped) = open_input(args)?;
     let header = HeaderV2 {
         codec: "arcs".into(),
         tolerance,

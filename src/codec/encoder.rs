@@ -236,36 +236,9 @@ impl<'a> CurveEncoder<'a> {
                 }
             }
         }
-        let mut good = good?;
-        if bad.is_none() {
-            let mut step = (guess / 2).max(1);
-            loop {
-                let next = (good.reach + step).min(last);
-                if next == good.reach {
-                    break;
-                }
-                match self.candidate(state, from, next, kind) {
-                    Some(c) => {
-                        good = c;
-                        step *= 2;
-                    }
-                    None => {
-                        bad = Some(next);
-                        break;
-                    }
-                }
-            }
-        }
-        if let Some(mut bad) = bad {
-            while bad > good.reach + 1 {
-                let mid = (good.reach + bad) / 2;
-                match self.candidate(state, from, mid, kind) {
-                    Some(c) => good = c,
-                    None => bad = mid,
-                }
-            }
-        }
-        Some(good)
+        Some(gallop(good?, bad, (guess / 2).max(1), last, |j| {
+            self.candidate(state, from, j, kind)
+        }))
     }
 
     /// The arcs for this curve and the points they decode to, or `None`
@@ -309,7 +282,7 @@ impl<'a> CurveEncoder<'a> {
             let chosen = match chosen {
                 Some(c) => c,
                 None => match self.jump(&state, from) {
-                    Jump::To(c) => c,
+                    Jump::To(c) => *c,
                     // The next vertex is within a start step of the chain's
                     // end, which is on the output: already covered.
                     Jump::Covered => {
@@ -360,7 +333,7 @@ impl<'a> CurveEncoder<'a> {
             return Jump::Impossible;
         };
         match self.accept(&arc, from, from + 1) {
-            Some(samples) => Jump::To(Candidate {
+            Some(samples) => Jump::To(Box::new(Candidate {
                 code: ElementCode {
                     kind: ElementKind::Jump,
                     length: 0,
@@ -371,7 +344,7 @@ impl<'a> CurveEncoder<'a> {
                 arc,
                 samples,
                 reach: from + 1,
-            }),
+            })),
             None => Jump::Impossible,
         }
     }
@@ -428,35 +401,7 @@ impl<'a> CurveEncoder<'a> {
             good = try_j(j);
             j += 1;
         }
-        let mut good = good?;
-        let mut step = 1;
-        let mut bad = None;
-        loop {
-            let next = (good.reach + step).min(last);
-            if next == good.reach {
-                break;
-            }
-            match try_j(next) {
-                Some(c) => {
-                    good = c;
-                    step *= 2;
-                }
-                None => {
-                    bad = Some(next);
-                    break;
-                }
-            }
-        }
-        if let Some(mut bad) = bad {
-            while bad - good.reach > 1 {
-                let mid = (good.reach + bad) / 2;
-                match try_j(mid) {
-                    Some(c) => good = c,
-                    None => bad = mid,
-                }
-            }
-        }
-        Some(good)
+        Some(gallop(good?, None, 1, last, try_j))
     }
 
     /// The points on the body-centred cubic lattice (nearest point within
@@ -494,6 +439,47 @@ pub fn element_end(state: &ChainState, steps: i64, a1: i64, a2: i64, q: &Quantis
     state.point + u * (steps as f64 * q.length) + (e1 * a1 as f64 + e2 * a2 as f64) * q.offset
 }
 
+/// From a passing candidate `good` (and a failing vertex `bad`, if one is
+/// known), the furthest-reaching candidate: reaches grow by `step`, doubling,
+/// up to vertex `last` until one fails, then bisection between the last pass
+/// and the first failure. `try_j(j)` is the candidate ending at vertex `j`.
+fn gallop(
+    mut good: Candidate,
+    mut bad: Option<usize>,
+    mut step: usize,
+    last: usize,
+    try_j: impl Fn(usize) -> Option<Candidate>,
+) -> Candidate {
+    if bad.is_none() {
+        loop {
+            let next = (good.reach + step).min(last);
+            if next == good.reach {
+                break;
+            }
+            match try_j(next) {
+                Some(c) => {
+                    good = c;
+                    step *= 2;
+                }
+                None => {
+                    bad = Some(next);
+                    break;
+                }
+            }
+        }
+    }
+    if let Some(mut bad) = bad {
+        while bad > good.reach + 1 {
+            let mid = (good.reach + bad) / 2;
+            match try_j(mid) {
+                Some(c) => good = c,
+                None => bad = mid,
+            }
+        }
+    }
+    good
+}
+
 /// End of a jump from `q`: `q + k·step`.
 pub fn jump_end(q: DVec3, k: [i64; 3], step: f64) -> DVec3 {
     q + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * step
@@ -501,7 +487,7 @@ pub fn jump_end(q: DVec3, k: [i64; 3], step: f64) -> DVec3 {
 
 /// What [`CurveEncoder::jump`] found.
 enum Jump {
-    To(Candidate),
+    To(Box<Candidate>),
     Covered,
     Impossible,
 }

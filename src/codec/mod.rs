@@ -623,7 +623,7 @@ pub fn decode_block(
     let mut prev = Previous::default();
     let q = params.quantiser();
     let grid = f64::from_bits(dec.direct(64));
-    if !(grid.is_finite() && grid >= 0.0 && grid < 1e300) {
+    if !(0.0..1e300).contains(&grid) {
         return Err(DecodeError::Curve {
             curve: 0,
             why: format!("a block lattice step of {grid}"),
