@@ -271,6 +271,29 @@ fn estimated_bits(code: &CurveCode) -> u64 {
     }
 }
 
+/// Prediction of an arcs curve's first chord (on the start grid): with an
+/// anchor, the anchoring neighbour's own first stretch as long as the
+/// previous arcs curve's first chord, walked from the anchor (it runs
+/// beside this curve); without, the previous arcs curve's first chord.
+fn first_end_prediction(
+    neighbours: &Neighbours,
+    before: usize,
+    anchor: Option<(usize, bool)>,
+    prev: &Previous,
+    step: f64,
+) -> [i64; 3] {
+    let walked = anchor.and_then(|(back, at_end)| {
+        let f = prev.first_end.map(|v| v as f64);
+        let length = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt() * step;
+        let v = neighbours.walk(before - back, at_end, length)?;
+        let k = [v.x / step, v.y / step, v.z / step].map(f64::round);
+        k.iter()
+            .all(|x| x.is_finite() && x.abs() < (1u64 << entropy::MAX_BITS) as f64)
+            .then(|| k.map(|x| x as i64))
+    });
+    walked.unwrap_or(prev.first_end)
+}
+
 /// Codes a difference of two lattice points (coordinates of one parity):
 /// the parity, then each coordinate halved.
 fn put_lattice(enc: &mut Encoder, parity: &mut Bit, m: &mut [IntModel; 3], d: [i64; 3]) {
@@ -316,7 +339,6 @@ fn choose(
         neighbours.push_grid(Vec::new());
         return (CurveCode::Empty, 0);
     }
-    let half = neighbours.half();
     let pts = opt.points.map(|g| {
         let own_start = lattice_bits([0, 1, 2].map(|a| g[0][a].wrapping_sub(prev.point_start[a])));
         let own = own_start
@@ -348,11 +370,7 @@ fn choose(
         }
         (_, Some((g, reference, _))) => {
             let n = g.len();
-            let ends = (
-                quantise::bcc_point(g[0], half),
-                quantise::bcc_point(g[n - 1], half),
-            );
-            neighbours.push_grid_with_ends(g.clone(), ends);
+            neighbours.push_lattice(g.clone());
             (CurveCode::Points { grid: g, reference }, n)
         }
         (Some((a, decoded)), None) => {
@@ -575,8 +593,15 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
                         }
                     }
                 }
+                let fe_pred = first_end_prediction(
+                    &neighbours,
+                    before,
+                    anchor.map(|a| (a.0, a.1)),
+                    &prev,
+                    q_start,
+                );
                 for a in 0..3 {
-                    m.first_end[a].put(&mut enc, first_end[a] - prev.first_end[a]);
+                    m.first_end[a].put(&mut enc, first_end[a] - fe_pred[a]);
                 }
                 prev.arc_start = *start;
                 prev.first_end = *first_end;
@@ -704,11 +729,7 @@ pub fn decode_block(
                     .iter()
                     .map(|k| DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * grid)
                     .collect();
-                let ends = (
-                    quantise::bcc_point(g[0], grid),
-                    quantise::bcc_point(g[n - 1], grid),
-                );
-                neighbours.push_grid_with_ends(g, ends);
+                neighbours.push_lattice(g);
                 pushed = true;
                 p
             }
@@ -723,9 +744,11 @@ pub fn decode_block(
                 let mut start = [0i64; 3];
                 let mut fe = [0i64; 3];
                 let before = neighbours.len();
+                let mut anchor = None;
                 if before > 0 && dec.bit(&mut m.has_anchor) {
                     let back = m.back_anchor.get_unsigned(&mut dec) as usize + 1;
                     let at_end = dec.bit(&mut m.anchor_end);
+                    anchor = Some((back, at_end));
                     if back > before || back > reference::MAX_BACK {
                         return Err(bad(format!("anchor {back} curves back")));
                     }
@@ -740,8 +763,9 @@ pub fn decode_block(
                         start[a] = prev.arc_start[a].wrapping_add(m.start[a].get(&mut dec));
                     }
                 }
+                let fe_pred = first_end_prediction(&neighbours, before, anchor, &prev, q.start);
                 for a in 0..3 {
-                    fe[a] = prev.first_end[a].wrapping_add(m.first_end[a].get(&mut dec));
+                    fe[a] = fe_pred[a].wrapping_add(m.first_end[a].get(&mut dec));
                 }
                 prev.arc_start = start;
                 prev.first_end = fe;

@@ -19,7 +19,7 @@
 
 use glam::DVec3;
 
-use super::quantise::bcc_nearest;
+use super::quantise::{bcc_nearest, bcc_point};
 
 /// How far back a reference may be, in curves of the same block.
 pub const MAX_BACK: usize = 32;
@@ -55,7 +55,10 @@ pub fn regrid(points: &[DVec3], half: f64) -> Vec<[i64; 3]> {
 pub struct Neighbours {
     half: f64,
     grids: Vec<Vec<[i64; 3]>>,
-    pending: Vec<Option<Vec<DVec3>>>,
+    /// Decoded points of the last [`MAX_BACK`] curves (older ones dropped).
+    points: Vec<Option<Vec<DVec3>>>,
+    /// Whether `grids[k]` holds curve `k` on the lattice yet.
+    gridded: Vec<bool>,
     /// First and last decoded point of each curve (none when empty): the
     /// anchors an arcs curve's start may be coded against.
     ends: Vec<Option<(DVec3, DVec3)>>,
@@ -66,7 +69,8 @@ impl Neighbours {
         Neighbours {
             half,
             grids: Vec::with_capacity(capacity),
-            pending: Vec::with_capacity(capacity),
+            points: Vec::with_capacity(capacity),
+            gridded: Vec::with_capacity(capacity),
             ends: Vec::with_capacity(capacity),
         }
     }
@@ -76,12 +80,38 @@ impl Neighbours {
         self.half
     }
 
-    /// A points curve with its decoded end points.
-    pub fn push_grid_with_ends(&mut self, g: Vec<[i64; 3]>, ends: (DVec3, DVec3)) {
-        self.push_grid(g);
-        if let Some(e) = self.ends.last_mut() {
-            *e = Some(ends);
+    /// A points curve, on the lattice (its points are `k · half`).
+    pub fn push_lattice(&mut self, g: Vec<[i64; 3]>) {
+        let p: Vec<DVec3> = g.iter().map(|&k| bcc_point(k, self.half)).collect();
+        self.ends.push(match (p.first(), p.last()) {
+            (Some(&a), Some(&b)) => Some((a, b)),
+            _ => None,
+        });
+        self.grids.push(g);
+        self.gridded.push(true);
+        self.points.push(Some(p));
+        self.forget_old();
+    }
+
+    /// The point of curve `k` (run backwards when `at_end`) reached by
+    /// walking `distance` along it from its first point (the first vertex
+    /// at or beyond it, or the last), relative to that first point: the
+    /// prediction of a curve's first chord from the neighbour it is
+    /// anchored on.
+    pub fn walk(&self, k: usize, at_end: bool, distance: f64) -> Option<DVec3> {
+        let p = self.points.get(k)?.as_ref()?;
+        if p.len() < 2 {
+            return None;
         }
+        let at = |i: usize| if at_end { p[p.len() - 1 - i] } else { p[i] };
+        let mut walked = 0.0;
+        for i in 1..p.len() {
+            walked += at(i).distance(at(i - 1));
+            if walked >= distance {
+                return Some(at(i) - at(0));
+            }
+        }
+        Some(at(p.len() - 1) - at(0))
     }
 
     /// Curve `k`'s start (or end) on the grid of step `step`.
@@ -125,7 +155,8 @@ impl Neighbours {
     /// A curve already on the lattice.
     pub fn push_grid(&mut self, g: Vec<[i64; 3]>) {
         self.grids.push(g);
-        self.pending.push(None);
+        self.gridded.push(true);
+        self.points.push(None);
         self.ends.push(None);
         self.forget_old();
     }
@@ -137,15 +168,19 @@ impl Neighbours {
             (Some(&a), Some(&b)) => Some((a, b)),
             _ => None,
         });
-        self.pending.push(Some(p));
+        self.gridded.push(false);
+        self.points.push(Some(p));
         self.forget_old();
     }
 
-    /// Points further back than a reference can reach are dropped.
+    /// Points further back than a reference can reach are dropped. The
+    /// encoder pushes a curve before coding it and the decoder after
+    /// decoding it, so one more than [`MAX_BACK`] is kept: both then see the
+    /// same [`MAX_BACK`] curves before the one being coded.
     fn forget_old(&mut self) {
-        let n = self.pending.len();
-        if n > MAX_BACK {
-            self.pending[n - MAX_BACK - 1] = None;
+        let n = self.points.len();
+        if n > MAX_BACK + 1 {
+            self.points[n - MAX_BACK - 2] = None;
         }
     }
 
@@ -153,8 +188,11 @@ impl Neighbours {
     pub fn window(&mut self) -> &[Vec<[i64; 3]>] {
         let n = self.grids.len();
         for k in n.saturating_sub(MAX_BACK)..n {
-            if let Some(p) = self.pending[k].take() {
-                self.grids[k] = regrid(&p, self.half);
+            if !self.gridded[k] {
+                if let Some(p) = &self.points[k] {
+                    self.grids[k] = regrid(p, self.half);
+                }
+                self.gridded[k] = true;
             }
         }
         &self.grids

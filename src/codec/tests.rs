@@ -183,3 +183,62 @@ proptest! {
         check_block(&curves, tol);
     }
 }
+
+/// A bundle: shifted, jittered, sometimes reversed copies of two shapes
+/// (a smooth arc-coded one and a coarse points-coded one), interleaved so
+/// that references and anchors reach up to and beyond 32 curves back.
+#[test]
+fn bundles_lean_on_neighbours_and_round_trip() {
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    let smooth: Vec<DVec3> = (0..80)
+        .map(|k| {
+            let s = k as f64 * 0.5;
+            DVec3::new(s, 8.0 * (s / 13.0).sin(), 3.0 * (s / 7.0).cos())
+        })
+        .collect();
+    let coarse: Vec<DVec3> = (0..20)
+        .map(|k| {
+            let s = k as f64 * 6.0;
+            DVec3::new(s, 10.0 * (s / 40.0).sin(), 0.0)
+        })
+        .collect();
+    let mut curves = Vec::new();
+    for k in 0..300 {
+        let base = if k % 3 == 0 { &coarse } else { &smooth };
+        let shift = DVec3::new(
+            rng.gen_range(-3.0..3.0),
+            rng.gen_range(-3.0..3.0),
+            rng.gen_range(-3.0..3.0),
+        );
+        let mut c: Vec<DVec3> = base
+            .iter()
+            .map(|&p| {
+                p + shift
+                    + DVec3::new(
+                        rng.gen_range(-0.05..0.05),
+                        rng.gen_range(-0.05..0.05),
+                        rng.gen_range(-0.05..0.05),
+                    )
+            })
+            .collect();
+        if rng.gen_bool(0.3) {
+            c.reverse();
+        }
+        curves.push(c);
+    }
+    for tol in [0.1, 0.5] {
+        let block = check_block(&curves, tol);
+        // Neighbours pay: the block is far smaller than its curves coded
+        // alone (each in a block of its own, with nothing to lean on).
+        let params = CodecParams::new(tol);
+        let alone: usize = curves
+            .iter()
+            .map(|c| encode_block(&[c], &params).unwrap().bytes.len() - 13)
+            .sum();
+        assert!(
+            (block.bytes.len() as f64) < 0.8 * alone as f64,
+            "T = {tol}: {} bytes together, {alone} alone",
+            block.bytes.len()
+        );
+    }
+}
