@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::inspect_cmd::parse_format;
-use super::io_util::{check_losses, report_skipped, write_failed};
+use super::io_util::{check_losses, report_skipped, write_failed, DelayedBar};
 use super::{CompressArgs, DistanceArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
 use crate::compress::{compress_curve, CompressOptions};
@@ -314,9 +314,9 @@ fn run_v2(args: &CompressArgs) -> Result<()> {
         dropped_point_data: meta.point_data_names.clone(),
         written_by: format!("strandfit {}", env!("CARGO_PKG_VERSION")),
     };
-    let bar = progress_bar(meta.count);
+    let mut bar = DelayedBar::new(meta.count);
     let summary = compress_stream(&mut *reader, &args.input, &args.output, &header, &mut |n| {
-        bar.set_position(n)
+        bar.set(n)
     })
     .map_err(|mut e| {
         // An error about the input names its curve as counted in the
@@ -333,7 +333,7 @@ fn run_v2(args: &CompressArgs) -> Result<()> {
         }
         anyhow::Error::from(e)
     })?;
-    bar.finish_and_clear();
+    bar.finish();
     report_skipped(&args.input, reader.skipped());
     let bytes_in = std::fs::metadata(&args.input).map(|m| m.len()).unwrap_or(0);
     let seconds = started.elapsed().as_secs_f64();
@@ -383,18 +383,4 @@ fn run_v2(args: &CompressArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// A progress bar on stderr, drawn only when stderr is a terminal
-/// (indicatif hides it otherwise) and after a second (its steady tick).
-fn progress_bar(count: Option<u64>) -> ProgressBar {
-    let bar = match count {
-        Some(n) => ProgressBar::new(n),
-        None => ProgressBar::new_spinner(),
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} {pos}/{len} curves {per_sec} eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar
 }

@@ -138,8 +138,10 @@ fn run_v2(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
         point_data: Vec::new(),
         curve_data: c.curve_data,
     };
-    let n = decompress_stream(&mut reader, &mut *writer, &map, &mut |_| {})
+    let mut bar = super::io_util::DelayedBar::new(Some(reader.curve_count()));
+    let n = decompress_stream(&mut reader, &mut *writer, &map, &mut |n| bar.set(n))
         .map_err(|e| anyhow::anyhow!("{e}"))?;
+    bar.finish();
     writer.finish()?;
     eprintln!(
         "{} -> {}: {n} curves",

@@ -277,3 +277,50 @@ pub fn write_failed(
     }
     anyhow::anyhow!("{}, curve {index}: cannot be written: {e}", input.display())
 }
+
+/// A progress bar on stderr that appears only once a job has run for a
+/// second, and only when stderr is a terminal (indicatif's stderr target
+/// draws nothing otherwise): short runs and logs stay clean.
+pub struct DelayedBar {
+    bar: indicatif::ProgressBar,
+    started: std::time::Instant,
+    shown: bool,
+}
+
+impl DelayedBar {
+    /// A bar over `count` curves (a spinner when the count is unknown).
+    pub fn new(count: Option<u64>) -> Self {
+        let bar = match count {
+            Some(n) => indicatif::ProgressBar::with_draw_target(
+                Some(n),
+                indicatif::ProgressDrawTarget::hidden(),
+            ),
+            None => indicatif::ProgressBar::hidden(),
+        };
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} {pos}/{len} curves {per_sec} eta {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        DelayedBar {
+            bar,
+            started: std::time::Instant::now(),
+            shown: false,
+        }
+    }
+
+    /// `n` curves done.
+    pub fn set(&mut self, n: u64) {
+        if !self.shown && self.started.elapsed() >= std::time::Duration::from_secs(1) {
+            self.bar
+                .set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            self.shown = true;
+        }
+        self.bar.set_position(n);
+    }
+
+    pub fn finish(self) {
+        self.bar.finish_and_clear();
+    }
+}
