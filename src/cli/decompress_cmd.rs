@@ -24,18 +24,7 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
         return run_v2(args, to);
     }
     let reader = ContainerReader::open(&args.input)?;
-    let meta = reader.header().source.to_metadata();
-    let target = match to {
-        Some(f) => f,
-        None => Format::from_path(&args.output)?,
-    };
-    check_losses(
-        &args.input,
-        &args.output,
-        &target.losses(&meta),
-        args.strict,
-    )?;
-    let mut writer = create_writer(&args.output, Some(target), &meta)?;
+    let mut writer = output_writer(args, to, &reader.header().source)?;
     let mut n = 0u64;
     for c in reader {
         let c = c?;
@@ -100,15 +89,15 @@ fn sample_chain(
     chain.sample(m.max(2))
 }
 
-/// A version-2 container: the codec's points (the guarantee's), or a
-/// resampling of them when asked.
-fn run_v2(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
-    use crate::codec::container::ReaderV2;
-    use crate::codec::stream::decompress_stream;
-
-    let mut reader = ReaderV2::open(&args.input)?;
-    let header = reader.header().clone();
-    let meta = header.source.to_metadata();
+/// The writer of the output, in the source's convention, after the check of
+/// what the target format cannot hold (warned about, or an error with
+/// `--strict`).
+fn output_writer(
+    args: &DecompressArgs,
+    to: Option<Format>,
+    source: &crate::io::container::SourceMeta,
+) -> Result<Box<dyn crate::io::CurveWriter>> {
+    let meta = source.to_metadata();
     let target = match to {
         Some(f) => f,
         None => Format::from_path(&args.output)?,
@@ -119,6 +108,17 @@ fn run_v2(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
         &target.losses(&meta),
         args.strict,
     )?;
+    Ok(create_writer(&args.output, Some(target), &meta)?)
+}
+
+/// A version-2 container: the codec's points (the guarantee's), or a
+/// resampling of them when asked.
+fn run_v2(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
+    use crate::codec::container::ReaderV2;
+    use crate::codec::stream::decompress_stream;
+
+    let mut reader = ReaderV2::open(&args.input)?;
+    let header = reader.header().clone();
     if args.points.is_some() || args.step.is_some() {
         eprintln!(
             "warning: {}: resampling with --points/--step gives up the guarantee that every \
@@ -127,7 +127,7 @@ fn run_v2(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
             header.tolerance
         );
     }
-    let mut writer = create_writer(&args.output, Some(target), &meta)?;
+    let mut writer = output_writer(args, to, &header.source)?;
     let (points, step) = (args.points, args.step);
     let map = move |c: crate::codec::container::DecodedCurve| Curve {
         id: c.id,

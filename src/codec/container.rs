@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 
 use super::quantise::Steps;
 use super::{decode_block, encode_block, CodecParams, EncodedBlock};
-use crate::io::container::{SourceMeta, MAGIC};
+use crate::io::container::{file_head, SourceMeta, MAGIC};
 use crate::io::{AtomicFile, IoError};
 
 pub const VERSION: u16 = 2;
@@ -247,15 +247,7 @@ impl WriterV2 {
         let mut out = AtomicFile::create(path)?;
         let json = serde_json::to_vec(header)
             .map_err(|e| IoError::new(path, format!("cannot encode the header: {e}")))?;
-        let stored = deflate(&json).map_err(|e| out.err(e))?;
-        let mut head = Vec::with_capacity(stored.len() + 24);
-        head.extend_from_slice(&MAGIC);
-        head.extend_from_slice(&VERSION.to_le_bytes());
-        head.extend_from_slice(&0u16.to_le_bytes());
-        head.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        head.extend_from_slice(&(stored.len() as u32).to_le_bytes());
-        head.extend_from_slice(&crc32fast::hash(&stored).to_le_bytes());
-        head.extend_from_slice(&stored);
+        let head = file_head(VERSION, &json).map_err(|e| out.err(e))?;
         out.write_all(&head).map_err(|e| out.err(e))?;
         Ok(WriterV2 {
             out,

@@ -655,6 +655,25 @@ fn check_chain(ch: &ChainParams) -> Result<(), String> {
 
 // ---------------------------------------------------------------- writing
 
+/// The file head both container versions start with: magic, `version`,
+/// flags 0, the header JSON's inflated and stored lengths, the CRC-32 of
+/// the stored bytes, and the header itself as raw DEFLATE (a .trk source's
+/// 1000-byte header, kept as hex, would otherwise cost 2 KB per file).
+pub(crate) fn file_head(version: u16, json: &[u8]) -> std::io::Result<Vec<u8>> {
+    let mut z = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::best());
+    z.write_all(json)?;
+    let stored = z.finish()?;
+    let mut head = Vec::with_capacity(stored.len() + 24);
+    head.extend_from_slice(&MAGIC);
+    head.extend_from_slice(&version.to_le_bytes());
+    head.extend_from_slice(&0u16.to_le_bytes());
+    head.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    head.extend_from_slice(&(stored.len() as u32).to_le_bytes());
+    head.extend_from_slice(&crc32fast::hash(&stored).to_le_bytes());
+    head.extend_from_slice(&stored);
+    Ok(head)
+}
+
 /// Streams curves into a container; [`finish`](Self::finish) writes the
 /// last block and the end record and renames the file into place.
 pub struct ContainerWriter {
@@ -673,19 +692,7 @@ impl ContainerWriter {
         let mut out = AtomicFile::create(path)?;
         let json = serde_json::to_vec(&header)
             .map_err(|e| IoError::new(path, format!("cannot encode the header: {e}")))?;
-        // The header is deflated too: a .trk source's 1000-byte header
-        // (kept as hex) would otherwise cost 2 KB per file.
-        let mut z = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::best());
-        z.write_all(&json).map_err(|e| out.err(e))?;
-        let stored = z.finish().map_err(|e| out.err(e))?;
-        let mut head = Vec::with_capacity(stored.len() + 24);
-        head.extend_from_slice(&MAGIC);
-        head.extend_from_slice(&VERSION.to_le_bytes());
-        head.extend_from_slice(&0u16.to_le_bytes());
-        head.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        head.extend_from_slice(&(stored.len() as u32).to_le_bytes());
-        head.extend_from_slice(&crc32fast::hash(&stored).to_le_bytes());
-        head.extend_from_slice(&stored);
+        let head = file_head(VERSION, &json).map_err(|e| out.err(e))?;
         out.write_all(&head).map_err(|e| out.err(e))?;
         Ok(ContainerWriter {
             out,
