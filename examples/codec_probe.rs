@@ -1,23 +1,24 @@
 //! Codec probe: bytes, kinds and two-sided error of the codec on one file.
 //!
-//! `cargo run --release --example codec_probe -- FILE TOL [offset length start sagitta]`
+//! `cargo run --release --example codec_probe -- FILE TOL [offset length start first sagitta]`
 use std::time::Instant;
 
 use glam::DVec3;
-use strandfit::codec::{decode_block, encode_block, quantise::Steps, CodecParams};
+use strandfit::codec::{decode_block, encode_block_tallied, quantise::Steps, CodecParams, FIELDS};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let path = std::path::Path::new(&args[1]);
     let tol: f64 = args[2].parse().unwrap();
     let mut params = CodecParams::new(tol);
-    if args.len() >= 7 {
-        let v: Vec<f64> = args[3..7].iter().map(|s| s.parse().unwrap()).collect();
+    if args.len() >= 8 {
+        let v: Vec<f64> = args[3..8].iter().map(|s| s.parse().unwrap()).collect();
         params.steps = Steps {
             offset: v[0],
             length: v[1],
             start: v[2],
-            sagitta: v[3],
+            first: v[3],
+            sagitta: v[4],
         };
     }
     let (_, curves) = strandfit::io::read_all(path, None).unwrap();
@@ -31,8 +32,12 @@ fn main() {
     let mut over = 0;
     let mut dt_dec = 0.0;
     let mut blocks = Vec::new();
+    let mut tally = vec![0.0; FIELDS.len()];
     for chunk in curves.chunks(4096) {
-        let b = encode_block(chunk, &params).unwrap();
+        let (b, t) = encode_block_tallied(chunk, &params, true).unwrap();
+        for (a, x) in tally.iter_mut().zip(t.unwrap()) {
+            *a += x;
+        }
         bytes += b.bytes.len();
         for k in &b.kinds {
             kinds[*k as usize] += 1;
@@ -62,4 +67,10 @@ fn main() {
         path.file_name().unwrap().to_string_lossy(), bytes as f64 * 8.0 / npts as f64, kinds,
         out_pts as f64 / npts as f64, npts as f64 / dt_enc / 1e6, out_pts as f64 / dt_dec / 1e6
     );
+    let total: f64 = tally.iter().sum();
+    for (name, bits) in FIELDS.iter().zip(&tally) {
+        if *bits > 0.0 {
+            println!("  {name:>16}: {:>10.0} B {:>5.1} %", bits / 8.0, 100.0 * bits / total);
+        }
+    }
 }

@@ -39,13 +39,13 @@ pub struct CompressReport {
     pub tolerance: Option<f64>,
     /// Container version written (2: the arc codec; 1: helix chains).
     pub container_version: u16,
-    /// Mean fitted distance (version 1 only: version 2 checks each curve
+    /// Mean fitted distance (version 1 only: version 3 checks each curve
     /// against the tolerance, and does not measure below it).
     pub mean_distance: Option<f64>,
-    /// Largest distance (version 2: the tolerance, which every curve is
+    /// Largest distance (version 3: the tolerance, which every curve is
     /// guaranteed to meet at default decompression).
     pub max_distance: f64,
-    /// Points the default decompression writes (version 2).
+    /// Points the default decompression writes (version 3).
     pub output_points: u64,
     /// Curves whose decoded chain is not within the tolerance (the search
     /// hit `--max-elements`).
@@ -54,7 +54,7 @@ pub struct CompressReport {
     pub verbatim: u64,
     /// Curves stored as their points because that is smaller.
     pub points_cheaper: u64,
-    /// Curves stored as arcs (version 2).
+    /// Curves stored as arcs (version 3).
     pub arcs: u64,
     /// Indices (in the input) of the curves `--skip-bad` left out.
     pub skipped: Vec<u64>,
@@ -77,7 +77,7 @@ pub fn run(args: &CompressArgs) -> Result<()> {
                  Fréchet distance: add --distance ordered (or frechet)"
             );
         }
-        return run_v2(args);
+        return run_codec(args);
     }
     let count = match (args.tolerance, args.elements, args.element_length) {
         (Some(t), None, None) => ElementCount::Tolerance(t),
@@ -108,7 +108,7 @@ pub fn run(args: &CompressArgs) -> Result<()> {
         StorageArg::F64 => Storage::F64,
     };
     let distance = match args.distance {
-        // Hausdorff is version 2, handled above.
+        // Hausdorff is version 3, handled above.
         DistanceArg::Ordered | DistanceArg::Hausdorff => Distance::Ordered,
         DistanceArg::Frechet => Distance::Frechet,
     };
@@ -290,12 +290,11 @@ fn open_input(args: &CompressArgs) -> Result<(Box<dyn CurveReader>, Metadata, Ve
     Ok((reader, meta, dropped))
 }
 
-/// `compress` with the arc codec into a version-2 container: every curve
+/// `compress` with the arc codec into a version-3 container: every curve
 /// within `--tolerance` in the two-sided Hausdorff distance at default
 /// decompression.
-fn run_v2(args: &CompressArgs) -> Result<()> {
-    use crate::codec::container::HeaderV2;
-    use crate::codec::quantise::Steps;
+fn run_codec(args: &CompressArgs) -> Result<()> {
+    use crate::codec::container::CodecHeader;
     use crate::codec::stream::compress_stream;
 
     let Some(tolerance) = args.tolerance else {
@@ -306,14 +305,13 @@ fn run_v2(args: &CompressArgs) -> Result<()> {
     }
     let started = Instant::now();
     let (mut reader, meta, dropped) = open_input(args)?;
-    let header = HeaderV2 {
-        codec: "arcs".into(),
+    // The input's name is not stored: the output's name says what it was,
+    // and in a farm the name is bytes in every file.
+    let header = CodecHeader::new(
         tolerance,
-        steps: Steps::default(),
-        source: SourceMeta::from_metadata(&meta, Some(&args.input)),
-        dropped_point_data: meta.point_data_names.clone(),
-        written_by: format!("strandfit {}", env!("CARGO_PKG_VERSION")),
-    };
+        SourceMeta::from_metadata(&meta, None),
+        meta.point_data_names.clone(),
+    );
     let mut bar = DelayedBar::new(meta.count);
     let summary = compress_stream(&mut *reader, &args.input, &args.output, &header, &mut |n| {
         bar.set(n)

@@ -20,8 +20,8 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
         bail!("--points must be at least 2");
     }
     let to = args.to.as_deref().map(parse_format).transpose()?;
-    if crate::codec::container::container_version(&args.input) == Some(2) {
-        return run_v2(args, to);
+    if crate::codec::container::container_version(&args.input).is_some_and(|v| v >= 2) {
+        return run_codec(args, to);
     }
     let reader = ContainerReader::open(&args.input)?;
     let mut writer = output_writer(args, to, &reader.header().source)?;
@@ -113,11 +113,11 @@ fn output_writer(
 
 /// A version-2 container: the codec's points (the guarantee's), or a
 /// resampling of them when asked.
-fn run_v2(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
-    use crate::codec::container::ReaderV2;
+fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
+    use crate::codec::container::CodecReader;
     use crate::codec::stream::decompress_stream;
 
-    let mut reader = ReaderV2::open(&args.input)?;
+    let mut reader = CodecReader::open(&args.input)?;
     let header = reader.header().clone();
     if args.points.is_some() || args.step.is_some() {
         eprintln!(

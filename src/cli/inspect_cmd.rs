@@ -11,8 +11,8 @@ use crate::io::inspect::CurveStats;
 use crate::io::{open_reader, Format};
 
 pub fn run(args: &InspectArgs) -> Result<()> {
-    if crate::codec::container::container_version(&args.input) == Some(2) {
-        return inspect_container_v2(args);
+    if crate::codec::container::container_version(&args.input).is_some_and(|v| v >= 2) {
+        return inspect_codec_container(args);
     }
     if crate::io::container::is_container(&args.input) {
         return inspect_container(args);
@@ -209,10 +209,10 @@ fn inspect_container(args: &InspectArgs) -> Result<()> {
 
 /// Summary of a version-2 container: its header, and counts from decoding
 /// every block (which also verifies every checksum).
-fn inspect_container_v2(args: &InspectArgs) -> Result<()> {
-    use crate::codec::container::ReaderV2;
+fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
+    use crate::codec::container::CodecReader;
     let bytes = std::fs::metadata(&args.input)?.len();
-    let mut reader = ReaderV2::open(&args.input)?;
+    let mut reader = CodecReader::open(&args.input)?;
     let header = reader.header().clone();
     let path = args.input.clone();
     let (mut curves, mut points, mut empty) = (0u64, 0u64, 0u64);
@@ -239,7 +239,7 @@ fn inspect_container_v2(args: &InspectArgs) -> Result<()> {
         let report = json!({
             "file": args.input.display().to_string(),
             "format": "sfh",
-            "container_version": 2,
+            "container_version": crate::codec::container::VERSION,
             "bytes": bytes,
             "header": header,
             "curves": curves,
@@ -252,17 +252,18 @@ fn inspect_container_v2(args: &InspectArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         println!(
-            "{}: strandfit container version 2, {bytes} bytes",
-            args.input.display()
+            "{}: strandfit container version {}, {bytes} bytes",
+            args.input.display(),
+            crate::codec::container::VERSION
         );
         println!(
-            "  codec           {} within {} (two-sided Hausdorff at default decompression)",
-            header.codec, header.tolerance
+            "  codec           arcs (model {}, strandfit {}) within {} (two-sided Hausdorff at default decompression)",
+            header.model, header.written_by, header.tolerance
         );
         println!(
-            "  source          {} ({}), units {}",
+            "  source          {}{}, units {}",
             header.source.format,
-            header.source.file.as_deref().unwrap_or("?"),
+            header.source.file.as_deref().map(|f| format!(" ({f})")).unwrap_or_default(),
             header.source.units.as_deref().unwrap_or("unknown")
         );
         println!(

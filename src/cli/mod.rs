@@ -244,7 +244,7 @@ pub enum StorageArg {
 pub enum DistanceArg {
     /// Two-sided: every input point within the tolerance of the output
     /// polyline and every output point within it of the input polyline
-    /// (container version 2, the arc codec; guaranteed at default
+    /// (container version 3, the arc codec; guaranteed at default
     /// decompression).
     Hausdorff,
     /// Version-1 helix container: the input's points lie within the
@@ -329,7 +329,7 @@ pub struct DecompressArgs {
     #[arg(long, conflicts_with = "points")]
     pub step: Option<f64>,
     /// Sample each curve at M points equally spaced in arc length (default:
-    /// version 2, the points the tolerance is guaranteed for; version 1, as
+    /// version 3, the points the tolerance is guaranteed for; version 1, as
     /// many as the input had). Gives up a version-2 guarantee, and says so.
     #[arg(short = 'm', long)]
     pub points: Option<usize>,

@@ -1,25 +1,26 @@
-//! The `.sfh` container, version 2: codec blocks with an index at the end.
+//! The `.sfh` container, version 3: codec blocks with an index at the end.
 //!
-//! Layout (integers little endian; `docs/container.md` has the details):
+//! Layout (`docs/container.md` has the details; `v` is a LEB128 varint,
+//! fixed-size integers are little endian):
 //!
 //! ```text
 //! 0   8  magic 89 53 46 48 0D 0A 1A 0A
-//! 8   2  version = 2
-//! 10  2  flags = 0
-//! 12  4  header JSON length, 16 4 stored (deflated) length, 20 4 CRC-32
-//! 24  …  header: raw DEFLATE of UTF-8 JSON ([`HeaderV2`])
-//!     …  blocks: "SFHB", u32 curves, u32 geometry length, u32 side
-//!        length, u32 side inflated length, u32 CRC-32 of geometry+side,
-//!        then the geometry (the codec's range-coded stream) and the side
-//!        data (DEFLATE: per curve its id and per-curve values)
-//!     …  index: "SFHI", u32 blocks, per block u64 offset and u32 curves,
-//!        u32 CRC-32 of the entries
-//! end-24 "SFHE", u64 curves, u64 index offset, u32 CRC-32 of block CRCs
+//! 8   2  version = 3
+//! 10  v  header length H, then H bytes: encoding (0 raw, 1 DEFLATE),
+//!        the binary header ([`CodecHeader`]), then u32 CRC-32 of the H bytes
+//!     …  blocks: v curves, v geometry length, v side length (then v side
+//!        inflated length if not 0), the geometry (the codec's range-coded
+//!        stream) and the side data (DEFLATE: per curve its id and
+//!        per-curve values), u32 CRC-32 of all of the block's bytes before it
+//!     …  index: v blocks, per block v bytes and v curves
+//! end-12 u32 CRC-32 of the index, u32 index length, "SFHE"
 //! ```
 //!
 //! Every block decodes alone (its entropy models start afresh), so blocks
 //! are encoded and decoded in parallel and a range of curves is read by
-//! seeking to its blocks through the index.
+//! seeking to its blocks through the index. The framing costs about 40
+//! bytes and the header about as much again: on a file of a few hundred
+//! curves that is a few per cent of the whole.
 
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom, Write};
@@ -30,14 +31,16 @@ use serde::{Deserialize, Serialize};
 
 use super::quantise::Steps;
 use super::{decode_block, encode_block, CodecParams, EncodedBlock};
-use crate::io::container::{file_head, SourceMeta, MAGIC};
+use crate::io::container::{SourceMeta, MAGIC};
 use crate::io::{AtomicFile, IoError};
 
-pub const VERSION: u16 = 2;
-const BLOCK_MAGIC: [u8; 4] = *b"SFHB";
-const INDEX_MAGIC: [u8; 4] = *b"SFHI";
+pub const VERSION: u16 = 3;
+/// The revision of the codec's model (what the geometry streams mean). A
+/// decoder reads only its own: a stream coded by another model would
+/// decode to other curves, so it is refused by name instead.
+pub const MODEL: u8 = 1;
 const END_MAGIC: [u8; 4] = *b"SFHE";
-const END_LEN: u64 = 24;
+const END_LEN: u64 = 12;
 /// Curves per block: the entropy models learn within a block, so larger
 /// blocks code a little smaller; 4,096 bounds memory and keeps two cores
 /// busy on files of a few blocks.
@@ -45,34 +48,189 @@ pub const BLOCK_CURVES: usize = 4096;
 /// Largest header, block part or index accepted.
 const MAX_SECTION: u32 = 1 << 30;
 
-/// The version-2 header (stored as JSON).
+/// The header of a version-3 container.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct HeaderV2 {
-    /// "arcs": the codec of [`crate::codec`].
-    pub codec: String,
+pub struct CodecHeader {
+    /// The revision of the codec model that wrote the geometry ([`MODEL`]).
+    pub model: u8,
     /// The two-sided Hausdorff tolerance every curve was compressed to.
     pub tolerance: f64,
-    /// Left out of the JSON when they are the defaults.
-    #[serde(default, skip_serializing_if = "is_default_steps")]
     pub steps: Steps,
     pub source: SourceMeta,
     /// Per-point data names of the input that are not stored.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub dropped_point_data: Vec<String>,
+    /// The version of strandfit that wrote the file.
     pub written_by: String,
 }
 
-fn is_default_steps(s: &Steps) -> bool {
-    *s == Steps::default()
-}
+impl CodecHeader {
+    /// A header for the current model with the default steps.
+    pub fn new(tolerance: f64, source: SourceMeta, dropped_point_data: Vec<String>) -> Self {
+        CodecHeader {
+            model: MODEL,
+            tolerance,
+            steps: Steps::default(),
+            source,
+            dropped_point_data,
+            written_by: env!("CARGO_PKG_VERSION").into(),
+        }
+    }
 
-impl HeaderV2 {
     pub fn params(&self) -> CodecParams {
         CodecParams {
             tolerance: self.tolerance,
             steps: self.steps,
         }
     }
+
+    /// The binary form (before the optional DEFLATE): model, tolerance,
+    /// steps (a flag, then five `f64` unless the defaults), the writer's
+    /// version, the source's metadata and the dropped names. Strings are a
+    /// varint length and UTF-8; optional fields follow a presence bit.
+    fn to_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(64);
+        b.push(self.model);
+        b.extend_from_slice(&self.tolerance.to_le_bytes());
+        let st = self.steps;
+        if st == Steps::default() {
+            b.push(0);
+        } else {
+            b.push(1);
+            for v in [st.offset, st.length, st.start, st.first, st.sagitta] {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        put_str(&mut b, &self.written_by);
+        let m = &self.source;
+        put_str(&mut b, &m.format);
+        let identity = glam::DMat4::IDENTITY.to_cols_array_2d();
+        let present = [
+            m.file.is_some(),
+            m.vox_to_world != identity,
+            m.voxel_size.is_some(),
+            m.dimensions.is_some(),
+            m.units.is_some(),
+        ];
+        b.push(
+            present
+                .iter()
+                .enumerate()
+                .fold(0u8, |acc, (k, &p)| acc | (p as u8) << k),
+        );
+        if let Some(f) = &m.file {
+            put_str(&mut b, f);
+        }
+        if present[1] {
+            for v in m.vox_to_world.iter().flatten() {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        if let Some(v) = m.voxel_size {
+            for x in v {
+                b.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        if let Some(d) = m.dimensions {
+            for x in d {
+                put_varint(&mut b, x as u64);
+            }
+        }
+        if let Some(u) = &m.units {
+            put_str(&mut b, u);
+        }
+        put_varint(&mut b, m.curve_data_names.len() as u64);
+        for n in &m.curve_data_names {
+            put_str(&mut b, n);
+        }
+        put_varint(&mut b, m.extra.len() as u64);
+        for (k, v) in &m.extra {
+            put_str(&mut b, k);
+            put_str(&mut b, v);
+        }
+        put_varint(&mut b, self.dropped_point_data.len() as u64);
+        for n in &self.dropped_point_data {
+            put_str(&mut b, n);
+        }
+        b
+    }
+
+    fn from_bytes(b: &[u8]) -> Result<Self, String> {
+        let mut c = Cursor { b, pos: 0 };
+        let model = c.take(1)?[0];
+        let tolerance = c.f64()?;
+        let steps = match c.take(1)?[0] {
+            0 => Steps::default(),
+            1 => Steps {
+                offset: c.f64()?,
+                length: c.f64()?,
+                start: c.f64()?,
+                first: c.f64()?,
+                sagitta: c.f64()?,
+            },
+            f => return Err(format!("unknown steps flag {f}")),
+        };
+        let written_by = c.str()?;
+        let format = c.str()?;
+        let present = c.take(1)?[0];
+        if present >> 5 != 0 {
+            return Err(format!("unknown metadata flags {present:#x}"));
+        }
+        let has = |k: u32| present >> k & 1 == 1;
+        let file = if has(0) { Some(c.str()?) } else { None };
+        let mut vox_to_world = glam::DMat4::IDENTITY.to_cols_array_2d();
+        if has(1) {
+            for v in vox_to_world.iter_mut().flatten() {
+                *v = c.f64()?;
+            }
+        }
+        let voxel_size = if has(2) {
+            Some([c.f64()?, c.f64()?, c.f64()?])
+        } else {
+            None
+        };
+        let dimensions = if has(3) {
+            let mut d = [0u32; 3];
+            for x in &mut d {
+                *x = u32::try_from(c.varint()?).map_err(|_| "a dimension beyond u32")?;
+            }
+            Some(d)
+        } else {
+            None
+        };
+        let units = if has(4) { Some(c.str()?) } else { None };
+        let curve_data_names = c.strs()?;
+        let n = c.count()?;
+        let mut extra = Vec::with_capacity(n);
+        for _ in 0..n {
+            extra.push((c.str()?, c.str()?));
+        }
+        let dropped_point_data = c.strs()?;
+        if c.pos != b.len() {
+            return Err("bytes left over after the header".into());
+        }
+        Ok(CodecHeader {
+            model,
+            tolerance,
+            steps,
+            source: SourceMeta {
+                format,
+                file,
+                vox_to_world,
+                voxel_size,
+                dimensions,
+                units,
+                curve_data_names,
+                extra,
+            },
+            dropped_point_data,
+            written_by,
+        })
+    }
+}
+
+fn put_str(out: &mut Vec<u8>, s: &str) {
+    put_varint(out, s.len() as u64);
+    out.extend_from_slice(s.as_bytes());
 }
 
 /// One decoded curve.
@@ -106,7 +264,7 @@ struct Cursor<'a> {
 impl Cursor<'_> {
     fn take(&mut self, n: usize) -> Result<&[u8], String> {
         if n > self.b.len() - self.pos {
-            return Err("side data end early".into());
+            return Err("ends early".into());
         }
         let s = &self.b[self.pos..self.pos + n];
         self.pos += n;
@@ -122,6 +280,27 @@ impl Cursor<'_> {
             }
         }
         Err("a varint longer than 64 bits".into())
+    }
+    fn f64(&mut self) -> Result<f64, String> {
+        let b = self.take(8)?;
+        Ok(f64::from_le_bytes(b.try_into().expect("8 bytes")))
+    }
+    /// A count of items that each take at least one byte (so a corrupt
+    /// count cannot allocate more than the bytes left).
+    fn count(&mut self) -> Result<usize, String> {
+        let n = self.varint()?;
+        if n > (self.b.len() - self.pos) as u64 {
+            return Err(format!("a count of {n} in {} bytes", self.b.len() - self.pos));
+        }
+        Ok(n as usize)
+    }
+    fn str(&mut self) -> Result<String, String> {
+        let n = self.count()?;
+        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| "a string that is not UTF-8".into())
+    }
+    fn strs(&mut self) -> Result<Vec<String>, String> {
+        let n = self.count()?;
+        (0..n).map(|_| self.str()).collect()
     }
 }
 
@@ -232,29 +411,42 @@ pub fn encode_block_bytes(
     })
 }
 
-/// Writes a version-2 container; [`finish`](Self::finish) writes the index
+/// Writes a version-3 container; [`finish`](Self::finish) writes the index
 /// and end record and renames the file into place.
-pub struct WriterV2 {
+pub struct CodecWriter {
     out: AtomicFile,
     offset: u64,
-    curves: u64,
+    /// Per block: its bytes and curves.
     index: Vec<(u64, u32)>,
-    crcs: crc32fast::Hasher,
 }
 
-impl WriterV2 {
-    pub fn create(path: &Path, header: &HeaderV2) -> Result<Self, IoError> {
+impl CodecWriter {
+    pub fn create(path: &Path, header: &CodecHeader) -> Result<Self, IoError> {
         let mut out = AtomicFile::create(path)?;
-        let json = serde_json::to_vec(header)
-            .map_err(|e| IoError::new(path, format!("cannot encode the header: {e}")))?;
-        let head = file_head(VERSION, &json).map_err(|e| out.err(e))?;
+        let raw = header.to_bytes();
+        // A .trk source's 1000-byte header, or long titles, deflate well;
+        // the usual few dozen bytes do not.
+        let packed = deflate(&raw).map_err(|e| out.err(e))?;
+        let mut body = Vec::with_capacity(raw.len() + 1);
+        if packed.len() + 4 < raw.len() {
+            body.push(1);
+            put_varint(&mut body, raw.len() as u64);
+            body.extend_from_slice(&packed);
+        } else {
+            body.push(0);
+            body.extend_from_slice(&raw);
+        }
+        let mut head = Vec::with_capacity(body.len() + 20);
+        head.extend_from_slice(&MAGIC);
+        head.extend_from_slice(&VERSION.to_le_bytes());
+        put_varint(&mut head, body.len() as u64);
+        head.extend_from_slice(&body);
+        head.extend_from_slice(&crc32fast::hash(&body).to_le_bytes());
         out.write_all(&head).map_err(|e| out.err(e))?;
-        Ok(WriterV2 {
+        Ok(CodecWriter {
             out,
             offset: head.len() as u64,
-            curves: 0,
             index: Vec::new(),
-            crcs: crc32fast::Hasher::new(),
         })
     }
 
@@ -264,80 +456,83 @@ impl WriterV2 {
 
     /// Appends an encoded block.
     pub fn write_block(&mut self, b: &BlockBytes) -> Result<(), IoError> {
-        let mut head = Vec::with_capacity(24);
-        head.extend_from_slice(&BLOCK_MAGIC);
-        head.extend_from_slice(&b.curves.to_le_bytes());
-        head.extend_from_slice(&(b.geometry.len() as u32).to_le_bytes());
-        head.extend_from_slice(&(b.side.len() as u32).to_le_bytes());
-        head.extend_from_slice(&b.side_len.to_le_bytes());
-        // The CRC covers the header's counts as well as the bytes.
+        let mut head = Vec::with_capacity(16);
+        put_varint(&mut head, b.curves as u64);
+        put_varint(&mut head, b.geometry.len() as u64);
+        put_varint(&mut head, b.side.len() as u64);
+        if !b.side.is_empty() {
+            put_varint(&mut head, b.side_len as u64);
+        }
         let mut crc = crc32fast::Hasher::new();
-        crc.update(&head[4..20]);
+        crc.update(&head);
         crc.update(&b.geometry);
         crc.update(&b.side);
-        let crc = crc.finalize();
-        self.crcs.update(&crc.to_le_bytes());
-        head.extend_from_slice(&crc.to_le_bytes());
-        for part in [&head[..], &b.geometry, &b.side] {
+        let crc = crc.finalize().to_le_bytes();
+        for part in [&head[..], &b.geometry, &b.side, &crc] {
             self.out.write_all(part).map_err(|e| self.out.err(e))?;
         }
-        self.index.push((self.offset, b.curves));
-        self.offset += (head.len() + b.geometry.len() + b.side.len()) as u64;
-        self.curves += b.curves as u64;
+        let len = (head.len() + b.geometry.len() + b.side.len() + 4) as u64;
+        self.index.push((len, b.curves));
+        self.offset += len;
         Ok(())
     }
 
     /// Completes and commits the file; returns its size in bytes.
     pub fn finish(mut self) -> Result<u64, IoError> {
-        let index_at = self.offset;
-        let mut idx = Vec::with_capacity(12 * self.index.len() + 12);
-        idx.extend_from_slice(&INDEX_MAGIC);
-        idx.extend_from_slice(&(self.index.len() as u32).to_le_bytes());
-        let mut entries = Vec::with_capacity(12 * self.index.len());
-        for (off, n) in &self.index {
-            entries.extend_from_slice(&off.to_le_bytes());
-            entries.extend_from_slice(&n.to_le_bytes());
+        let mut idx = Vec::with_capacity(4 * self.index.len() + 16);
+        put_varint(&mut idx, self.index.len() as u64);
+        for (len, n) in &self.index {
+            put_varint(&mut idx, *len);
+            put_varint(&mut idx, *n as u64);
         }
-        idx.extend_from_slice(&entries);
-        idx.extend_from_slice(&crc32fast::hash(&entries).to_le_bytes());
         let mut end = Vec::with_capacity(END_LEN as usize);
+        end.extend_from_slice(&crc32fast::hash(&idx).to_le_bytes());
+        end.extend_from_slice(&(idx.len() as u32).to_le_bytes());
         end.extend_from_slice(&END_MAGIC);
-        end.extend_from_slice(&self.curves.to_le_bytes());
-        end.extend_from_slice(&index_at.to_le_bytes());
-        end.extend_from_slice(&self.crcs.clone().finalize().to_le_bytes());
         self.out.write_all(&idx).map_err(|e| self.out.err(e))?;
         self.out.write_all(&end).map_err(|e| self.out.err(e))?;
         self.out.commit()?;
-        Ok(index_at + idx.len() as u64 + END_LEN)
+        Ok(self.offset + idx.len() as u64 + END_LEN)
     }
 }
 
-/// Reads a version-2 container: the header and index at open, any block on
+/// Reads a version-3 container: the header and index at open, any block on
 /// demand.
-pub struct ReaderV2 {
+pub struct CodecReader {
     path: PathBuf,
     file: BufReader<File>,
-    header: HeaderV2,
-    /// Per block: offset, curves, first curve.
-    blocks: Vec<(u64, u32, u64)>,
+    header: CodecHeader,
+    /// Per block: offset, length in bytes, curves, first curve.
+    blocks: Vec<(u64, u64, u32, u64)>,
     curves: u64,
-    /// Where the index starts (the end of the last block).
-    index_at: u64,
 }
 
 fn u32_at(b: &[u8], at: usize) -> u32 {
     u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
 }
 
-fn u64_at(b: &[u8], at: usize) -> u64 {
-    let mut a = [0u8; 8];
-    a.copy_from_slice(&b[at..at + 8]);
-    u64::from_le_bytes(a)
+/// Reads a varint from `file` (at most 10 bytes).
+fn read_varint(file: &mut impl Read) -> std::io::Result<(u64, Vec<u8>)> {
+    let mut v = 0u64;
+    let mut bytes = Vec::with_capacity(4);
+    for shift in (0..64).step_by(7) {
+        let mut b = [0u8];
+        file.read_exact(&mut b)?;
+        bytes.push(b[0]);
+        v |= ((b[0] & 0x7f) as u64) << shift;
+        if b[0] < 0x80 {
+            return Ok((v, bytes));
+        }
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidData,
+        "a varint longer than 64 bits",
+    ))
 }
 
-impl ReaderV2 {
-    /// Opens a version-2 container (the version is checked by the caller's
-    /// dispatch too; any other is an error here).
+impl CodecReader {
+    /// Opens a version-3 container (other versions are an error here; the
+    /// caller's dispatch sends version 1 elsewhere).
     pub fn open(path: &Path) -> Result<Self, IoError> {
         let err = |why: String| IoError::new(path, why);
         let f = File::open(path).map_err(|e| IoError::os(path, "cannot read", e))?;
@@ -346,8 +541,8 @@ impl ReaderV2 {
             .map_err(|e| IoError::os(path, "cannot read", e))?
             .len();
         let mut file = BufReader::new(f);
-        let mut head = [0u8; 24];
-        if size < 24 + END_LEN {
+        let mut head = [0u8; 10];
+        if size < 10 + END_LEN {
             return Err(err(format!(
                 "file truncated: {size} bytes is too short for a container"
             )));
@@ -358,31 +553,55 @@ impl ReaderV2 {
             return Err(err("not a strandfit container (wrong magic number)".into()).at("byte 0"));
         }
         let version = u16::from_le_bytes([head[8], head[9]]);
+        if version == 2 {
+            return Err(err(
+                "container version 2 was written by a development build of strandfit 0.1.0 \
+                 (November 2026); this build reads versions 1 and 3: compress the input again"
+                    .into(),
+            ));
+        }
         if version != VERSION {
             return Err(err(format!(
                 "container version {version}, expected {VERSION}"
             )));
         }
-        if head[10..12] != [0, 0] {
-            return Err(err("unknown flags (reserved, must be 0)".into()));
-        }
-        let (raw_len, len, crc) = (u32_at(&head, 12), u32_at(&head, 16), u32_at(&head, 20));
-        if len > MAX_SECTION || raw_len > MAX_SECTION || 24 + len as u64 + END_LEN > size {
+        let (len, len_bytes) = read_varint(&mut file)
+            .map_err(|e| err(format!("cannot read the header length: {e}")).at("header"))?;
+        let data_start = 10 + len_bytes.len() as u64 + len + 4;
+        if len > MAX_SECTION as u64 || data_start + END_LEN > size {
             return Err(err(format!(
                 "header length {len} exceeds the file ({size} bytes)"
-            )));
+            ))
+            .at("header"));
         }
-        let mut stored = vec![0u8; len as usize];
-        file.read_exact(&mut stored)
+        let mut body = vec![0u8; len as usize + 4];
+        file.read_exact(&mut body)
             .map_err(|e| IoError::os(path, "cannot read", e))?;
-        if crc32fast::hash(&stored) != crc {
+        let (body, crc) = body.split_at(len as usize);
+        if crc32fast::hash(body) != u32_at(crc, 0) {
             return Err(err("header checksum mismatch (the file is corrupt)".into()).at("header"));
         }
-        let json = inflate(&stored, raw_len as usize).map_err(|e| err(format!("header: {e}")))?;
-        let header: HeaderV2 = serde_json::from_slice(&json)
+        let raw = match body.first() {
+            Some(0) => body[1..].to_vec(),
+            Some(1) => {
+                let mut c = Cursor { b: body, pos: 1 };
+                let n = c.varint().map_err(|e| err(format!("header: {e}")))?;
+                if n > MAX_SECTION as u64 {
+                    return Err(err(format!("header of {n} bytes")).at("header"));
+                }
+                inflate(&body[c.pos..], n as usize).map_err(|e| err(format!("header: {e}")))?
+            }
+            other => {
+                return Err(err(format!("unknown header encoding {other:?}")).at("header"));
+            }
+        };
+        let header = CodecHeader::from_bytes(&raw)
             .map_err(|e| err(format!("unreadable header: {e}")).at("header"))?;
-        if header.codec != "arcs" {
-            return Err(err(format!("unknown codec `{}`", header.codec)));
+        if header.model != MODEL {
+            return Err(err(format!(
+                "codec model {} (written by strandfit {}); this build reads model {MODEL}",
+                header.model, header.written_by
+            )));
         }
         if !(header.tolerance.is_finite() && header.tolerance > 0.0) {
             return Err(err(format!(
@@ -391,7 +610,7 @@ impl ReaderV2 {
             )));
         }
         let st = header.steps;
-        if ![st.offset, st.length, st.start, st.sagitta]
+        if ![st.offset, st.length, st.start, st.first, st.sagitta]
             .iter()
             .all(|v| v.is_finite() && *v > 0.0 && *v < 1e6)
         {
@@ -402,68 +621,49 @@ impl ReaderV2 {
         file.seek(SeekFrom::Start(size - END_LEN))
             .and_then(|_| file.read_exact(&mut end))
             .map_err(|e| IoError::os(path, "cannot read", e))?;
-        if end[..4] != END_MAGIC {
+        if end[8..] != END_MAGIC {
             return Err(err("no end record (truncated file?)".into()).at("end"));
         }
-        let curves = u64_at(&end, 4);
-        let index_at = u64_at(&end, 12);
-        let data_start = 24 + len as u64;
-        if index_at < data_start || index_at + 12 > size - END_LEN {
-            return Err(err(format!("index offset {index_at} outside the file")).at("end"));
+        let idx_len = u32_at(&end, 4) as u64;
+        if idx_len == 0 || data_start + idx_len + END_LEN > size {
+            return Err(err(format!("index of {idx_len} bytes outside the file")).at("end"));
         }
-        let mut idx = vec![0u8; (size - END_LEN - index_at) as usize];
+        let index_at = size - END_LEN - idx_len;
+        let mut idx = vec![0u8; idx_len as usize];
         file.seek(SeekFrom::Start(index_at))
             .and_then(|_| file.read_exact(&mut idx))
             .map_err(|e| IoError::os(path, "cannot read", e))?;
-        if idx[..4] != INDEX_MAGIC {
-            return Err(
-                err("no index where the end record points (corrupt file)".into()).at("index"),
-            );
-        }
-        let n = u32_at(&idx, 4) as usize;
-        if idx.len() != 8 + 12 * n + 4 {
-            return Err(err(format!(
-                "index of {n} blocks does not fit its {} bytes",
-                idx.len()
-            ))
-            .at("index"));
-        }
-        let entries = &idx[8..8 + 12 * n];
-        if crc32fast::hash(entries) != u32_at(&idx, 8 + 12 * n) {
+        if crc32fast::hash(&idx) != u32_at(&end, 0) {
             return Err(err("index checksum mismatch (the file is corrupt)".into()).at("index"));
         }
-        let mut blocks = Vec::with_capacity(n.min(1 << 16));
-        let mut first = 0u64;
-        let mut prev_end = data_start;
+        let bad_index = |why: String| err(format!("{why} (corrupt file)")).at("index");
+        let mut c = Cursor { b: &idx, pos: 0 };
+        let n = c.count().map_err(bad_index)?;
+        let mut blocks = Vec::with_capacity(n);
+        let (mut first, mut at) = (0u64, data_start);
         for k in 0..n {
-            let off = u64_at(entries, 12 * k);
-            let c = u32_at(entries, 12 * k + 8);
-            if off != prev_end && k == 0 || off < prev_end || off >= index_at || c == 0 {
-                return Err(
-                    err(format!("index entry {k} is inconsistent (corrupt file)")).at("index"),
-                );
+            let len = c.varint().map_err(bad_index)?;
+            let curves = c.varint().map_err(bad_index)?;
+            if len < 7 || len > index_at - at || curves == 0 || curves > u32::MAX as u64 {
+                return Err(bad_index(format!("index entry {k} is inconsistent")));
             }
-            prev_end = off + 24;
-            blocks.push((off, c, first));
-            first += c as u64;
+            blocks.push((at, len, curves as u32, first));
+            at += len;
+            first += curves;
         }
-        if first != curves {
-            return Err(err(format!(
-                "the end record counts {curves} curves, the index {first}"
-            ))
-            .at("end"));
+        if c.pos != idx.len() || at != index_at {
+            return Err(bad_index("the index does not account for the blocks".into()));
         }
-        Ok(ReaderV2 {
+        Ok(CodecReader {
             path: path.to_path_buf(),
             file,
             header,
             blocks,
-            curves,
-            index_at,
+            curves: first,
         })
     }
 
-    pub fn header(&self) -> &HeaderV2 {
+    pub fn header(&self) -> &CodecHeader {
         &self.header
     }
 
@@ -481,66 +681,54 @@ impl ReaderV2 {
 
     /// First curve and curve count of block `k`.
     pub fn block_span(&self, k: usize) -> (u64, u64) {
-        (self.blocks[k].2, self.blocks[k].1 as u64)
+        (self.blocks[k].3, self.blocks[k].2 as u64)
     }
 
     /// The raw bytes of block `k` (geometry, side), checked against their
     /// CRC; cheap enough to call from one thread while others decode.
     pub fn read_block_bytes(&mut self, k: usize) -> Result<RawBlock, IoError> {
-        let (off, curves, first) = self.blocks[k];
+        let (off, len, curves, first) = self.blocks[k];
         let path = self.path.clone();
         let err = |why: String| {
             IoError::new(&path, why)
                 .curve(first)
                 .at(format!("block {k}"))
         };
-        let mut head = [0u8; 24];
+        if len > MAX_SECTION as u64 * 3 {
+            return Err(err(format!("a block of {len} bytes")));
+        }
+        let mut b = vec![0u8; len as usize];
         self.file
             .seek(SeekFrom::Start(off))
-            .and_then(|_| self.file.read_exact(&mut head))
+            .and_then(|_| self.file.read_exact(&mut b))
             .map_err(|e| err(format!("cannot read the block: {e}")))?;
-        if head[..4] != BLOCK_MAGIC || u32_at(&head, 4) != curves {
+        let (body, crc) = b.split_at(b.len() - 4);
+        if crc32fast::hash(body) != u32_at(crc, 0) {
+            return Err(err("block checksum mismatch (the file is corrupt)".into()));
+        }
+        let mut c = Cursor { b: body, pos: 0 };
+        let mut field = || c.varint().map_err(|e| err(format!("block head: {e}")));
+        let (n, g, s) = (field()?, field()?, field()?);
+        let s_raw = if s > 0 { field()? } else { 0 };
+        if n != curves as u64 {
             return Err(err(
                 "block header does not match the index (corrupt file)".into()
             ));
         }
-        let (g, s, s_raw, crc) = (
-            u32_at(&head, 8),
-            u32_at(&head, 12),
-            u32_at(&head, 16),
-            u32_at(&head, 20),
-        );
-        // The block must end where the next one (or the index) starts.
-        let next = self.blocks.get(k + 1).map_or(self.index_at, |b| b.0);
-        if g > MAX_SECTION
-            || s > MAX_SECTION
-            || s_raw > MAX_SECTION
-            || off + 24 + g as u64 + s as u64 != next
-        {
+        if s_raw > MAX_SECTION as u64 || g.checked_add(s) != Some((body.len() - c.pos) as u64) {
             return Err(err(
-                "block lengths do not end where the next block starts (corrupt file)".into(),
+                "block lengths do not add up to the block (corrupt file)".into()
             ));
         }
-        let mut geometry = vec![0u8; g as usize];
-        let mut side = vec![0u8; s as usize];
-        self.file
-            .read_exact(&mut geometry)
-            .and_then(|_| self.file.read_exact(&mut side))
-            .map_err(|e| err(format!("cannot read the block: {e}")))?;
-        let mut h = crc32fast::Hasher::new();
-        h.update(&head[4..20]);
-        h.update(&geometry);
-        h.update(&side);
-        if h.finalize() != crc {
-            return Err(err("block checksum mismatch (the file is corrupt)".into()));
-        }
+        let geometry = body[c.pos..c.pos + g as usize].to_vec();
+        let side = body[c.pos + g as usize..].to_vec();
         Ok(RawBlock {
             index: k,
             first,
             curves,
             geometry,
             side,
-            side_len: s_raw,
+            side_len: s_raw as u32,
         })
     }
 }
@@ -557,7 +745,7 @@ pub struct RawBlock {
 
 impl RawBlock {
     /// The block's curves (pure computation: run blocks in parallel).
-    pub fn decode(&self, path: &Path, header: &HeaderV2) -> Result<Vec<DecodedCurve>, IoError> {
+    pub fn decode(&self, path: &Path, header: &CodecHeader) -> Result<Vec<DecodedCurve>, IoError> {
         let err = |curve: u64, why: String| {
             IoError::new(path, why)
                 .curve(curve)
@@ -605,7 +793,7 @@ impl RawBlock {
                     curve_data,
                 })
             };
-            out.push(read().map_err(|e| err(curve, e))?);
+            out.push(read().map_err(|e| err(curve, format!("side data: {e}")))?);
         }
         if c.pos != side.len() {
             return Err(err(
@@ -635,17 +823,10 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
-    fn header(names: usize) -> HeaderV2 {
+    fn header(names: usize) -> CodecHeader {
         let mut m = Metadata::new(Format::Json);
         m.curve_data_names = (0..names).map(|k| format!("v{k}")).collect();
-        HeaderV2 {
-            codec: "arcs".into(),
-            tolerance: 0.1,
-            steps: Steps::default(),
-            source: SourceMeta::from_metadata(&m, None),
-            dropped_point_data: vec![],
-            written_by: "test".into(),
-        }
+        CodecHeader::new(0.1, SourceMeta::from_metadata(&m, None), vec![])
     }
 
     fn curves(n: usize, rng: &mut ChaCha8Rng) -> Vec<(Option<String>, Vec<DVec3>, Vec<f32>)> {
@@ -668,7 +849,7 @@ mod tests {
     /// Writes `cs` in blocks of `per_block` curves.
     fn write(path: &Path, cs: &[(Option<String>, Vec<DVec3>, Vec<f32>)], per_block: usize) -> u64 {
         let h = header(2);
-        let mut w = WriterV2::create(path, &h).unwrap();
+        let mut w = CodecWriter::create(path, &h).unwrap();
         for chunk in cs.chunks(per_block) {
             let ins: Vec<CurveIn> = chunk
                 .iter()
@@ -693,7 +874,7 @@ mod tests {
         let p = dir.path().join("x.sfh");
         let bytes = write(&p, &cs, 7);
         assert_eq!(bytes, std::fs::metadata(&p).unwrap().len());
-        let mut r = ReaderV2::open(&p).unwrap();
+        let mut r = CodecReader::open(&p).unwrap();
         assert_eq!(r.curve_count(), 50);
         assert_eq!(r.block_count(), 8);
         let all = read_range(&mut r, 0, 50).unwrap();
@@ -718,7 +899,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("x.sfh");
         write(&p, &[], 4);
-        let r = ReaderV2::open(&p).unwrap();
+        let r = CodecReader::open(&p).unwrap();
         assert_eq!((r.curve_count(), r.block_count()), (0, 0));
     }
 
@@ -743,7 +924,7 @@ mod tests {
                 }
             }
             std::fs::write(&q, &b).unwrap();
-            let Ok(mut r) = ReaderV2::open(&q) else {
+            let Ok(mut r) = CodecReader::open(&q) else {
                 continue;
             };
             opened += 1;

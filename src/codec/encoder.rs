@@ -149,6 +149,7 @@ impl<'a> CurveEncoder<'a> {
             offset: [a1, a2],
             bulge: [0, 0],
             jump: [0; 3],
+            span: state.chord_steps,
         };
         if kind == ElementKind::Corner {
             let (tries, count) = self.corner_bulges(state.point, end, state.normal, from, j)?;
@@ -316,7 +317,7 @@ impl<'a> CurveEncoder<'a> {
     /// passes but for absurd margins.
     fn jump(&self, state: &ChainState, from: usize) -> Jump {
         let d = self.points[from + 1] - state.point;
-        let k = [d.x, d.y, d.z].map(|x| Quantiser::index(x, self.q.start));
+        let k = [d.x, d.y, d.z].map(|x| Quantiser::index(x, self.q.first));
         let [Some(a), Some(b), Some(c)] = k else {
             return Jump::Impossible;
         };
@@ -328,7 +329,7 @@ impl<'a> CurveEncoder<'a> {
                 Jump::Impossible
             };
         }
-        let end = jump_end(state.point, k, self.q.start);
+        let end = jump_end(state.point, k, self.q.first);
         let Ok(arc) = Arc::new(state.point, (end - state.point).normalize(), end) else {
             return Jump::Impossible;
         };
@@ -340,6 +341,7 @@ impl<'a> CurveEncoder<'a> {
                     offset: [0, 0],
                     bulge: [0, 0],
                     jump: k,
+                    span: state.chord_steps,
                 },
                 arc,
                 samples,
@@ -356,14 +358,14 @@ impl<'a> CurveEncoder<'a> {
         let try_j = |j: usize| -> Option<Candidate> {
             let d = self.points[j] - q0;
             let k = [
-                Quantiser::index(d.x, self.q.start)?,
-                Quantiser::index(d.y, self.q.start)?,
-                Quantiser::index(d.z, self.q.start)?,
+                Quantiser::index(d.x, self.q.first)?,
+                Quantiser::index(d.y, self.q.first)?,
+                Quantiser::index(d.z, self.q.first)?,
             ];
             if k == [0, 0, 0] {
                 return None;
             }
-            let end = first_end(q0, k, self.q.start);
+            let end = first_end(q0, k, self.q.first);
             let h = self.bulge_estimate(q0, end, 0, j);
             let (f1, f2) = bulge_frame(q0, end, DVec3::ZERO)?;
             let b = [
@@ -381,6 +383,7 @@ impl<'a> CurveEncoder<'a> {
                             offset: [k[0], k[1]],
                             bulge,
                             jump: [0; 3],
+                            span: 0,
                         },
                         arc,
                         samples,

@@ -22,6 +22,8 @@ const PROB_HALF: u16 = PROB_ONE / 2;
 /// slow enough to settle (LZMA's choice; 4 and 6 measured no better).
 const ADAPT_SHIFT: u32 = 5;
 const TOP: u32 = 1 << 24;
+/// Bytes a decoder may read past the end of a valid stream.
+const SLACK: usize = 8;
 
 /// Largest bit length of a coded magnitude: values up to `2^40 - 1`.
 pub const MAX_BITS: usize = 40;
@@ -63,6 +65,10 @@ pub struct Encoder {
     cache: u8,
     cache_size: u64,
     out: Vec<u8>,
+    /// Ideal bits spent per tag (for measuring where a stream's bytes go;
+    /// off unless [`Encoder::with_tally`]).
+    tally: Option<Vec<f64>>,
+    tag: usize,
 }
 
 impl Default for Encoder {
@@ -79,7 +85,27 @@ impl Encoder {
             cache: 0,
             cache_size: 1,
             out: Vec::new(),
+            tally: None,
+            tag: 0,
         }
+    }
+
+    /// An encoder that also adds up the ideal cost of every bit under the
+    /// tag last set by [`set_tag`](Self::set_tag) (`tags` of them).
+    pub fn with_tally(tags: usize) -> Self {
+        let mut e = Self::new();
+        e.tally = Some(vec![0.0; tags]);
+        e
+    }
+
+    /// Attributes the bits coded from now on to `tag` (when tallying).
+    pub fn set_tag(&mut self, tag: usize) {
+        self.tag = tag;
+    }
+
+    /// The ideal bits per tag so far, if tallying.
+    pub fn tally(&self) -> Option<&[f64]> {
+        self.tally.as_deref()
     }
 
     fn shift_low(&mut self) {
@@ -102,6 +128,9 @@ impl Encoder {
 
     /// Codes `bit` in the adaptive context `ctx`.
     pub fn bit(&mut self, ctx: &mut Bit, bit: bool) {
+        if let Some(t) = self.tally.as_mut() {
+            t[self.tag] += ctx.cost(bit) as f64 / 256.0;
+        }
         let bound = (self.range >> PROB_BITS) * ctx.0 as u32;
         if bit {
             self.low += bound as u64;
@@ -124,10 +153,27 @@ impl Encoder {
         }
     }
 
-    /// Flushes the coder and returns the bytes.
+    /// Flushes the coder and returns the bytes. Any value in
+    /// `[low, low + range)` ends the stream; the one with the most trailing
+    /// zero bits is taken, and its trailing zero bytes are left out (the
+    /// decoder reads zeros past the end): about three bytes per stream.
     pub fn finish(mut self) -> Vec<u8> {
+        for shift in (0..32).rev() {
+            let mask = (1u64 << shift) - 1;
+            let v = (self.low + mask) & !mask;
+            if v < self.low + self.range as u64 {
+                self.low = v;
+                break;
+            }
+        }
         for _ in 0..5 {
             self.shift_low();
+        }
+        // Only the flush's own zeros: the decoder allows `SLACK` bytes.
+        for _ in 0..4 {
+            if self.out.len() > 1 && self.out.last() == Some(&0) {
+                self.out.pop();
+            }
         }
         self.out
     }
@@ -166,9 +212,10 @@ impl<'a> Decoder<'a> {
                 b
             }
             None => {
-                // The encoder's flush writes 5 bytes, of which the decoder
-                // may look one past the last meaningful one.
-                if self.pos > self.data.len() + 4 {
+                // Past the end the stream's left-out trailing zeros are
+                // read (see `Encoder::finish`): up to the five bytes of the
+                // flush, and the decoder may look a few bytes ahead.
+                if self.pos > self.data.len() + SLACK {
                     self.overrun = true;
                 }
                 self.pos += 1;
@@ -180,7 +227,7 @@ impl<'a> Decoder<'a> {
     /// Whether the decoder read beyond the stream (a truncated or corrupt
     /// stream).
     pub fn overrun(&self) -> bool {
-        self.overrun || self.pos > self.data.len() + 4
+        self.overrun || self.pos > self.data.len() + SLACK
     }
 
     pub fn bit(&mut self, ctx: &mut Bit) -> bool {

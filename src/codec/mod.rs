@@ -116,6 +116,9 @@ pub struct ElementCode {
     /// A jump's end relative to its start, in start steps (the other
     /// fields are then zero).
     pub jump: [i64; 3],
+    /// The previous chord in length steps (not coded: the decoder knows
+    /// it; the context of the residuals, which grow with the span).
+    pub span: i64,
 }
 
 /// One curve's code.
@@ -362,6 +365,7 @@ fn choose(
             _ => (g, None, own),
         }
     });
+    let pts = if std::env::var_os("SF_FORCE_ARCS").is_some() && opt.arcs.is_some() { None } else { pts };
     match (opt.arcs, pts) {
         (Some((a, decoded)), Some((_, _, bits))) if estimated_bits(&a) < bits => {
             let n = decoded.len();
@@ -397,8 +401,9 @@ struct Models {
     corner: [Bit; 4],
     jump_kind: [Bit; 4],
     jump: [IntModel; 3],
-    length: IntModel,
-    offset: [IntModel; 2],
+    /// By [`span_context`].
+    length: [IntModel; SPANS],
+    offset: [[IntModel; 2]; SPANS],
     bulge: [IntModel; 2],
     residual: [IntModel; 3],
     raw_count: IntModel,
@@ -415,6 +420,17 @@ struct Models {
     anchor_end: Bit,
     anchor_start: [IntModel; 3],
     ref_residual: [IntModel; 3],
+}
+
+/// Contexts of an element's length and offsets: the bit length of the
+/// previous chord in length steps. The prediction misses by more over a
+/// longer span (the curvature's change acts over the span squared), so
+/// residuals of short and long elements are modelled apart.
+const SPANS: usize = 8;
+
+fn span_context(chord_steps: i64) -> usize {
+    let bits = 64 - chord_steps.unsigned_abs().leading_zeros() as usize;
+    bits.min(SPANS - 1)
 }
 
 /// Cross-curve predictions: the previous curve's start and first end.
@@ -470,12 +486,28 @@ fn kind_of(code: &CurveCode) -> u8 {
     }
 }
 
+/// The fields of a block's stream, for [`encode_block_tallied`].
+pub const FIELDS: [&str; 13] = [
+    "curve kind", "count", "start", "first end", "first bulge", "element kind",
+    "length", "offset", "bulge", "jump", "points start", "points residual", "raw",
+];
+
 /// Encodes curves into one block (curves fitted in parallel, then coded in
 /// order).
 pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
 ) -> Result<EncodedBlock, EncodeError> {
+    encode_block_tallied(curves, params, false).map(|(b, _)| b)
+}
+
+/// [`encode_block`], and with `tally` the ideal bits spent on each of
+/// [`FIELDS`] (to see where a file's bytes go).
+pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
+    curves: &[C],
+    params: &CodecParams,
+    tally: bool,
+) -> Result<(EncodedBlock, Option<Vec<f64>>), EncodeError> {
     if !(params.tolerance.is_finite() && params.tolerance > 0.0) {
         return Err(EncodeError::BadTolerance(params.tolerance));
     }
@@ -485,21 +517,28 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
         }
     }
     // The points lattice of this block, sized by its largest coordinate
-    // (first in the stream; 0 when no lattice fits: raw points then).
+    // rounded up to a power of two (whose exponent is the stream's first
+    // byte); 0 when no lattice fits: raw points then.
     let scale = curves
         .iter()
         .flat_map(|c| c.as_ref().iter())
         .map(|p| p.abs().max_element())
         .fold(0.0, f64::max);
-    let half = quantise::lattice_half(params.tolerance, scale).unwrap_or(0.0);
-    let mut enc = Encoder::new();
-    enc.direct(half.to_bits(), 64);
+    let scale_exp = quantise::scale_exponent(scale);
+    let half = quantise::lattice_half(params.tolerance, 2f64.powi(scale_exp)).unwrap_or(0.0);
+    let mut enc = if tally {
+        Encoder::with_tally(FIELDS.len())
+    } else {
+        Encoder::new()
+    };
+    enc.direct((scale_exp + 128) as u64, 8);
     let options: Vec<CurveOptions> = curves
         .par_iter()
         .map(|pts| curve_options(pts.as_ref(), params, half))
         .collect();
     let grid_step = half;
     let q_start = params.quantiser().start;
+    let q_first = params.quantiser().first;
     let mut m = Models::default();
     let mut prev = Previous::default();
     let mut kinds = Vec::with_capacity(curves.len());
@@ -513,17 +552,21 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
         output_points += n;
         let kind = kind_of(code);
         kinds.push(kind);
+        enc.set_tag(0);
         put_kind(&mut enc, &mut m, kind);
         match code {
             CurveCode::Empty => {}
             CurveCode::Raw(p) => {
+                enc.set_tag(12);
                 m.raw_count.put_unsigned(&mut enc, p.len() as u64);
                 for v in p.iter().flat_map(|v| v.to_array()) {
                     enc.direct(v.to_bits(), 64);
                 }
             }
             CurveCode::Points { grid, reference } => {
+                enc.set_tag(1);
                 m.count.put_unsigned(&mut enc, grid.len() as u64 - 1);
+                enc.set_tag(10);
                 if neighbours.len() > 1 {
                     enc.bit(&mut m.has_reference, reference.is_some());
                 }
@@ -539,6 +582,7 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
                         let d = [0, 1, 2].map(|a| grid[0][a] - start[a]);
                         put_lattice(&mut enc, &mut m.parity[0], &mut m.ref_start, d);
                         let n = grid.len();
+                        enc.set_tag(11);
                         for k in 1..n {
                             let pred = reference::predict(grid[k - 1], k, n, r, rf.reversed);
                             let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
@@ -548,6 +592,7 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
                     None => {
                         let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
                         put_lattice(&mut enc, &mut m.parity[2], &mut m.point_start, d);
+                        enc.set_tag(11);
                         for k in 1..grid.len() {
                             let pred = own_prediction(grid, k);
                             let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
@@ -563,7 +608,9 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
                 first_bulge,
                 elements,
             } => {
+                enc.set_tag(1);
                 m.count.put_unsigned(&mut enc, elements.len() as u64);
+                enc.set_tag(2);
                 // `neighbours` holds this curve last; its anchors are the
                 // curves before it.
                 let before = neighbours.len() - 1;
@@ -598,11 +645,13 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
                     before,
                     anchor.map(|a| (a.0, a.1)),
                     &prev,
-                    q_start,
+                    q_first,
                 );
+                enc.set_tag(3);
                 for a in 0..3 {
                     m.first_end[a].put(&mut enc, first_end[a] - fe_pred[a]);
                 }
+                enc.set_tag(4);
                 prev.arc_start = *start;
                 prev.first_end = *first_end;
                 for a in 0..2 {
@@ -610,18 +659,24 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
                 }
                 let mut prev_kind = ElementKind::Corner;
                 for e in elements {
+                    let ctx = span_context(e.span);
+                    enc.set_tag(5);
                     put_element_kind(&mut enc, &mut m, prev_kind, e.kind);
                     prev_kind = e.kind;
                     if e.kind == ElementKind::Jump {
+                        enc.set_tag(9);
                         for a in 0..3 {
                             m.jump[a].put(&mut enc, e.jump[a]);
                         }
                         continue;
                     }
-                    m.length.put(&mut enc, e.length);
-                    m.offset[0].put(&mut enc, e.offset[0]);
-                    m.offset[1].put(&mut enc, e.offset[1]);
+                    enc.set_tag(6);
+                    m.length[ctx].put(&mut enc, e.length);
+                    enc.set_tag(7);
+                    m.offset[ctx][0].put(&mut enc, e.offset[0]);
+                    m.offset[ctx][1].put(&mut enc, e.offset[1]);
                     if e.kind == ElementKind::Corner {
+                        enc.set_tag(8);
                         m.bulge[0].put(&mut enc, e.bulge[0]);
                         m.bulge[1].put(&mut enc, e.bulge[1]);
                     }
@@ -629,11 +684,15 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
             }
         }
     }
-    Ok(EncodedBlock {
-        bytes: enc.finish(),
-        kinds,
-        output_points,
-    })
+    let tallied = enc.tally().map(<[f64]>::to_vec);
+    Ok((
+        EncodedBlock {
+            bytes: enc.finish(),
+            kinds,
+            output_points,
+        },
+        tallied,
+    ))
 }
 
 /// Decodes the `count` curves of a block into the points the guarantee is
@@ -647,13 +706,8 @@ pub fn decode_block(
     let mut m = Models::default();
     let mut prev = Previous::default();
     let q = params.quantiser();
-    let grid = f64::from_bits(dec.direct(64));
-    if !(0.0..1e300).contains(&grid) {
-        return Err(DecodeError::Curve {
-            curve: 0,
-            why: format!("a block lattice step of {grid}"),
-        });
-    }
+    let scale_exp = dec.direct(8) as i32 - 128;
+    let grid = quantise::lattice_half(params.tolerance, 2f64.powi(scale_exp)).unwrap_or(0.0);
     // Capacities from counts read off the stream are capped: a count is
     // only trusted as far as the points it actually decodes.
     let mut out = Vec::with_capacity(count.min(1 << 16));
@@ -763,7 +817,7 @@ pub fn decode_block(
                         start[a] = prev.arc_start[a].wrapping_add(m.start[a].get(&mut dec));
                     }
                 }
-                let fe_pred = first_end_prediction(&neighbours, before, anchor, &prev, q.start);
+                let fe_pred = first_end_prediction(&neighbours, before, anchor, &prev, q.first);
                 for a in 0..3 {
                     fe[a] = fe_pred[a].wrapping_add(m.first_end[a].get(&mut dec));
                 }
@@ -774,7 +828,7 @@ pub fn decode_block(
                     m.first_bulge[1].get(&mut dec),
                 ];
                 let q0 = DVec3::new(start[0] as f64, start[1] as f64, start[2] as f64) * q.start;
-                let end = first_end(q0, fe, q.start);
+                let end = first_end(q0, fe, q.first);
                 let t = corner_from_code(q0, end, DVec3::ZERO, fb, q.offset)
                     .ok_or_else(|| bad("a first element of zero length".into()))?;
                 let arc = Arc::new(q0, t, end).map_err(|e| bad(format!("first element: {e:?}")))?;
@@ -785,13 +839,14 @@ pub fn decode_block(
                 for k in 0..n {
                     let kind = get_element_kind(&mut dec, &mut m, prev_kind);
                     prev_kind = kind;
+                    let ctx = span_context(state.chord_steps);
                     let end = if kind == ElementKind::Jump {
                         let j = [0, 1, 2].map(|a| m.jump[a].get(&mut dec));
-                        jump_end(state.point, j, q.start)
+                        jump_end(state.point, j, q.first)
                     } else {
-                        let dl = m.length.get(&mut dec);
-                        let a1 = m.offset[0].get(&mut dec);
-                        let a2 = m.offset[1].get(&mut dec);
+                        let dl = m.length[ctx].get(&mut dec);
+                        let a1 = m.offset[ctx][0].get(&mut dec);
+                        let a2 = m.offset[ctx][1].get(&mut dec);
                         let steps = state.chord_steps.wrapping_add(dl);
                         element_end(&state, steps, a1, a2, &q)
                     };

@@ -1,5 +1,5 @@
 //! Whole files through the codec: [`compress_stream`] reads curves from any
-//! [`CurveReader`] into a version-2 container, block by block;
+//! [`CurveReader`] into a version-3 container, block by block;
 //! [`decompress_stream`] writes a container's curves to any
 //! [`CurveWriter`], decoding several blocks at once. Memory is bounded by a
 //! few blocks whatever the file's size; neither prints (progress goes to a
@@ -10,7 +10,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::container::{
-    encode_block_bytes, BlockBytes, CurveIn, DecodedCurve, HeaderV2, ReaderV2, WriterV2,
+    encode_block_bytes, BlockBytes, CurveIn, DecodedCurve, CodecHeader, CodecReader, CodecWriter,
     BLOCK_CURVES,
 };
 use crate::io::{Curve, CurveReader, CurveWriter, IoError};
@@ -27,7 +27,7 @@ pub struct CompressSummary {
     pub bytes: u64,
 }
 
-/// Compresses every curve of `reader` into a version-2 container at `out`
+/// Compresses every curve of `reader` into a version-3 container at `out`
 /// (written atomically). `progress` gets the number of curves done after
 /// each block. Errors name the input file and curve for bad input, the
 /// output for write failures.
@@ -35,12 +35,12 @@ pub fn compress_stream(
     reader: &mut dyn CurveReader,
     input: &Path,
     out: &Path,
-    header: &HeaderV2,
+    header: &CodecHeader,
     progress: &mut dyn FnMut(u64),
 ) -> Result<CompressSummary, IoError> {
     let params = header.params();
     let n_cd = header.source.curve_data_names.len();
-    let mut writer = WriterV2::create(out, header)?;
+    let mut writer = CodecWriter::create(out, header)?;
     let mut summary = CompressSummary::default();
     // Blocks go in groups of one per thread: a group is fitted and coded in
     // parallel (each block's entropy coding is sequential), while the
@@ -118,7 +118,7 @@ const BLOCKS_AT_ONCE: usize = 8;
 /// finishes), `map` turning each decoded curve into the curve written
 /// (e.g. resampling it). Returns the number of curves written.
 pub fn decompress_stream(
-    reader: &mut ReaderV2,
+    reader: &mut CodecReader,
     writer: &mut dyn CurveWriter,
     map: &(dyn Fn(DecodedCurve) -> Curve + Sync),
     progress: &mut dyn FnMut(u64),
@@ -155,7 +155,7 @@ pub fn decompress_stream(
 /// Curves `first..first + count` of the container, reading only the
 /// blocks that hold them (random access through the index).
 pub fn read_range(
-    reader: &mut ReaderV2,
+    reader: &mut CodecReader,
     first: u64,
     count: u64,
 ) -> Result<Vec<DecodedCurve>, IoError> {

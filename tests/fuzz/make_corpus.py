@@ -459,7 +459,7 @@ def make_sfh(binary):
     f = "sfh"
     d = os.path.join(OUT, f)
     os.makedirs(d, exist_ok=True)
-    # Version 1 (helix chains: --distance ordered), then version 2 (the
+    # Version 1 (helix chains: --distance ordered), then version 3 (the
     # default arc codec; its blocks are mutated byte-wise, under CRCs).
     v1 = ["--distance", "ordered"]
     jobs = [
@@ -471,11 +471,11 @@ def make_sfh(binary):
         ("json/simple.json", "ids_f32.sfh", ["--tolerance", "0.5", "--storage", "f32"] + v1),
         ("tck/standard.tck", "standard_compact.sfh", ["--tolerance", "0.1"] + v1),
         ("tck/empty.tck", "empty.sfh", ["--tolerance", "0.5"] + v1),
-        ("tck/dipy_EuDX_small_25.tck", "eudx_v2.sfh", ["--tolerance", "0.5"]),
-        ("tck/dipy_EuDX_small_25.tck", "eudx_v2_fine.sfh", ["--tolerance", "0.05"]),
-        ("trk/complex.trk", "complex_trk_v2.sfh", ["--tolerance", "0.1"]),
-        ("json/simple.json", "ids_refs_v2.sfh", ["--tolerance", "0.1"]),
-        ("tck/empty.tck", "empty_v2.sfh", ["--tolerance", "0.1"]),
+        ("tck/dipy_EuDX_small_25.tck", "eudx_v3.sfh", ["--tolerance", "0.5"]),
+        ("tck/dipy_EuDX_small_25.tck", "eudx_v3_fine.sfh", ["--tolerance", "0.05"]),
+        ("trk/complex.trk", "complex_trk_v3.sfh", ["--tolerance", "0.1"]),
+        ("json/simple.json", "ids_refs_v3.sfh", ["--tolerance", "0.1"]),
+        ("tck/empty.tck", "empty_v3.sfh", ["--tolerance", "0.1"]),
     ]
     for src, name, args in jobs:
         # Relative paths: the source file's name is stored in the header.

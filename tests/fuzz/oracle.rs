@@ -15,7 +15,7 @@
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
-use strandfit::codec::container::{container_version, ReaderV2};
+use strandfit::codec::container::{container_version, CodecReader};
 use strandfit::helix::PiecewiseHelix;
 use strandfit::io::container::{ContainerReader, Shape};
 use strandfit::io::{self, Curve, Format, IoError, Metadata};
@@ -202,10 +202,10 @@ pub fn judge_read(
     })
 }
 
-/// A version-2 container: every block read and decoded, as `decompress`
-/// does; the points it hands out must be usable.
-fn check_container_v2(path: &Path) -> Result<Outcome, Bug> {
-    let mut reader = match ReaderV2::open(path) {
+/// A version-3 container (or a refused version 2): every block read and
+/// decoded, as `decompress` does; the points it hands out must be usable.
+fn check_codec_container(path: &Path) -> Result<Outcome, Bug> {
+    let mut reader = match CodecReader::open(path) {
         Ok(r) => r,
         Err(e) => return named(path, &e),
     };
@@ -236,8 +236,8 @@ fn check_container_v2(path: &Path) -> Result<Outcome, Bug> {
 }
 
 fn check_container(path: &Path) -> Result<Outcome, Bug> {
-    if container_version(path) == Some(2) {
-        return check_container_v2(path);
+    if container_version(path).is_some_and(|v| v >= 2) {
+        return check_codec_container(path);
     }
     let reader = match ContainerReader::open(path) {
         Ok(r) => r,
