@@ -341,7 +341,28 @@ fn version_1_containers_still_decode() {
 }
 
 #[test]
-fn resampling_a_version_2_container_says_it_gives_up_the_guarantee() {
+fn a_version_2_development_container_is_refused_by_name() {
+    // Version 2 was written by development builds for a day; its streams
+    // mean something else now, so it is refused, never misread.
+    let v2 = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/sfh/eudx_v2_dev.sfh");
+    let dir = tempfile::tempdir().unwrap();
+    let back = dir.path().join("back.tck");
+    for args in [
+        vec!["decompress", v2.to_str().unwrap(), "-o", back.to_str().unwrap()],
+        vec!["inspect", v2.to_str().unwrap()],
+    ] {
+        let out = strandfit(&args);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("eudx_v2_dev.sfh"), "{err}");
+        assert!(err.contains("container version 2"), "{err}");
+        assert!(err.contains("reads versions 1 and 3"), "{err}");
+    }
+    assert!(!back.exists());
+}
+
+#[test]
+fn resampling_a_version_3_container_says_it_gives_up_the_guarantee() {
     let dir = tempfile::tempdir().unwrap();
     let sfh = dir.path().join("x.sfh");
     ok(&[

@@ -485,6 +485,8 @@ def make_sfh(binary):
             check=True,
             stdout=subprocess.DEVNULL,
         )
+    # Version 2, a development format that readers refuse by name.
+    shutil.copy(os.path.join(ROOT, "tests/data/sfh/eudx_v2_dev.sfh"), os.path.join(d, "eudx_v2_dev.sfh"))
     base = open(os.path.join(d, "eudx_compact.sfh"), "rb").read()
     # Header: magic 8, version 2, flags 2, raw length 4, stored length 4, crc 4.
     put(f, "zero_bytes.sfh", b"")
