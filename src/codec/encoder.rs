@@ -430,6 +430,7 @@ impl<'a> CurveEncoder<'a> {
         Some(CurveCode::Points {
             grid: idx,
             reference: None,
+            helix: false,
         })
     }
 }
@@ -543,6 +544,9 @@ pub fn next_state(
     length_step: f64,
 ) -> ChainState {
     let mut st = arc.next_state(length_step);
+    if kind == ElementKind::G1 {
+        st.twist = observed_twist(arc, before, length_step);
+    }
     if matches!(kind, ElementKind::Straight | ElementKind::Jump) {
         let turn = arc.tangent - before.tangent;
         let sin_turn = arc.tangent.cross(before.tangent).length();
@@ -552,4 +556,31 @@ pub fn next_state(
         }
     }
     st
+}
+
+/// The turn of the arc plane at the junction before a G1 `arc`: the signed
+/// angle about the tangent from the previous arc's normal to this one's.
+/// On a helix of curvature `κ` and torsion `τ` the osculating arcs' planes
+/// turn by about `τ·L` per element, so the next arc is predicted turned by
+/// as much again. Only where both normals are well defined: both arcs bend
+/// by several length steps (a nearly straight arc's plane is noise).
+fn observed_twist(arc: &Arc, before: &ChainState, length_step: f64) -> f64 {
+    const MIN_BEND_STEPS: f64 = 2.0;
+    let bend = |curvature: f64, chord: f64| 0.5 * curvature * chord * chord;
+    let chord = (arc.end - arc.start).length();
+    let before_chord = before.frame_chord(length_step);
+    if bend(arc.curvature, chord) < MIN_BEND_STEPS * length_step
+        || bend(before.curvature, before_chord) < MIN_BEND_STEPS * length_step
+    {
+        return 0.0;
+    }
+    let t = arc.tangent;
+    let (from, to) = (before.normal, arc.normal);
+    let angle = t.dot(from.cross(to)).atan2(from.dot(to));
+    // A turn of more than a right angle is a change of bend, not torsion.
+    if angle.abs() > std::f64::consts::FRAC_PI_2 {
+        0.0
+    } else {
+        angle
+    }
 }

@@ -130,6 +130,9 @@ pub enum CurveCode {
     Points {
         grid: Vec<[i64; 3]>,
         reference: Option<Reference>,
+        /// Without a reference: predicted by [`helix_prediction`] rather
+        /// than second order.
+        helix: bool,
     },
     /// Start point on the start grid, the first element's end relative to
     /// it on the same grid, its bulge, then the elements.
@@ -240,10 +243,10 @@ fn estimated_bits(code: &CurveCode) -> u64 {
     match code {
         CurveCode::Empty => 2,
         CurveCode::Raw(p) => 192 * p.len() as u64,
-        CurveCode::Points { grid, .. } => {
+        CurveCode::Points { grid, helix, .. } => {
             let mut bits = 8;
             for k in 1..grid.len() {
-                let p = own_prediction(grid, k);
+                let p = own_prediction(grid, k, *helix);
                 bits += lattice_bits([0, 1, 2].map(|a| grid[k][a] - p[a]));
             }
             bits
@@ -318,14 +321,54 @@ fn lattice_bits(d: [i64; 3]) -> u64 {
     1 + (0..3).map(|a| eg_bits((d[a] - b) / 2)).sum::<u64>()
 }
 
-/// Second-order prediction of grid point `k ≥ 1` from the curve's own
-/// previous points (first order for the second point).
-fn own_prediction(g: &[[i64; 3]], k: usize) -> [i64; 3] {
+/// Contexts of a points-mode residual: the size of the one before (a curve's
+/// noise comes in stretches).
+const RESIDUAL_CONTEXTS: usize = 4;
+
+fn residual_context(d: [i64; 3]) -> usize {
+    let m = d.iter().map(|v| v.unsigned_abs()).max().unwrap_or(0) / 2;
+    (64 - m.leading_zeros() as usize).min(RESIDUAL_CONTEXTS - 1)
+}
+
+/// Prediction of grid point `k ≥ 1` from the curve's own previous points:
+/// second order (first order for the second point), or with `helix` the
+/// screw continuation of the last three steps.
+fn own_prediction(g: &[[i64; 3]], k: usize, helix: bool) -> [i64; 3] {
+    if helix && k >= 4 {
+        if let Some(p) = helix_prediction(g, k) {
+            return p;
+        }
+    }
     if k >= 2 {
         [0, 1, 2].map(|a| g[k - 1][a].wrapping_mul(2).wrapping_sub(g[k - 2][a]))
     } else {
         g[k - 1]
     }
+}
+
+/// The last step `d₂ = g[k−1] − g[k−2]` turned by the rotation that took
+/// the step pair `(d₀, d₁)` to `(d₁, d₂)`: on a helix sampled at equal arc
+/// lengths every step is the one before it screwed by the same rotation,
+/// so this is exact there (up to the lattice), where second-order
+/// prediction misses by the curvature. Coarsely sampled curls (hair) are
+/// where it pays; the encoder chooses per curve. `None` where the steps
+/// are (nearly) collinear and the rotation is undefined.
+fn helix_prediction(g: &[[i64; 3]], k: usize) -> Option<[i64; 3]> {
+    let v = |i: usize| DVec3::new(g[i][0] as f64, g[i][1] as f64, g[i][2] as f64);
+    let (d0, d1, d2) = (v(k - 3) - v(k - 4), v(k - 2) - v(k - 3), v(k - 1) - v(k - 2));
+    let frame = |a: DVec3, b: DVec3| -> Option<glam::DMat3> {
+        let n = a.cross(b);
+        let (la, ln) = (a.length(), n.length());
+        if !(ln > 1e-6 * la * b.length() && la > 0.0) {
+            return None;
+        }
+        let e1 = a / la;
+        let e3 = n / ln;
+        Some(glam::DMat3::from_cols(e1, e3.cross(e1), e3))
+    };
+    let (f0, f1) = (frame(d0, d1)?, frame(d1, d2)?);
+    let p = v(k - 1) + f1 * (f0.transpose() * d2);
+    quantise::bcc_nearest(p, 1.0)
 }
 
 /// Chooses one curve's code given the block so far: arcs, or points with
@@ -344,13 +387,18 @@ fn choose(
     }
     let pts = opt.points.map(|g| {
         let own_start = lattice_bits([0, 1, 2].map(|a| g[0][a].wrapping_sub(prev.point_start[a])));
-        let own = own_start
-            + (1..g.len())
-                .map(|k| {
-                    let p = own_prediction(&g, k);
-                    lattice_bits([0, 1, 2].map(|a| g[k][a].wrapping_sub(p[a])))
-                })
-                .sum::<u64>();
+        let own_with = |helix: bool| {
+            own_start
+                + (1..g.len())
+                    .map(|k| {
+                        let p = own_prediction(&g, k, helix);
+                        lattice_bits([0, 1, 2].map(|a| g[k][a].wrapping_sub(p[a])))
+                    })
+                    .sum::<u64>()
+        };
+        let (linear, screw) = (own_with(false), own_with(true));
+        let helix = screw < linear;
+        let own = linear.min(screw);
         // A neighbour saves at most about a third on bundles: where arcs
         // cost under half the own prediction, it is not looked for.
         let arcs_far_cheaper = opt
@@ -358,24 +406,30 @@ fn choose(
             .as_ref()
             .is_some_and(|(a, _)| 2 * estimated_bits(a) < own);
         if arcs_far_cheaper {
-            return (g, None, own);
+            return (g, None, helix, own);
         }
         match reference::best_reference(&g, neighbours.window(), lattice_bits) {
-            Some((rf, bits)) if bits < own => (g, Some(rf), bits),
-            _ => (g, None, own),
+            Some((rf, bits)) if bits < own => (g, Some(rf), false, bits),
+            _ => (g, None, helix, own),
         }
     });
-    let pts = if std::env::var_os("SF_FORCE_ARCS").is_some() && opt.arcs.is_some() { None } else { pts };
     match (opt.arcs, pts) {
-        (Some((a, decoded)), Some((_, _, bits))) if estimated_bits(&a) < bits => {
+        (Some((a, decoded)), Some((_, _, _, bits))) if estimated_bits(&a) < bits => {
             let n = decoded.len();
             neighbours.push_points(decoded);
             (a, n)
         }
-        (_, Some((g, reference, _))) => {
+        (_, Some((g, reference, helix, _))) => {
             let n = g.len();
             neighbours.push_lattice(g.clone());
-            (CurveCode::Points { grid: g, reference }, n)
+            (
+                CurveCode::Points {
+                    grid: g,
+                    reference,
+                    helix,
+                },
+                n,
+            )
         }
         (Some((a, decoded)), None) => {
             let n = decoded.len();
@@ -405,9 +459,13 @@ struct Models {
     length: [IntModel; SPANS],
     offset: [[IntModel; 2]; SPANS],
     bulge: [IntModel; 2],
-    residual: [IntModel; 3],
+    /// By [`residual_context`] of the residual before.
+    residual: [[IntModel; 3]; RESIDUAL_CONTEXTS],
+    residual_parity: [Bit; RESIDUAL_CONTEXTS],
     raw_count: IntModel,
     has_reference: Bit,
+    /// Own prediction by screw continuation ([`helix_prediction`]).
+    helix: Bit,
     point_start: [IntModel; 3],
     /// Parity of lattice differences: reference start, reference
     /// residual, own start, own residual.
@@ -419,7 +477,8 @@ struct Models {
     back_anchor: IntModel,
     anchor_end: Bit,
     anchor_start: [IntModel; 3],
-    ref_residual: [IntModel; 3],
+    ref_residual: [[IntModel; 3]; RESIDUAL_CONTEXTS],
+    ref_residual_parity: [Bit; RESIDUAL_CONTEXTS],
 }
 
 /// Contexts of an element's length and offsets: the bit length of the
@@ -563,7 +622,11 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
                     enc.direct(v.to_bits(), 64);
                 }
             }
-            CurveCode::Points { grid, reference } => {
+            CurveCode::Points {
+                grid,
+                reference,
+                helix,
+            } => {
                 enc.set_tag(1);
                 m.count.put_unsigned(&mut enc, grid.len() as u64 - 1);
                 enc.set_tag(10);
@@ -583,20 +646,35 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
                         put_lattice(&mut enc, &mut m.parity[0], &mut m.ref_start, d);
                         let n = grid.len();
                         enc.set_tag(11);
+                        let mut ctx = RESIDUAL_CONTEXTS - 1;
                         for k in 1..n {
                             let pred = reference::predict(grid[k - 1], k, n, r, rf.reversed);
                             let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
-                            put_lattice(&mut enc, &mut m.parity[1], &mut m.ref_residual, d);
+                            put_lattice(
+                                &mut enc,
+                                &mut m.ref_residual_parity[ctx],
+                                &mut m.ref_residual[ctx],
+                                d,
+                            );
+                            ctx = residual_context(d);
                         }
                     }
                     None => {
+                        enc.bit(&mut m.helix, *helix);
                         let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
                         put_lattice(&mut enc, &mut m.parity[2], &mut m.point_start, d);
                         enc.set_tag(11);
+                        let mut ctx = RESIDUAL_CONTEXTS - 1;
                         for k in 1..grid.len() {
-                            let pred = own_prediction(grid, k);
+                            let pred = own_prediction(grid, k, *helix);
                             let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
-                            put_lattice(&mut enc, &mut m.parity[3], &mut m.residual, d);
+                            put_lattice(
+                                &mut enc,
+                                &mut m.residual_parity[ctx],
+                                &mut m.residual[ctx],
+                                d,
+                            );
+                            ctx = residual_context(d);
                         }
                     }
                 }
@@ -764,17 +842,30 @@ pub fn decode_block(
                     let start = reference::at(r, 0, reversed);
                     let d = get_lattice(&mut dec, &mut m.parity[0], &mut m.ref_start);
                     g.push([0, 1, 2].map(|a| start[a].wrapping_add(d[a])));
+                    let mut ctx = RESIDUAL_CONTEXTS - 1;
                     for k in 1..n {
                         let pred = reference::predict(g[k - 1], k, n, r, reversed);
-                        let d = get_lattice(&mut dec, &mut m.parity[1], &mut m.ref_residual);
+                        let d = get_lattice(
+                            &mut dec,
+                            &mut m.ref_residual_parity[ctx],
+                            &mut m.ref_residual[ctx],
+                        );
+                        ctx = residual_context(d);
                         g.push([0, 1, 2].map(|a| pred[a].wrapping_add(d[a])));
                     }
                 } else {
+                    let helix = dec.bit(&mut m.helix);
                     let d = get_lattice(&mut dec, &mut m.parity[2], &mut m.point_start);
                     g.push([0, 1, 2].map(|a| prev.point_start[a].wrapping_add(d[a])));
+                    let mut ctx = RESIDUAL_CONTEXTS - 1;
                     for k in 1..n {
-                        let pred = own_prediction(&g, k);
-                        let d = get_lattice(&mut dec, &mut m.parity[3], &mut m.residual);
+                        let pred = own_prediction(&g, k, helix);
+                        let d = get_lattice(
+                            &mut dec,
+                            &mut m.residual_parity[ctx],
+                            &mut m.residual[ctx],
+                        );
+                        ctx = residual_context(d);
                         g.push([0, 1, 2].map(|a| pred[a].wrapping_add(d[a])));
                     }
                 }

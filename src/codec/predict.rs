@@ -38,6 +38,10 @@ pub struct ChainState {
     /// Chord length of the previous element, in length steps (the length
     /// residual is coded against it).
     pub chord_steps: i64,
+    /// Angle (radians) by which the prediction turns `normal` about
+    /// `tangent` before bending: the turn of the arc planes seen at the
+    /// last junction, so that a helix's arcs are predicted with its torsion.
+    pub twist: f64,
 }
 
 /// A unit vector perpendicular to the unit vector `v`, chosen
@@ -73,6 +77,7 @@ impl ChainState {
             normal: any_perpendicular(tangent),
             curvature: 0.0,
             chord_steps: 0,
+            twist: 0.0,
         }
     }
 
@@ -91,10 +96,22 @@ impl ChainState {
         // predicted: α ≤ π/2).
         let s = (0.5 * c * self.curvature).min(1.0);
         let co = (1.0 - s * s).sqrt();
-        let u = self.tangent * co + self.normal * s;
-        let e1 = self.normal * co - self.tangent * s;
+        let normal = self.twisted_normal();
+        let u = self.tangent * co + normal * s;
+        let e1 = normal * co - self.tangent * s;
         let e2 = u.cross(e1);
         (u, e1, e2)
+    }
+}
+
+impl ChainState {
+    /// `normal` turned by `twist` about `tangent`.
+    pub fn twisted_normal(&self) -> DVec3 {
+        if self.twist == 0.0 {
+            return self.normal;
+        }
+        let (s, c) = self.twist.sin_cos();
+        self.normal * c + self.tangent.cross(self.normal) * s
     }
 }
 
@@ -266,6 +283,7 @@ impl Arc {
             },
             curvature: self.curvature,
             chord_steps,
+            twist: 0.0,
         }
     }
 }
