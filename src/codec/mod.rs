@@ -287,17 +287,49 @@ fn first_end_prediction(
     anchor: Option<(usize, bool)>,
     prev: &Previous,
     step: f64,
-) -> [i64; 3] {
-    let walked = anchor.and_then(|(back, at_end)| {
+) -> ([i64; 3], Option<(DVec3, DVec3)>) {
+    let walk = anchor.and_then(|(back, at_end)| {
         let f = prev.first_end.map(|v| v as f64);
         let length = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt() * step;
-        let v = neighbours.walk(before - back, at_end, length)?;
+        neighbours.walk_with_middle(before - back, at_end, length)
+    });
+    let walked = walk.and_then(|(v, _)| {
         let k = [v.x / step, v.y / step, v.z / step].map(f64::round);
         k.iter()
             .all(|x| x.is_finite() && x.abs() < (1u64 << entropy::MAX_BITS) as f64)
             .then(|| k.map(|x| x as i64))
     });
-    walked.unwrap_or(prev.first_end)
+    (walked.unwrap_or(prev.first_end), walk)
+}
+
+/// Prediction of an anchored curve's first bulge: the bulge of the
+/// anchoring neighbour's walked stretch (`walk`: its end and middle,
+/// relative to the anchor; [`first_end_prediction`]), the parabola through
+/// them `y = 4hλ(1 − λ)` as the encoder estimates its own, scaled to this
+/// chord (a bulge grows with the chord squared) and put in this element's
+/// bulge frame. Neighbouring curves bend alike where they start together.
+fn first_bulge_prediction(
+    walk: Option<(DVec3, DVec3)>,
+    q0: DVec3,
+    end: DVec3,
+    step: f64,
+) -> [i64; 2] {
+    let predict = || -> Option<[i64; 2]> {
+        let (e, m) = walk?;
+        let c2 = e.length_squared();
+        let lambda = m.dot(e) / c2;
+        if !(c2 > 0.0 && (0.1..=0.9).contains(&lambda)) {
+            return None;
+        }
+        let h = (m - e * lambda) / (4.0 * lambda * (1.0 - lambda));
+        let scale = ((end - q0).length_squared() / c2).min(4.0);
+        let (f1, f2) = encoder::bulge_frame(q0, end, DVec3::ZERO)?;
+        let b = [h.dot(f1) * scale / step, h.dot(f2) * scale / step].map(f64::round);
+        b.iter()
+            .all(|x| x.is_finite() && x.abs() < (1u64 << 20) as f64)
+            .then(|| b.map(|x| x as i64))
+    };
+    predict().unwrap_or([0, 0])
 }
 
 /// Codes a difference of two lattice points (coordinates of one parity):
@@ -598,6 +630,7 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
     let grid_step = half;
     let q_start = params.quantiser().start;
     let q_first = params.quantiser().first;
+    let q_offset = params.quantiser().offset;
     let mut m = Models::default();
     let mut prev = Previous::default();
     let mut kinds = Vec::with_capacity(curves.len());
@@ -718,7 +751,7 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
                         }
                     }
                 }
-                let fe_pred = first_end_prediction(
+                let (fe_pred, walk) = first_end_prediction(
                     &neighbours,
                     before,
                     anchor.map(|a| (a.0, a.1)),
@@ -732,8 +765,15 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
                 enc.set_tag(4);
                 prev.arc_start = *start;
                 prev.first_end = *first_end;
+                let q0 = DVec3::new(start[0] as f64, start[1] as f64, start[2] as f64) * q_start;
+                let fb_pred = first_bulge_prediction(
+                    walk,
+                    q0,
+                    encoder::first_end(q0, *first_end, q_first),
+                    q_offset,
+                );
                 for a in 0..2 {
-                    m.first_bulge[a].put(&mut enc, first_bulge[a]);
+                    m.first_bulge[a].put(&mut enc, first_bulge[a] - fb_pred[a]);
                 }
                 let mut prev_kind = ElementKind::Corner;
                 for e in elements {
@@ -908,18 +948,17 @@ pub fn decode_block(
                         start[a] = prev.arc_start[a].wrapping_add(m.start[a].get(&mut dec));
                     }
                 }
-                let fe_pred = first_end_prediction(&neighbours, before, anchor, &prev, q.first);
+                let (fe_pred, walk) =
+                    first_end_prediction(&neighbours, before, anchor, &prev, q.first);
                 for a in 0..3 {
                     fe[a] = fe_pred[a].wrapping_add(m.first_end[a].get(&mut dec));
                 }
                 prev.arc_start = start;
                 prev.first_end = fe;
-                let fb = [
-                    m.first_bulge[0].get(&mut dec),
-                    m.first_bulge[1].get(&mut dec),
-                ];
                 let q0 = DVec3::new(start[0] as f64, start[1] as f64, start[2] as f64) * q.start;
                 let end = first_end(q0, fe, q.first);
+                let fb_pred = first_bulge_prediction(walk, q0, end, q.offset);
+                let fb = [0, 1].map(|a| fb_pred[a].wrapping_add(m.first_bulge[a].get(&mut dec)));
                 let t = corner_from_code(q0, end, DVec3::ZERO, fb, q.offset)
                     .ok_or_else(|| bad("a first element of zero length".into()))?;
                 let arc = Arc::new(q0, t, end).map_err(|e| bad(format!("first element: {e:?}")))?;

@@ -114,6 +114,30 @@ impl Neighbours {
         Some(at(p.len() - 1) - at(0))
     }
 
+    /// [`walk`](Self::walk), and the first vertex at or beyond half the
+    /// distance (relative to the same first point): the walked stretch's
+    /// middle, from which its bulge is estimated.
+    pub fn walk_with_middle(&self, k: usize, at_end: bool, distance: f64) -> Option<(DVec3, DVec3)> {
+        let p = self.points.get(k)?.as_ref()?;
+        if p.len() < 2 {
+            return None;
+        }
+        let at = |i: usize| if at_end { p[p.len() - 1 - i] } else { p[i] };
+        let mut walked = 0.0;
+        let mut middle = None;
+        for i in 1..p.len() {
+            walked += at(i).distance(at(i - 1));
+            if middle.is_none() && walked >= 0.5 * distance {
+                middle = Some(at(i) - at(0));
+            }
+            if walked >= distance {
+                return Some((at(i) - at(0), middle.unwrap_or(at(i) - at(0))));
+            }
+        }
+        let end = at(p.len() - 1) - at(0);
+        Some((end, middle.unwrap_or(end)))
+    }
+
     /// Curve `k`'s start (or end) on the grid of step `step`.
     pub fn anchor(&self, k: usize, at_end: bool, step: f64) -> Option<[i64; 3]> {
         let (a, b) = self.ends.get(k).copied().flatten()?;
