@@ -28,6 +28,7 @@ fn main() {
     let mut bytes = 0;
     let mut kinds = [0usize; 4];
     let mut out_pts = 0;
+    let mut elements = 0;
     let mut worst = 0f64;
     let mut over = 0;
     let mut dt_dec = 0.0;
@@ -43,6 +44,7 @@ fn main() {
             kinds[*k as usize] += 1;
         }
         out_pts += b.output_points;
+        elements += b.elements;
         blocks.push((b, chunk));
     }
     let dt_enc = t0.elapsed().as_secs_f64();
@@ -67,6 +69,7 @@ fn main() {
         path.file_name().unwrap().to_string_lossy(), bytes as f64 * 8.0 / npts as f64, kinds,
         out_pts as f64 / npts as f64, npts as f64 / dt_enc / 1e6, out_pts as f64 / dt_dec / 1e6
     );
+    println!("  {elements} arc elements ({:.2} input points each)", npts as f64 / elements.max(1) as f64);
     let total: f64 = tally.iter().sum();
     for (name, bits) in FIELDS.iter().zip(&tally) {
         if *bits > 0.0 {

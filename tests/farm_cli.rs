@@ -392,7 +392,8 @@ fn dropped_data_are_named_and_strict_refuses() {
     let e = fails(&["convert", s(&trk), "-o", s(&tck), "--strict"]);
     assert!(e.contains("--strict") && e.contains("`fa`"), "{e}");
     assert!(!tck.exists());
-    // The container keeps per-curve data, not per-point data.
+    // The default container keeps both; a version-1 container keeps
+    // per-curve data, not per-point data.
     let sfh = dir.path().join("x.sfh");
     let e = stderr(&ok(&[
         "compress",
@@ -401,26 +402,33 @@ fn dropped_data_are_named_and_strict_refuses() {
         "0.5",
         "-o",
         s(&sfh),
+        "--strict",
     ]));
+    assert!(!e.contains("warning"), "{e}");
+    let v1 = ["--distance", "ordered"];
+    let e = stderr(&ok(&[
+        &["compress", s(&trk), "--tolerance", "0.5", "-o", s(&sfh)][..],
+        &v1[..],
+    ]
+    .concat()));
     assert!(
         e.contains("per-point data") && !e.contains("per-curve data"),
         "{e}"
     );
-    let e = fails(&[
-        "compress",
-        s(&trk),
-        "--tolerance",
-        "0.5",
-        "-o",
-        s(&sfh),
-        "--strict",
-    ]);
+    let e = fails(
+        &[
+            &["compress", s(&trk), "--tolerance", "0.5", "-o", s(&sfh), "--strict"][..],
+            &v1[..],
+        ]
+        .concat(),
+    );
     assert!(e.contains("`fa`"), "{e}");
     // And decompressing to a format without per-curve data says so.
     let sfh2 = dir.path().join("y.sfh");
     ok(&["compress", s(&trk), "--tolerance", "0.5", "-o", s(&sfh2)]);
     let e = stderr(&ok(&["decompress", s(&sfh2), "-o", s(&tck)]));
     assert!(e.contains("per-curve data `mean_colors[0]`"), "{e}");
+    assert!(e.contains("per-point data `colors[0]`"), "{e}");
     // trk -> trk keeps everything: no warning.
     let e = stderr(&ok(&[
         "convert",
@@ -558,4 +566,70 @@ fn the_reported_worst_distance_never_exceeds_a_met_tolerance() {
             assert!(r["max_distance"].as_f64().unwrap() <= tol, "{r}");
         }
     }
+}
+
+#[test]
+fn per_point_values_come_back_on_the_decoded_points() {
+    // A .trk of helices whose scalar is the arc length at each point (and
+    // a second, constant one): after compress and decompress every decoded
+    // point carries the arc length of where it lies on the input, to
+    // within the tolerance, and the constant stays what it was.
+    use strandfit::io::{create_writer, Curve, Format, Metadata};
+    use strandfit::DVec3;
+    let dir = tempfile::tempdir().unwrap();
+    let trk = dir.path().join("s.trk");
+    let mut meta = Metadata::new(Format::Trk);
+    meta.point_data_names = vec!["s".into(), "c".into()];
+    let step = 0.25;
+    let curves: Vec<Curve> = (0..30)
+        .map(|k| {
+            let r = 4.0 + k as f64 * 0.1;
+            let pitch = 0.5;
+            let ds = step / (r * r + pitch * pitch).sqrt();
+            let points: Vec<DVec3> = (0..200)
+                .map(|i| {
+                    let a = i as f64 * ds;
+                    DVec3::new(r * a.cos() + k as f64, r * a.sin(), pitch * a)
+                })
+                .collect();
+            let point_data = (0..200).flat_map(|i| [i as f32 * step as f32, 7.5]).collect();
+            Curve {
+                id: None,
+                points,
+                point_data,
+                curve_data: vec![],
+            }
+        })
+        .collect();
+    let mut w = create_writer(&trk, Some(Format::Trk), &meta).unwrap();
+    for c in &curves {
+        w.write_curve(c).unwrap();
+    }
+    w.finish().unwrap();
+    let tol = 0.1;
+    let sfh = dir.path().join("s.sfh");
+    let back = dir.path().join("back.trk");
+    ok(&["compress", s(&trk), "--tolerance", "0.1", "-o", s(&sfh), "--strict"]);
+    let e = stderr(&ok(&["decompress", s(&sfh), "-o", s(&back)]));
+    assert!(!e.contains("warning"), "{e}");
+    let (m, got) = read_all(&back, None).unwrap();
+    assert_eq!(m.point_data_names, meta.point_data_names);
+    assert_eq!(got.len(), curves.len());
+    let mut fewer = 0;
+    for (k, (a, b)) in curves.iter().zip(&got).enumerate() {
+        assert_eq!(b.point_data.len(), 2 * b.points.len(), "curve {k}");
+        fewer += (b.points.len() < a.points.len()) as usize;
+        for (j, q) in b.points.iter().enumerate() {
+            // Arc length of the input point nearest q (the input is dense).
+            let i = (0..a.points.len())
+                .min_by(|&x, &y| a.points[x].distance(*q).total_cmp(&a.points[y].distance(*q)))
+                .unwrap();
+            let s_near = i as f64 * step;
+            let v = b.point_data[2 * j] as f64;
+            assert!((v - s_near).abs() <= step + tol, "curve {k} point {j}: {v} vs {s_near}");
+            assert_eq!(b.point_data[2 * j + 1], 7.5);
+        }
+    }
+    // The helices are arcs, so the output is not the input's points.
+    assert!(fewer > 20, "{fewer}");
 }

@@ -120,7 +120,7 @@ pub fn run(args: &CompressArgs) -> Result<()> {
         ..CompressOptions::new(count, storage)
     };
     let started = Instant::now();
-    let (mut reader, meta, dropped) = open_input(args)?;
+    let (mut reader, meta, dropped) = open_input(args, false)?;
     let header = Header {
         storage,
         tolerance: args.tolerance,
@@ -273,9 +273,12 @@ pub fn run(args: &CompressArgs) -> Result<()> {
 
 /// The input's reader (bad curves failing or skipped as asked), its
 /// metadata, and what the container will not hold (warned about, or an
-/// error with `--strict`): per-point data and source content the reader
-/// does not carry.
-fn open_input(args: &CompressArgs) -> Result<(Box<dyn CurveReader>, Metadata, Vec<String>)> {
+/// error with `--strict`): per-point data (in a version-1 container) and
+/// source content the reader does not carry.
+fn open_input(
+    args: &CompressArgs,
+    keeps_point_data: bool,
+) -> Result<(Box<dyn CurveReader>, Metadata, Vec<String>)> {
     let from = args.from.as_deref().map(parse_format).transpose()?;
     let bad = if args.care.skip_bad {
         BadCurves::Skip
@@ -285,7 +288,7 @@ fn open_input(args: &CompressArgs) -> Result<(Box<dyn CurveReader>, Metadata, Ve
     let reader = open_reader_with(&args.input, from, bad)?;
     let meta = reader.metadata().clone();
     let mut dropped = source_losses(&meta);
-    dropped.extend(data_losses(&meta, |_| false, true, "sfh"));
+    dropped.extend(data_losses(&meta, |_| keeps_point_data, true, "sfh"));
     check_losses(&args.input, &args.output, &dropped, args.care.strict)?;
     Ok((reader, meta, dropped))
 }
@@ -304,7 +307,7 @@ fn run_codec(args: &CompressArgs) -> Result<()> {
         bail!("--tolerance must be positive, got {tolerance}");
     }
     let started = Instant::now();
-    let (mut reader, meta, dropped) = open_input(args)?;
+    let (mut reader, meta, dropped) = open_input(args, true)?;
     // The input's name is not stored: the output's name says what it was,
     // and in a farm the name is bytes in every file.
     let header = CodecHeader::new(

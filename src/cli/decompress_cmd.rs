@@ -24,7 +24,7 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
         return run_codec(args, to);
     }
     let reader = ContainerReader::open(&args.input)?;
-    let mut writer = output_writer(args, to, &reader.header().source)?;
+    let mut writer = output_writer(args, to, &reader.header().source.to_metadata())?;
     let mut n = 0u64;
     for c in reader {
         let c = c?;
@@ -95,9 +95,8 @@ fn sample_chain(
 fn output_writer(
     args: &DecompressArgs,
     to: Option<Format>,
-    source: &crate::io::container::SourceMeta,
+    meta: &crate::io::Metadata,
 ) -> Result<Box<dyn crate::io::CurveWriter>> {
-    let meta = source.to_metadata();
     let target = match to {
         Some(f) => f,
         None => Format::from_path(&args.output)?,
@@ -105,13 +104,13 @@ fn output_writer(
     check_losses(
         &args.input,
         &args.output,
-        &target.losses(&meta),
+        &target.losses(meta),
         args.strict,
     )?;
-    Ok(create_writer(&args.output, Some(target), &meta)?)
+    Ok(create_writer(&args.output, Some(target), meta)?)
 }
 
-/// A version-2 container: the codec's points (the guarantee's), or a
+/// A version-3 container: the codec's points (the guarantee's), or a
 /// resampling of them when asked.
 fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
     use crate::codec::container::CodecReader;
@@ -127,16 +126,32 @@ fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
             header.tolerance
         );
     }
-    let mut writer = output_writer(args, to, &header.source)?;
+    let mut meta = header.source.to_metadata();
+    meta.point_data_names = header.point_data_names.clone();
+    let mut writer = output_writer(args, to, &meta)?;
     let (points, step) = (args.points, args.step);
-    let map = move |c: crate::codec::container::DecodedCurve| Curve {
-        id: c.id,
-        points: match (points, step) {
-            (None, None) => c.points,
-            (m, s) => resample_polyline(&c.points, m, s),
+    let width = header.point_data_names.len();
+    let map = move |c: crate::codec::container::DecodedCurve| match (points, step) {
+        (None, None) => Curve {
+            id: c.id,
+            points: c.points,
+            point_data: c.point_data,
+            curve_data: c.curve_data,
         },
-        point_data: Vec::new(),
-        curve_data: c.curve_data,
+        (m, s) => {
+            let resampled = resample_polyline(&c.points, m, s);
+            Curve {
+                id: c.id,
+                point_data: crate::codec::point_data::carry(
+                    &c.points,
+                    &c.point_data,
+                    width,
+                    &resampled,
+                ),
+                points: resampled,
+                curve_data: c.curve_data,
+            }
+        }
     };
     let mut bar = super::io_util::DelayedBar::new(Some(reader.curve_count()));
     let n = decompress_stream(&mut reader, &mut *writer, &map, &mut |n| bar.set(n))

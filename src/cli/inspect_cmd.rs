@@ -274,10 +274,10 @@ fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
             "  size            {:.2} bytes/curve",
             bytes as f64 / curves.max(1) as f64
         );
-        if !header.dropped_point_data.is_empty() {
+        if !header.point_data_names.is_empty() {
             println!(
-                "  dropped         per-point data {}",
-                header.dropped_point_data.join(", ")
+                "  per-point data  {} (on the decoded points)",
+                header.point_data_names.join(", ")
             );
         }
     }

@@ -38,7 +38,7 @@ pub const VERSION: u16 = 3;
 /// The revision of the codec's model (what the geometry streams mean). A
 /// decoder reads only its own: a stream coded by another model would
 /// decode to other curves, so it is refused by name instead.
-pub const MODEL: u8 = 2;
+pub const MODEL: u8 = 3;
 const END_MAGIC: [u8; 4] = *b"SFHE";
 const END_LEN: u64 = 12;
 /// Curves per block: the entropy models learn within a block, so larger
@@ -57,21 +57,22 @@ pub struct CodecHeader {
     pub tolerance: f64,
     pub steps: Steps,
     pub source: SourceMeta,
-    /// Per-point data names of the input that are not stored.
-    pub dropped_point_data: Vec<String>,
+    /// Names of the per-point values stored with each curve (on its decoded
+    /// points: [`super::point_data`]).
+    pub point_data_names: Vec<String>,
     /// The version of strandfit that wrote the file.
     pub written_by: String,
 }
 
 impl CodecHeader {
     /// A header for the current model with the default steps.
-    pub fn new(tolerance: f64, source: SourceMeta, dropped_point_data: Vec<String>) -> Self {
+    pub fn new(tolerance: f64, source: SourceMeta, point_data_names: Vec<String>) -> Self {
         CodecHeader {
             model: MODEL,
             tolerance,
             steps: Steps::default(),
             source,
-            dropped_point_data,
+            point_data_names,
             written_by: env!("CARGO_PKG_VERSION").into(),
         }
     }
@@ -85,7 +86,7 @@ impl CodecHeader {
 
     /// The binary form (before the optional DEFLATE): model, tolerance,
     /// steps (a flag, then five `f64` unless the defaults), the writer's
-    /// version, the source's metadata and the dropped names. Strings are a
+    /// version, the source's metadata and the per-point value names. Strings are a
     /// varint length and UTF-8; optional fields follow a presence bit.
     fn to_bytes(&self) -> Vec<u8> {
         let mut b = Vec::with_capacity(64);
@@ -147,8 +148,8 @@ impl CodecHeader {
             put_str(&mut b, k);
             put_str(&mut b, v);
         }
-        put_varint(&mut b, self.dropped_point_data.len() as u64);
-        for n in &self.dropped_point_data {
+        put_varint(&mut b, self.point_data_names.len() as u64);
+        for n in &self.point_data_names {
             put_str(&mut b, n);
         }
         b
@@ -204,7 +205,7 @@ impl CodecHeader {
         for _ in 0..n {
             extra.push((c.str()?, c.str()?));
         }
-        let dropped_point_data = c.strs()?;
+        let point_data_names = c.strs()?;
         if c.pos != b.len() {
             return Err("bytes left over after the header".into());
         }
@@ -222,7 +223,7 @@ impl CodecHeader {
                 curve_data_names,
                 extra,
             },
-            dropped_point_data,
+            point_data_names,
             written_by,
         })
     }
@@ -238,6 +239,8 @@ fn put_str(out: &mut Vec<u8>, s: &str) {
 pub struct DecodedCurve {
     pub id: Option<String>,
     pub points: Vec<DVec3>,
+    /// Per decoded point, the values named in the header (row-major).
+    pub point_data: Vec<f32>,
     pub curve_data: Vec<f32>,
 }
 
@@ -245,6 +248,8 @@ pub struct DecodedCurve {
 pub struct CurveIn<'a> {
     pub id: Option<&'a str>,
     pub points: &'a [DVec3],
+    /// Per input point, the values named in the header (row-major).
+    pub point_data: &'a [f32],
     pub curve_data: &'a [f32],
 }
 
@@ -332,6 +337,9 @@ pub struct BlockBytes {
     pub encoded: EncodedBlock,
     /// Which input curves were empty (for [`verify`](Self::verify)).
     empty: Vec<bool>,
+    /// Per curve, the decoded points its per-point values are for (empty
+    /// without per-point values).
+    point_counts: Vec<usize>,
 }
 
 impl BlockBytes {
@@ -345,6 +353,9 @@ impl BlockBytes {
         for (k, (b, &e)) in back.iter().zip(&self.empty).enumerate() {
             if b.is_empty() != e {
                 return Err((k, "the curve would not decode".into()));
+            }
+            if self.point_counts.get(k).is_some_and(|&n| n != b.len()) {
+                return Err((k, "per-point values for other points than decode".into()));
             }
         }
         if back.iter().map(Vec::len).sum::<usize>() != self.encoded.output_points {
@@ -363,15 +374,8 @@ pub fn encode_block_bytes(
     curves: &[CurveIn],
     params: &CodecParams,
     n_curve_data: usize,
+    n_point_data: usize,
 ) -> Result<BlockBytes, (usize, String)> {
-    let pts: Vec<&[DVec3]> = curves.iter().map(|c| c.points).collect();
-    let encoded = encode_block(&pts, params).map_err(|e| match e {
-        super::EncodeError::NonFinite { curve, point } => {
-            (curve, format!("point {point} is not finite"))
-        }
-        e => (0, e.to_string()),
-    })?;
-    let mut side = Vec::new();
     for (k, c) in curves.iter().enumerate() {
         if c.curve_data.len() != n_curve_data {
             return Err((
@@ -382,6 +386,31 @@ pub fn encode_block_bytes(
                 ),
             ));
         }
+        if c.point_data.len() != c.points.len() * n_point_data {
+            return Err((
+                k,
+                format!(
+                    "{} per-point values for {} points where the header names {n_point_data} per point",
+                    c.point_data.len(),
+                    c.points.len()
+                ),
+            ));
+        }
+    }
+    let pts: Vec<&[DVec3]> = curves.iter().map(|c| c.points).collect();
+    let encode = if n_point_data > 0 {
+        super::encode_block_keeping
+    } else {
+        encode_block
+    };
+    let encoded = encode(&pts, params).map_err(|e| match e {
+        super::EncodeError::NonFinite { curve, point } => {
+            (curve, format!("point {point} is not finite"))
+        }
+        e => (0, e.to_string()),
+    })?;
+    let mut side = Vec::new();
+    for c in curves {
         match c.id {
             None => put_varint(&mut side, 0),
             Some(s) => {
@@ -393,14 +422,31 @@ pub fn encode_block_bytes(
             side.extend_from_slice(&v.to_le_bytes());
         }
     }
-    // No ids and no per-curve values (.tck, .vtk, .hair): no side data at
-    // all, rather than a deflated run of zeros and its lengths.
-    let (side_len, stored) = if n_curve_data == 0 && side.iter().all(|&b| b == 0) {
-        (0, Vec::new())
-    } else {
-        let stored = deflate(&side).map_err(|e| (0, e.to_string()))?;
-        (side.len() as u32, stored)
-    };
+    // Per-point values on the decoded points: per curve their count, then
+    // the values' bytes in four planes (first bytes of all, then second
+    // bytes, …), which DEFLATE finds far more repetition in than in
+    // interleaved floats.
+    let mut point_counts = Vec::new();
+    if n_point_data > 0 {
+        let mut all = Vec::new();
+        for (c, out) in curves.iter().zip(&encoded.decoded) {
+            put_varint(&mut side, out.len() as u64);
+            point_counts.push(out.len());
+            all.extend(super::point_data::carry(c.points, c.point_data, n_point_data, out));
+        }
+        for plane in 0..4 {
+            side.extend(all.iter().map(|v| v.to_le_bytes()[plane]));
+        }
+    }
+    // No ids and no per-curve or per-point values (.tck, .vtk, .hair): no
+    // side data at all, rather than a deflated run of zeros and its lengths.
+    let (side_len, stored) =
+        if n_curve_data == 0 && n_point_data == 0 && side.iter().all(|&b| b == 0) {
+            (0, Vec::new())
+        } else {
+            let stored = deflate(&side).map_err(|e| (0, e.to_string()))?;
+            (side.len() as u32, stored)
+        };
     Ok(BlockBytes {
         curves: curves.len() as u32,
         geometry: encoded.bytes.clone(),
@@ -408,6 +454,7 @@ pub fn encode_block_bytes(
         side_len,
         encoded,
         empty: curves.iter().map(|c| c.points.is_empty()).collect(),
+        point_counts,
     })
 }
 
@@ -757,12 +804,13 @@ impl RawBlock {
             e => err(self.first, e.to_string()),
         })?;
         let n_cd = header.source.curve_data_names.len();
+        let n_pd = header.point_data_names.len();
         let side = if self.side_len == 0 && self.side.is_empty() {
-            // No side data: no ids, and no per-curve values to read.
-            if n_cd > 0 {
+            // No side data: no ids, and no per-curve or per-point values.
+            if n_cd > 0 || n_pd > 0 {
                 return Err(err(
                     self.first,
-                    "per-curve values missing from the block".into(),
+                    "per-curve or per-point values missing from the block".into(),
                 ));
             }
             vec![0u8; n]
@@ -790,10 +838,47 @@ impl RawBlock {
                 Ok(DecodedCurve {
                     id,
                     points,
+                    point_data: Vec::new(),
                     curve_data,
                 })
             };
             out.push(read().map_err(|e| err(curve, format!("side data: {e}")))?);
+        }
+        if n_pd > 0 {
+            let mut total = 0usize;
+            for (k, d) in out.iter().enumerate() {
+                let m = c
+                    .varint()
+                    .map_err(|e| err(self.first + k as u64, format!("side data: {e}")))?;
+                if m != d.points.len() as u64 {
+                    return Err(err(
+                        self.first + k as u64,
+                        format!(
+                            "per-point values for {m} points, but {} decode",
+                            d.points.len()
+                        ),
+                    ));
+                }
+                total += d.points.len() * n_pd;
+            }
+            let left = side.len() - c.pos;
+            if left != 4 * total {
+                return Err(err(
+                    self.first,
+                    format!("side data: {left} bytes of per-point values where {} are due", 4 * total),
+                ));
+            }
+            let planes = &side[c.pos..];
+            let mut v = 0usize;
+            for d in &mut out {
+                d.point_data.reserve(d.points.len() * n_pd);
+                for _ in 0..d.points.len() * n_pd {
+                    let b = [0, 1, 2, 3].map(|p| planes[p * total + v]);
+                    d.point_data.push(f32::from_le_bytes(b));
+                    v += 1;
+                }
+            }
+            c.pos = side.len();
         }
         if c.pos != side.len() {
             return Err(err(
@@ -826,7 +911,13 @@ mod tests {
     fn header(names: usize) -> CodecHeader {
         let mut m = Metadata::new(Format::Json);
         m.curve_data_names = (0..names).map(|k| format!("v{k}")).collect();
-        CodecHeader::new(0.1, SourceMeta::from_metadata(&m, None), vec![])
+        CodecHeader::new(0.1, SourceMeta::from_metadata(&m, None), vec!["s".into()])
+    }
+
+    /// Per point, its arc length (the curves' points are 0.3 apart along
+    /// a helix of pitch 0.2: 0.3·√1.04 in space, near enough).
+    fn arc_values(p: &[DVec3]) -> Vec<f32> {
+        (0..p.len()).map(|i| i as f32 * 0.3).collect()
     }
 
     fn curves(n: usize, rng: &mut ChaCha8Rng) -> Vec<(Option<String>, Vec<DVec3>, Vec<f32>)> {
@@ -851,15 +942,18 @@ mod tests {
         let h = header(2);
         let mut w = CodecWriter::create(path, &h).unwrap();
         for chunk in cs.chunks(per_block) {
+            let values: Vec<Vec<f32>> = chunk.iter().map(|(_, p, _)| arc_values(p)).collect();
             let ins: Vec<CurveIn> = chunk
                 .iter()
-                .map(|(id, p, d)| CurveIn {
+                .zip(&values)
+                .map(|((id, p, d), v)| CurveIn {
                     id: id.as_deref(),
                     points: p,
+                    point_data: v,
                     curve_data: d,
                 })
                 .collect();
-            let b = encode_block_bytes(&ins, &h.params(), 2).unwrap();
+            let b = encode_block_bytes(&ins, &h.params(), 2, 1).unwrap();
             b.verify(&h.params()).unwrap();
             w.write_block(&b).unwrap();
         }
@@ -886,6 +980,16 @@ mod tests {
             } else {
                 assert!(crate::metrics::hausdorff(pts, &c.points).unwrap() <= 0.1);
             }
+            // The per-point values came along onto the decoded points: one
+            // each, rising along the curve from the first value to the last.
+            assert_eq!(c.point_data.len(), c.points.len(), "curve {k}");
+            let want = arc_values(pts);
+            if let (Some(a), Some(b)) = (c.point_data.first(), want.first()) {
+                assert!((a - b).abs() <= 0.35, "curve {k}: starts at {a}");
+                let (a, b) = (c.point_data.last().unwrap(), want.last().unwrap());
+                assert!((a - b).abs() <= 0.35, "curve {k}: ends at {a}, not {b}");
+            }
+            assert!(c.point_data.windows(2).all(|w| w[1] >= w[0]), "curve {k}");
         }
         let mid = read_range(&mut r, 13, 9).unwrap();
         assert_eq!(mid.len(), 9);
@@ -943,15 +1047,24 @@ mod tests {
     }
 
     #[test]
-    fn the_writer_refuses_mismatched_curve_data() {
+    fn the_writer_refuses_mismatched_curve_and_point_data() {
         let h = header(2);
         let p = [DVec3::ZERO, DVec3::X];
         let ins = [CurveIn {
             id: None,
             points: &p,
+            point_data: &[0.0, 1.0],
             curve_data: &[1.0],
         }];
-        let e = encode_block_bytes(&ins, &h.params(), 2).err().unwrap();
+        let e = encode_block_bytes(&ins, &h.params(), 2, 1).err().unwrap();
         assert!(e.1.contains("per-curve values"), "{}", e.1);
+        let ins = [CurveIn {
+            id: None,
+            points: &p,
+            point_data: &[0.0],
+            curve_data: &[1.0, 2.0],
+        }];
+        let e = encode_block_bytes(&ins, &h.params(), 2, 1).err().unwrap();
+        assert!(e.1.contains("per-point values"), "{}", e.1);
     }
 }

@@ -50,6 +50,7 @@ pub mod check;
 pub mod container;
 pub mod encoder;
 pub mod entropy;
+pub mod point_data;
 pub mod predict;
 pub mod quantise;
 pub mod reference;
@@ -173,6 +174,11 @@ pub struct EncodedBlock {
     pub kinds: Vec<u8>,
     /// Points the decoder will write, in all.
     pub output_points: usize,
+    /// Arc elements (first elements included), in all.
+    pub elements: usize,
+    /// Per curve, the points the decoder will write (only from
+    /// [`encode_block_keeping`]: what per-point values are carried onto).
+    pub decoded: Vec<Vec<DVec3>>,
 }
 
 /// Upper bound of the points one curve may decode to (a corrupt stream
@@ -589,7 +595,16 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
 ) -> Result<EncodedBlock, EncodeError> {
-    encode_block_tallied(curves, params, false).map(|(b, _)| b)
+    encode_block_with(curves, params, false, false).map(|(b, _)| b)
+}
+
+/// [`encode_block`], keeping each curve's decoded points in
+/// [`EncodedBlock::decoded`].
+pub fn encode_block_keeping<C: AsRef<[DVec3]> + Sync>(
+    curves: &[C],
+    params: &CodecParams,
+) -> Result<EncodedBlock, EncodeError> {
+    encode_block_with(curves, params, false, true).map(|(b, _)| b)
 }
 
 /// [`encode_block`], and with `tally` the ideal bits spent on each of
@@ -598,6 +613,15 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
     tally: bool,
+) -> Result<(EncodedBlock, Option<Vec<f64>>), EncodeError> {
+    encode_block_with(curves, params, tally, false)
+}
+
+fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
+    curves: &[C],
+    params: &CodecParams,
+    tally: bool,
+    keep: bool,
 ) -> Result<(EncodedBlock, Option<Vec<f64>>), EncodeError> {
     if !(params.tolerance.is_finite() && params.tolerance > 0.0) {
         return Err(EncodeError::BadTolerance(params.tolerance));
@@ -635,11 +659,16 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
     let mut prev = Previous::default();
     let mut kinds = Vec::with_capacity(curves.len());
     let mut output_points = 0;
+    let mut decoded = Vec::with_capacity(if keep { curves.len() } else { 0 });
+    let mut n_elements = 0;
     // The block's decoded curves: the references.
     let mut neighbours = Neighbours::new(grid_step, curves.len());
     for (points, opt) in curves.iter().zip(options) {
         // The choice, in order: a points-mode curve may lean on those before.
         let (code, n) = choose(points.as_ref(), opt, &mut neighbours, &prev);
+        if keep {
+            decoded.push(neighbours.last_points().to_vec());
+        }
         let code = &code;
         output_points += n;
         let kind = kind_of(code);
@@ -721,6 +750,7 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
             } => {
                 enc.set_tag(1);
                 m.count.put_unsigned(&mut enc, elements.len() as u64);
+                n_elements += 1 + elements.len();
                 enc.set_tag(2);
                 // `neighbours` holds this curve last; its anchors are the
                 // curves before it.
@@ -808,6 +838,8 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
             bytes: enc.finish(),
             kinds,
             output_points,
+            elements: n_elements,
+            decoded,
         },
         tallied,
     ))

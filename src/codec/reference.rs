@@ -201,6 +201,12 @@ impl Neighbours {
     /// encoder pushes a curve before coding it and the decoder after
     /// decoding it, so one more than [`MAX_BACK`] is kept: both then see the
     /// same [`MAX_BACK`] curves before the one being coded.
+    /// The decoded points of the curve pushed last (empty for an empty
+    /// curve).
+    pub fn last_points(&self) -> &[DVec3] {
+        self.points.last().and_then(|p| p.as_deref()).unwrap_or(&[])
+    }
+
     fn forget_old(&mut self) {
         let n = self.points.len();
         if n > MAX_BACK + 1 {

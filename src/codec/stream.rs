@@ -40,6 +40,7 @@ pub fn compress_stream(
 ) -> Result<CompressSummary, IoError> {
     let params = header.params();
     let n_cd = header.source.curve_data_names.len();
+    let n_pd = header.point_data_names.len();
     let mut writer = CodecWriter::create(out, header)?;
     let mut summary = CompressSummary::default();
     // Blocks go in groups of one per thread: a group is fitted and coded in
@@ -79,10 +80,11 @@ pub fn compress_stream(
                             .map(|c| CurveIn {
                                 id: c.id.as_deref(),
                                 points: &c.points,
+                                point_data: &c.point_data,
                                 curve_data: &c.curve_data,
                             })
                             .collect();
-                        encode_block_bytes(&ins, &params, n_cd)
+                        encode_block_bytes(&ins, &params, n_cd, n_pd)
                     })
                     .collect()
             },
