@@ -502,6 +502,8 @@ struct Models {
     residual_parity: [Bit; RESIDUAL_CONTEXTS],
     raw_count: IntModel,
     has_reference: Bit,
+    /// A second reference, averaged with the first.
+    has_second: Bit,
     /// Own prediction by screw continuation ([`helix_prediction`]).
     helix: Bit,
     point_start: [IntModel; 3],
@@ -699,18 +701,27 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                     Some(rf) => {
                         m.back.put_unsigned(&mut enc, rf.back as u64 - 1);
                         enc.bit(&mut m.reversed, rf.reversed);
+                        enc.bit(&mut m.has_second, rf.second.is_some());
+                        if let Some((back, reversed)) = rf.second {
+                            m.back.put_unsigned(&mut enc, back as u64 - 1);
+                            enc.bit(&mut m.reversed, reversed);
+                        }
                         // `neighbours` holds this curve last: its reference
                         // is `back` before that.
                         let grids = neighbours.window();
-                        let r = &grids[grids.len() - 1 - rf.back];
-                        let start = reference::at(r, 0, rf.reversed);
+                        let at_back = |b: usize| &grids[grids.len() - 1 - b][..];
+                        let res = reference::Resolved {
+                            first: (at_back(rf.back), rf.reversed),
+                            second: rf.second.map(|(b, rev)| (at_back(b), rev)),
+                        };
+                        let start = res.start();
                         let d = [0, 1, 2].map(|a| grid[0][a] - start[a]);
                         put_lattice(&mut enc, &mut m.parity[0], &mut m.ref_start, d);
                         let n = grid.len();
                         enc.set_tag(11);
                         let mut ctx = RESIDUAL_CONTEXTS - 1;
                         for k in 1..n {
-                            let pred = reference::predict(grid[k - 1], k, n, r, rf.reversed);
+                            let pred = res.predict(grid[k - 1], k, n);
                             let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
                             put_lattice(
                                 &mut enc,
@@ -901,22 +912,36 @@ pub fn decode_block(
                 let with_reference = !neighbours.is_empty() && dec.bit(&mut m.has_reference);
                 let mut g: Vec<[i64; 3]> = Vec::with_capacity(n.min(1 << 16));
                 if with_reference {
-                    let back = m.back.get_unsigned(&mut dec) as usize + 1;
-                    let reversed = dec.bit(&mut m.reversed);
-                    if back > neighbours.len() || back > reference::MAX_BACK {
-                        return Err(bad(format!("reference {back} curves back")));
-                    }
+                    let mut read_ref = |dec: &mut Decoder| -> Result<(usize, bool), DecodeError> {
+                        let back = m.back.get_unsigned(dec) as usize + 1;
+                        let reversed = dec.bit(&mut m.reversed);
+                        if back > neighbours.len() || back > reference::MAX_BACK {
+                            return Err(bad(format!("reference {back} curves back")));
+                        }
+                        Ok((back, reversed))
+                    };
+                    let first = read_ref(&mut dec)?;
+                    let second = if dec.bit(&mut m.has_second) {
+                        Some(read_ref(&mut dec)?)
+                    } else {
+                        None
+                    };
                     let grids = neighbours.window();
-                    let r = &grids[grids.len() - back];
-                    if r.len() < 2 {
+                    let at_back = |b: usize| &grids[grids.len() - b][..];
+                    if at_back(first.0).len() < 2 || second.is_some_and(|(b, _)| at_back(b).len() < 2)
+                    {
                         return Err(bad("a reference of fewer than two points".into()));
                     }
-                    let start = reference::at(r, 0, reversed);
+                    let res = reference::Resolved {
+                        first: (at_back(first.0), first.1),
+                        second: second.map(|(b, rev)| (at_back(b), rev)),
+                    };
+                    let start = res.start();
                     let d = get_lattice(&mut dec, &mut m.parity[0], &mut m.ref_start);
                     g.push([0, 1, 2].map(|a| start[a].wrapping_add(d[a])));
                     let mut ctx = RESIDUAL_CONTEXTS - 1;
                     for k in 1..n {
-                        let pred = reference::predict(g[k - 1], k, n, r, reversed);
+                        let pred = res.predict(g[k - 1], k, n);
                         let d = get_lattice(
                             &mut dec,
                             &mut m.ref_residual_parity[ctx],

@@ -26,12 +26,61 @@ pub const MAX_BACK: usize = 32;
 /// References whose end points are nearest are costed in full; the others
 /// are not tried (the search stays `O(n)` per curve).
 const SHORTLIST: usize = 4;
+/// Pairs of references are tried among this many best single ones.
+const PAIRED: usize = 3;
 
-/// A curve's reference: `back` curves before it, maybe reversed.
+/// A curve's reference: `back` curves before it, maybe reversed; and maybe
+/// a second one, whose steps are averaged with the first's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Reference {
     pub back: usize,
     pub reversed: bool,
+    /// `(back, reversed)` of the second reference.
+    pub second: Option<(usize, bool)>,
+}
+
+/// The curves a [`Reference`] names, resolved: each with its direction.
+#[derive(Clone, Copy)]
+pub struct Resolved<'a> {
+    pub first: (&'a [[i64; 3]], bool),
+    pub second: Option<(&'a [[i64; 3]], bool)>,
+}
+
+impl Resolved<'_> {
+    /// Prediction of the start: the first reference's start, or the lattice
+    /// point nearest the two starts' midpoint.
+    pub fn start(&self) -> [i64; 3] {
+        let (r, rev) = self.first;
+        let a = at(r, 0, rev);
+        match self.second {
+            None => a,
+            Some((r2, rev2)) => midpoint(a, at(r2, 0, rev2)),
+        }
+    }
+
+    /// Prediction of point `i ≥ 1` of `n` from the previous decoded point:
+    /// the reference's matching step, or the mean of the two references'
+    /// steps rounded to the lattice. Two neighbours' wiggles are
+    /// independent, so their mean step is a steadier prediction.
+    pub fn predict(&self, prev: [i64; 3], i: usize, n: usize) -> [i64; 3] {
+        let (r, rev) = self.first;
+        let p1 = predict(prev, i, n, r, rev);
+        match self.second {
+            None => p1,
+            Some((r2, rev2)) => midpoint(p1, predict(prev, i, n, r2, rev2)),
+        }
+    }
+}
+
+/// The lattice point nearest the midpoint of two lattice points (in
+/// half-step units; all coordinates of a point share a parity).
+fn midpoint(a: [i64; 3], b: [i64; 3]) -> [i64; 3] {
+    let m = DVec3::new(
+        (a[0] as f64 + b[0] as f64) * 0.5,
+        (a[1] as f64 + b[1] as f64) * 0.5,
+        (a[2] as f64 + b[2] as f64) * 0.5,
+    );
+    bcc_nearest(m, 1.0).unwrap_or(a)
 }
 
 /// The points of a decoded curve on the points lattice (half step
@@ -276,7 +325,8 @@ fn l1(a: [i64; 3], b: [i64; 3]) -> i64 {
 
 /// The cheapest reference for the grid points `g` (curve `k` of its block,
 /// `grids[r]` the regridded decoded curves before it), with its estimated
-/// cost in bits (`cost` of one residual vector).
+/// cost in bits (`cost` of one residual vector): one of the curves whose
+/// ends are nearest, or the mean of two of the best three.
 pub fn best_reference(
     g: &[[i64; 3]],
     grids: &[Vec<[i64; 3]>],
@@ -297,7 +347,14 @@ pub fn best_reference(
         for reversed in [false, true] {
             let d = l1(g[0], at(r, 0, reversed))
                 .saturating_add(l1(g[n - 1], at(r, r.len() - 1, reversed)));
-            short.push((d, Reference { back, reversed }));
+            short.push((
+                d,
+                Reference {
+                    back,
+                    reversed,
+                    second: None,
+                },
+            ));
         }
     }
     // The SHORTLIST nearest (ties: the nearer back first), without sorting
@@ -307,19 +364,44 @@ pub fn best_reference(
         short.truncate(SHORTLIST);
     }
     short.sort_by_key(|s| (s.0, s.1.back, s.1.reversed));
-    short
-        .iter()
-        .map(|&(_, rf)| {
-            let r = &grids[k - rf.back];
-            let start = at(r, 0, rf.reversed);
-            let mut bits = 8 + cost([0, 1, 2].map(|a| g[0][a].wrapping_sub(start[a])));
-            for i in 1..n {
-                let p = predict(g[i - 1], i, n, r, rf.reversed);
-                bits += cost([0, 1, 2].map(|a| g[i][a].wrapping_sub(p[a])));
+    let resolve = |rf: &Reference| Resolved {
+        first: (&grids[k - rf.back][..], rf.reversed),
+        second: rf.second.map(|(b, rev)| (&grids[k - b][..], rev)),
+    };
+    let bits_of = |rf: &Reference| {
+        let res = resolve(rf);
+        let start = res.start();
+        let mut bits = 8 + cost([0, 1, 2].map(|a| g[0][a].wrapping_sub(start[a])));
+        if rf.second.is_some() {
+            bits += 6;
+        }
+        for i in 1..n {
+            let p = res.predict(g[i - 1], i, n);
+            bits += cost([0, 1, 2].map(|a| g[i][a].wrapping_sub(p[a])));
+        }
+        bits
+    };
+    let mut singles: Vec<(Reference, u64)> =
+        short.iter().map(|&(_, rf)| (rf, bits_of(&rf))).collect();
+    singles.sort_by_key(|x| (x.1, x.0.back, x.0.reversed));
+    let mut best = singles.first().copied()?;
+    let top = &singles[..singles.len().min(PAIRED)];
+    for (x, a) in top.iter().enumerate() {
+        for b in &top[x + 1..] {
+            if a.0.back == b.0.back {
+                continue;
             }
-            (rf, bits)
-        })
-        .min_by_key(|x| x.1)
+            let rf = Reference {
+                second: Some((b.0.back, b.0.reversed)),
+                ..a.0
+            };
+            let bits = bits_of(&rf);
+            if bits < best.1 {
+                best = (rf, bits);
+            }
+        }
+    }
+    Some(best)
 }
 
 #[cfg(test)]
@@ -356,9 +438,39 @@ mod tests {
             rf,
             Reference {
                 back: 2,
-                reversed: true
+                reversed: true,
+                second: None
             }
         );
+    }
+
+    #[test]
+    fn two_references_average_their_steps() {
+        // Two neighbours wiggle in opposite directions about a straight
+        // line; the curve runs straight between them. Each alone predicts
+        // its own wiggle; their mean step is the straight step.
+        let line: Vec<[i64; 3]> = (0..12).map(|i| [4 * i, 0, 0]).collect();
+        let up: Vec<[i64; 3]> = (0..12).map(|i| [4 * i, 2 * (i % 2) + 10, 0]).collect();
+        let down: Vec<[i64; 3]> = (0..12).map(|i| [4 * i, -2 * (i % 2) - 10, 0]).collect();
+        let grids = vec![up.clone(), down.clone(), vec![[0, 0, 0]]];
+        let cost = |v: [i64; 3]| v.iter().map(|x| x.unsigned_abs()).sum::<u64>() * 4 + 1;
+        let (rf, bits) = best_reference(&line, &grids, cost).unwrap();
+        assert!(rf.second.is_some(), "{rf:?}");
+        let res = Resolved {
+            first: (&grids[3 - rf.back][..], rf.reversed),
+            second: rf.second.map(|(b, rev)| (&grids[3 - b][..], rev)),
+        };
+        assert_eq!(res.start(), [0, 0, 0]);
+        for i in 1..12 {
+            assert_eq!(res.predict(line[i - 1], i, 12), line[i], "point {i}");
+        }
+        // Each alone misses by 2 at every point.
+        let one = |b: usize| Resolved {
+            first: (&grids[3 - b][..], false),
+            second: None,
+        };
+        assert_ne!(one(1).predict(line[0], 1, 12), line[1]);
+        assert!(bits < 8 + 4 * 12 + 6 + 11 + 80);
     }
 
     #[test]
