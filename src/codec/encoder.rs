@@ -545,13 +545,14 @@ pub fn next_state(
 ) -> ChainState {
     let mut st = arc.next_state(length_step);
     if kind == ElementKind::G1 {
-        st.twist = observed_twist(arc, before, length_step);
+        st.set_twist(observed_twist(arc, before, length_step));
     }
     if matches!(kind, ElementKind::Straight | ElementKind::Jump) {
         let turn = arc.tangent - before.tangent;
         let sin_turn = arc.tangent.cross(before.tangent).length();
         if sin_turn > 1e-12 {
             st.normal = perpendicular_part(turn, arc.tangent);
+            st.bend = st.normal;
             st.curvature = 2.0 * sin_turn / st.frame_chord(length_step);
         }
     }

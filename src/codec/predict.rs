@@ -38,10 +38,11 @@ pub struct ChainState {
     /// Chord length of the previous element, in length steps (the length
     /// residual is coded against it).
     pub chord_steps: i64,
-    /// Angle (radians) by which the prediction turns `normal` about
-    /// `tangent` before bending: the turn of the arc planes seen at the
-    /// last junction, so that a helix's arcs are predicted with its torsion.
-    pub twist: f64,
+    /// `normal` turned about `tangent` by the turn of the arc planes seen
+    /// at the last junction ([`set_twist`](Self::set_twist)): the bend the
+    /// prediction takes, so that a helix's arcs are predicted with its
+    /// torsion. Equal to `normal` until a twist is set.
+    pub bend: DVec3,
 }
 
 /// A unit vector perpendicular to the unit vector `v`, chosen
@@ -77,7 +78,7 @@ impl ChainState {
             normal: any_perpendicular(tangent),
             curvature: 0.0,
             chord_steps: 0,
-            twist: 0.0,
+            bend: any_perpendicular(tangent),
         }
     }
 
@@ -96,7 +97,7 @@ impl ChainState {
         // predicted: α ≤ π/2).
         let s = (0.5 * c * self.curvature).min(1.0);
         let co = (1.0 - s * s).sqrt();
-        let normal = self.twisted_normal();
+        let normal = self.bend;
         let u = self.tangent * co + normal * s;
         let e1 = normal * co - self.tangent * s;
         let e2 = u.cross(e1);
@@ -105,13 +106,15 @@ impl ChainState {
 }
 
 impl ChainState {
-    /// `normal` turned by `twist` about `tangent`.
-    pub fn twisted_normal(&self) -> DVec3 {
-        if self.twist == 0.0 {
-            return self.normal;
-        }
-        let (s, c) = self.twist.sin_cos();
-        self.normal * c + self.tangent.cross(self.normal) * s
+    /// Sets the predicted bend to `normal` turned by `twist` (radians)
+    /// about `tangent` (once per element, not per candidate).
+    pub fn set_twist(&mut self, twist: f64) {
+        self.bend = if twist == 0.0 {
+            self.normal
+        } else {
+            let (s, c) = twist.sin_cos();
+            self.normal * c + self.tangent.cross(self.normal) * s
+        };
     }
 }
 
@@ -273,17 +276,18 @@ impl Arc {
         } else {
             0
         };
+        let normal = if self.curvature > 0.0 {
+            self.end_normal()
+        } else {
+            self.normal
+        };
         ChainState {
             point: self.end,
             tangent: self.end_tangent(),
-            normal: if self.curvature > 0.0 {
-                self.end_normal()
-            } else {
-                self.normal
-            },
+            normal,
             curvature: self.curvature,
             chord_steps,
-            twist: 0.0,
+            bend: normal,
         }
     }
 }
