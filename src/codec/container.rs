@@ -38,7 +38,7 @@ pub const VERSION: u16 = 3;
 /// The revision of the codec's model (what the geometry streams mean). A
 /// decoder reads only its own: a stream coded by another model would
 /// decode to other curves, so it is refused by name instead.
-pub const MODEL: u8 = 5;
+pub const MODEL: u8 = 6;
 const END_MAGIC: [u8; 4] = *b"SFHE";
 const END_LEN: u64 = 12;
 /// Curves per block: the entropy models learn within a block, so larger

@@ -52,14 +52,9 @@ pub fn acceptance_tolerance(tolerance: f64, points: &[DVec3]) -> f64 {
 }
 
 impl<'a> CurveEncoder<'a> {
-    /// The start point on its grid (`None` if not codable).
+    /// The start point on its lattice (`None` if not codable).
     fn start_index(&self) -> Option<[i64; 3]> {
-        let p = self.points[0];
-        Some([
-            Quantiser::index(p.x, self.q.start)?,
-            Quantiser::index(p.y, self.q.start)?,
-            Quantiser::index(p.z, self.q.start)?,
-        ])
+        super::quantise::bcc_nearest(self.points[0], self.q.start)
     }
 
     /// Bulge estimate for an arc from `q` to `e` following input vertices

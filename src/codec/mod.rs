@@ -514,6 +514,8 @@ struct Models {
     reversed: Bit,
     ref_start: [IntModel; 3],
     has_anchor: Bit,
+    /// Parity of start differences: from an anchor, from the previous start.
+    start_parity: [Bit; 2],
     back_anchor: IntModel,
     anchor_end: Bit,
     anchor_start: [IntModel; 3],
@@ -766,7 +768,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 // `neighbours` holds this curve last; its anchors are the
                 // curves before it.
                 let before = neighbours.len() - 1;
-                let own: u64 = (0..3).map(|a| eg_bits(start[a] - prev.arc_start[a])).sum();
+                let own = lattice_bits([0, 1, 2].map(|a| start[a] - prev.arc_start[a]));
                 let anchor = if before > 0 {
                     let best = neighbours.best_anchor(*start, q_start, before);
                     let pick = best.filter(|&(_, _, bits)| bits < own);
@@ -782,14 +784,12 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                         let r = neighbours
                             .anchor(before - back, at_end, q_start)
                             .unwrap_or([0; 3]);
-                        for a in 0..3 {
-                            m.anchor_start[a].put(&mut enc, start[a] - r[a]);
-                        }
+                        let d = [0, 1, 2].map(|a| start[a] - r[a]);
+                        put_lattice(&mut enc, &mut m.start_parity[0], &mut m.anchor_start, d);
                     }
                     None => {
-                        for a in 0..3 {
-                            m.start[a].put(&mut enc, start[a] - prev.arc_start[a]);
-                        }
+                        let d = [0, 1, 2].map(|a| start[a] - prev.arc_start[a]);
+                        put_lattice(&mut enc, &mut m.start_parity[1], &mut m.start, d);
                     }
                 }
                 let (fe_pred, walk) = first_end_prediction(
@@ -983,7 +983,7 @@ pub fn decode_block(
                         bytes.len()
                     )));
                 }
-                let mut start = [0i64; 3];
+                let start;
                 let mut fe = [0i64; 3];
                 let before = neighbours.len();
                 let mut anchor = None;
@@ -997,13 +997,11 @@ pub fn decode_block(
                     let r = neighbours
                         .anchor(before - back, at_end, q.start)
                         .ok_or_else(|| bad("an anchor on an empty curve".into()))?;
-                    for a in 0..3 {
-                        start[a] = r[a].wrapping_add(m.anchor_start[a].get(&mut dec));
-                    }
+                    let d = get_lattice(&mut dec, &mut m.start_parity[0], &mut m.anchor_start);
+                    start = [0, 1, 2].map(|a| r[a].wrapping_add(d[a]));
                 } else {
-                    for a in 0..3 {
-                        start[a] = prev.arc_start[a].wrapping_add(m.start[a].get(&mut dec));
-                    }
+                    let d = get_lattice(&mut dec, &mut m.start_parity[1], &mut m.start);
+                    start = [0, 1, 2].map(|a| prev.arc_start[a].wrapping_add(d[a]));
                 }
                 let (fe_pred, walk) =
                     first_end_prediction(&neighbours, before, anchor, &prev, q.first);

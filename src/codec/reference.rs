@@ -187,19 +187,15 @@ impl Neighbours {
         Some((end, middle.unwrap_or(end)))
     }
 
-    /// Curve `k`'s start (or end) on the grid of step `step`.
-    pub fn anchor(&self, k: usize, at_end: bool, step: f64) -> Option<[i64; 3]> {
+    /// Curve `k`'s start (or end) on the starts' lattice of half step
+    /// `half`.
+    pub fn anchor(&self, k: usize, at_end: bool, half: f64) -> Option<[i64; 3]> {
         let (a, b) = self.ends.get(k).copied().flatten()?;
-        let p = if at_end { b } else { a };
-        let limit = (1u64 << super::entropy::MAX_BITS) as f64;
-        let v = [p.x / step, p.y / step, p.z / step].map(f64::round);
-        v.iter()
-            .all(|x| x.is_finite() && x.abs() < limit)
-            .then(|| v.map(|x| x as i64))
+        bcc_nearest(if at_end { b } else { a }, half)
     }
 
     /// The anchor among the [`MAX_BACK`] curves before curve `k` (their
-    /// starts and ends) nearest to `start` (on the grid of step `step`):
+    /// starts and ends) nearest to `start` (on the lattice of half step `step`):
     /// `(back, at_end, estimated bits)`.
     pub fn best_anchor(&self, start: [i64; 3], step: f64, k: usize) -> Option<(usize, bool, u64)> {
         let mut best: Option<(usize, bool, u64)> = None;
@@ -208,7 +204,9 @@ impl Neighbours {
                 let Some(r) = self.anchor(k - back, at_end, step) else {
                     continue;
                 };
-                let bits = 6 + (0..3).map(|a| eg(start[a].wrapping_sub(r[a]))).sum::<u64>();
+                // A lattice difference: its parity, then halves.
+                let d = [0, 1, 2].map(|a| start[a].wrapping_sub(r[a]));
+                let bits = 7 + (0..3).map(|a| eg((d[a] - (d[0] & 1)) / 2)).sum::<u64>();
                 if best.is_none_or(|b| bits < b.2) {
                     best = Some((back, at_end, bits));
                 }
