@@ -666,7 +666,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     let mut decoded = Vec::with_capacity(if keep { curves.len() } else { 0 });
     let mut n_elements = 0;
     // The block's decoded curves: the references.
-    let mut neighbours = Neighbours::new(grid_step, curves.len());
+    let mut neighbours = Neighbours::new(grid_step, q_start, curves.len());
     for (points, opt) in curves.iter().zip(options) {
         // The choice, in order: a points-mode curve may lean on those before.
         let (code, n) = choose(points.as_ref(), opt, &mut neighbours, &prev);
@@ -770,7 +770,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 let before = neighbours.len() - 1;
                 let own = lattice_bits([0, 1, 2].map(|a| start[a] - prev.arc_start[a]));
                 let anchor = if before > 0 {
-                    let best = neighbours.best_anchor(*start, q_start, before);
+                    let best = neighbours.best_anchor(*start, before);
                     let pick = best.filter(|&(_, _, bits)| bits < own);
                     enc.bit(&mut m.has_anchor, pick.is_some());
                     pick
@@ -782,7 +782,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                         m.back_anchor.put_unsigned(&mut enc, back as u64 - 1);
                         enc.bit(&mut m.anchor_end, at_end);
                         let r = neighbours
-                            .anchor(before - back, at_end, q_start)
+                            .anchor(before - back, at_end)
                             .unwrap_or([0; 3]);
                         let d = [0, 1, 2].map(|a| start[a] - r[a]);
                         put_lattice(&mut enc, &mut m.start_parity[0], &mut m.anchor_start, d);
@@ -873,7 +873,7 @@ pub fn decode_block(
     // only trusted as far as the points it actually decodes.
     let mut out = Vec::with_capacity(count.min(1 << 16));
     // Decoded curves on the points grid, for points-mode references.
-    let mut neighbours = Neighbours::new(grid, count);
+    let mut neighbours = Neighbours::new(grid, q.start, count);
     for curve in 0..count {
         let bad = |why: String| DecodeError::Curve { curve, why };
         let mut pushed = false;
@@ -995,7 +995,7 @@ pub fn decode_block(
                         return Err(bad(format!("anchor {back} curves back")));
                     }
                     let r = neighbours
-                        .anchor(before - back, at_end, q.start)
+                        .anchor(before - back, at_end)
                         .ok_or_else(|| bad("an anchor on an empty curve".into()))?;
                     let d = get_lattice(&mut dec, &mut m.start_parity[0], &mut m.anchor_start);
                     start = [0, 1, 2].map(|a| r[a].wrapping_add(d[a]));

@@ -111,16 +111,23 @@ pub struct Neighbours {
     /// First and last decoded point of each curve (none when empty): the
     /// anchors an arcs curve's start may be coded against.
     ends: Vec<Option<(DVec3, DVec3)>>,
+    /// Half step of the starts' lattice, and each curve's first and last
+    /// decoded point on it (computed once per curve: every arcs curve
+    /// costs its start against 64 of them).
+    start_half: f64,
+    anchors: Vec<[Option<[i64; 3]>; 2]>,
 }
 
 impl Neighbours {
-    pub fn new(half: f64, capacity: usize) -> Self {
+    pub fn new(half: f64, start_half: f64, capacity: usize) -> Self {
         Neighbours {
             half,
             grids: Vec::with_capacity(capacity),
             points: Vec::with_capacity(capacity),
             gridded: Vec::with_capacity(capacity),
             ends: Vec::with_capacity(capacity),
+            start_half,
+            anchors: Vec::with_capacity(capacity),
         }
     }
 
@@ -132,7 +139,7 @@ impl Neighbours {
     /// A points curve, on the lattice (its points are `k · half`).
     pub fn push_lattice(&mut self, g: Vec<[i64; 3]>) {
         let p: Vec<DVec3> = g.iter().map(|&k| bcc_point(k, self.half)).collect();
-        self.ends.push(match (p.first(), p.last()) {
+        self.push_ends(match (p.first(), p.last()) {
             (Some(&a), Some(&b)) => Some((a, b)),
             _ => None,
         });
@@ -187,21 +194,28 @@ impl Neighbours {
         Some((end, middle.unwrap_or(end)))
     }
 
-    /// Curve `k`'s start (or end) on the starts' lattice of half step
-    /// `half`.
-    pub fn anchor(&self, k: usize, at_end: bool, half: f64) -> Option<[i64; 3]> {
-        let (a, b) = self.ends.get(k).copied().flatten()?;
-        bcc_nearest(if at_end { b } else { a }, half)
+    fn push_ends(&mut self, ends: Option<(DVec3, DVec3)>) {
+        let h = self.start_half;
+        self.anchors.push(match ends {
+            Some((a, b)) if h > 0.0 => [bcc_nearest(a, h), bcc_nearest(b, h)],
+            _ => [None, None],
+        });
+        self.ends.push(ends);
+    }
+
+    /// Curve `k`'s start (or end) on the starts' lattice.
+    pub fn anchor(&self, k: usize, at_end: bool) -> Option<[i64; 3]> {
+        self.anchors.get(k)?[at_end as usize]
     }
 
     /// The anchor among the [`MAX_BACK`] curves before curve `k` (their
-    /// starts and ends) nearest to `start` (on the lattice of half step `step`):
+    /// starts and ends) nearest to `start` (on the starts' lattice):
     /// `(back, at_end, estimated bits)`.
-    pub fn best_anchor(&self, start: [i64; 3], step: f64, k: usize) -> Option<(usize, bool, u64)> {
+    pub fn best_anchor(&self, start: [i64; 3], k: usize) -> Option<(usize, bool, u64)> {
         let mut best: Option<(usize, bool, u64)> = None;
         for back in 1..=MAX_BACK.min(k) {
             for at_end in [false, true] {
-                let Some(r) = self.anchor(k - back, at_end, step) else {
+                let Some(r) = self.anchor(k - back, at_end) else {
                     continue;
                 };
                 // A lattice difference: its parity, then halves.
@@ -228,14 +242,14 @@ impl Neighbours {
         self.grids.push(g);
         self.gridded.push(true);
         self.points.push(None);
-        self.ends.push(None);
+        self.push_ends(None);
         self.forget_old();
     }
 
     /// A curve by its decoded points.
     pub fn push_points(&mut self, p: Vec<DVec3>) {
         self.grids.push(Vec::new());
-        self.ends.push(match (p.first(), p.last()) {
+        self.push_ends(match (p.first(), p.last()) {
             (Some(&a), Some(&b)) => Some((a, b)),
             _ => None,
         });
