@@ -69,11 +69,18 @@ fn main() {
         path.file_name().unwrap().to_string_lossy(), bytes as f64 * 8.0 / npts as f64, kinds,
         out_pts as f64 / npts as f64, npts as f64 / dt_enc / 1e6, out_pts as f64 / dt_dec / 1e6
     );
-    println!("  {elements} arc elements ({:.2} input points each)", npts as f64 / elements.max(1) as f64);
+    println!(
+        "  {elements} arc elements ({:.2} input points each)",
+        npts as f64 / elements.max(1) as f64
+    );
     let total: f64 = tally.iter().sum();
     for (name, bits) in FIELDS.iter().zip(&tally) {
         if *bits > 0.0 {
-            println!("  {name:>16}: {:>10.0} B {:>5.1} %", bits / 8.0, 100.0 * bits / total);
+            println!(
+                "  {name:>16}: {:>10.0} B {:>5.1} %",
+                bits / 8.0,
+                100.0 * bits / total
+            );
         }
     }
 }

@@ -348,7 +348,12 @@ fn a_version_2_development_container_is_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
     let back = dir.path().join("back.tck");
     for args in [
-        vec!["decompress", v2.to_str().unwrap(), "-o", back.to_str().unwrap()],
+        vec![
+            "decompress",
+            v2.to_str().unwrap(),
+            "-o",
+            back.to_str().unwrap(),
+        ],
         vec!["inspect", v2.to_str().unwrap()],
     ] {
         let out = strandfit(&args);

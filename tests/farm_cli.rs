@@ -417,7 +417,15 @@ fn dropped_data_are_named_and_strict_refuses() {
     );
     let e = fails(
         &[
-            &["compress", s(&trk), "--tolerance", "0.5", "-o", s(&sfh), "--strict"][..],
+            &[
+                "compress",
+                s(&trk),
+                "--tolerance",
+                "0.5",
+                "-o",
+                s(&sfh),
+                "--strict",
+            ][..],
             &v1[..],
         ]
         .concat(),
@@ -592,7 +600,9 @@ fn per_point_values_come_back_on_the_decoded_points() {
                     DVec3::new(r * a.cos() + k as f64, r * a.sin(), pitch * a)
                 })
                 .collect();
-            let point_data = (0..200).flat_map(|i| [i as f32 * step as f32, 7.5]).collect();
+            let point_data = (0..200)
+                .flat_map(|i| [i as f32 * step as f32, 7.5])
+                .collect();
             Curve {
                 id: None,
                 points,
@@ -609,7 +619,15 @@ fn per_point_values_come_back_on_the_decoded_points() {
     let tol = 0.1;
     let sfh = dir.path().join("s.sfh");
     let back = dir.path().join("back.trk");
-    ok(&["compress", s(&trk), "--tolerance", "0.1", "-o", s(&sfh), "--strict"]);
+    ok(&[
+        "compress",
+        s(&trk),
+        "--tolerance",
+        "0.1",
+        "-o",
+        s(&sfh),
+        "--strict",
+    ]);
     let e = stderr(&ok(&["decompress", s(&sfh), "-o", s(&back)]));
     assert!(!e.contains("warning"), "{e}");
     let (m, got) = read_all(&back, None).unwrap();
@@ -622,11 +640,18 @@ fn per_point_values_come_back_on_the_decoded_points() {
         for (j, q) in b.points.iter().enumerate() {
             // Arc length of the input point nearest q (the input is dense).
             let i = (0..a.points.len())
-                .min_by(|&x, &y| a.points[x].distance(*q).total_cmp(&a.points[y].distance(*q)))
+                .min_by(|&x, &y| {
+                    a.points[x]
+                        .distance(*q)
+                        .total_cmp(&a.points[y].distance(*q))
+                })
                 .unwrap();
             let s_near = i as f64 * step;
             let v = b.point_data[2 * j] as f64;
-            assert!((v - s_near).abs() <= step + tol, "curve {k} point {j}: {v} vs {s_near}");
+            assert!(
+                (v - s_near).abs() <= step + tol,
+                "curve {k} point {j}: {v} vs {s_near}"
+            );
             assert_eq!(b.point_data[2 * j + 1], 7.5);
         }
     }

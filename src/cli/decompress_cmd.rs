@@ -101,12 +101,7 @@ fn output_writer(
         Some(f) => f,
         None => Format::from_path(&args.output)?,
     };
-    check_losses(
-        &args.input,
-        &args.output,
-        &target.losses(meta),
-        args.strict,
-    )?;
+    check_losses(&args.input, &args.output, &target.losses(meta), args.strict)?;
     Ok(create_writer(&args.output, Some(target), meta)?)
 }
 

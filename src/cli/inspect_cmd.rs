@@ -263,7 +263,12 @@ fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
         println!(
             "  source          {}{}, units {}",
             header.source.format,
-            header.source.file.as_deref().map(|f| format!(" ({f})")).unwrap_or_default(),
+            header
+                .source
+                .file
+                .as_deref()
+                .map(|f| format!(" ({f})"))
+                .unwrap_or_default(),
             header.source.units.as_deref().unwrap_or("unknown")
         );
         println!(

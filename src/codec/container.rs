@@ -295,7 +295,10 @@ impl Cursor<'_> {
     fn count(&mut self) -> Result<usize, String> {
         let n = self.varint()?;
         if n > (self.b.len() - self.pos) as u64 {
-            return Err(format!("a count of {n} in {} bytes", self.b.len() - self.pos));
+            return Err(format!(
+                "a count of {n} in {} bytes",
+                self.b.len() - self.pos
+            ));
         }
         Ok(n as usize)
     }
@@ -432,7 +435,12 @@ pub fn encode_block_bytes(
         for (c, out) in curves.iter().zip(&encoded.decoded) {
             put_varint(&mut side, out.len() as u64);
             point_counts.push(out.len());
-            all.extend(super::point_data::carry(c.points, c.point_data, n_point_data, out));
+            all.extend(super::point_data::carry(
+                c.points,
+                c.point_data,
+                n_point_data,
+                out,
+            ));
         }
         for plane in 0..4 {
             side.extend(all.iter().map(|v| v.to_le_bytes()[plane]));
@@ -699,7 +707,9 @@ impl CodecReader {
             first += curves;
         }
         if c.pos != idx.len() || at != index_at {
-            return Err(bad_index("the index does not account for the blocks".into()));
+            return Err(bad_index(
+                "the index does not account for the blocks".into(),
+            ));
         }
         Ok(CodecReader {
             path: path.to_path_buf(),
@@ -764,7 +774,7 @@ impl CodecReader {
         }
         if s_raw > MAX_SECTION as u64 || g.checked_add(s) != Some((body.len() - c.pos) as u64) {
             return Err(err(
-                "block lengths do not add up to the block (corrupt file)".into()
+                "block lengths do not add up to the block (corrupt file)".into(),
             ));
         }
         let geometry = body[c.pos..c.pos + g as usize].to_vec();
@@ -865,7 +875,10 @@ impl RawBlock {
             if left != 4 * total {
                 return Err(err(
                     self.first,
-                    format!("side data: {left} bytes of per-point values where {} are due", 4 * total),
+                    format!(
+                        "side data: {left} bytes of per-point values where {} are due",
+                        4 * total
+                    ),
                 ));
             }
             let planes = &side[c.pos..];

@@ -393,7 +393,11 @@ fn own_prediction(g: &[[i64; 3]], k: usize, helix: bool) -> [i64; 3] {
 /// are (nearly) collinear and the rotation is undefined.
 fn helix_prediction(g: &[[i64; 3]], k: usize) -> Option<[i64; 3]> {
     let v = |i: usize| DVec3::new(g[i][0] as f64, g[i][1] as f64, g[i][2] as f64);
-    let (d0, d1, d2) = (v(k - 3) - v(k - 4), v(k - 2) - v(k - 3), v(k - 1) - v(k - 2));
+    let (d0, d1, d2) = (
+        v(k - 3) - v(k - 4),
+        v(k - 2) - v(k - 3),
+        v(k - 1) - v(k - 2),
+    );
     let frame = |a: DVec3, b: DVec3| -> Option<glam::DMat3> {
         let n = a.cross(b);
         let (la, ln) = (a.length(), n.length());
@@ -589,8 +593,19 @@ fn kind_of(code: &CurveCode) -> u8 {
 
 /// The fields of a block's stream, for [`encode_block_tallied`].
 pub const FIELDS: [&str; 13] = [
-    "curve kind", "count", "start", "first end", "first bulge", "element kind",
-    "length", "offset", "bulge", "jump", "points start", "points residual", "raw",
+    "curve kind",
+    "count",
+    "start",
+    "first end",
+    "first bulge",
+    "element kind",
+    "length",
+    "offset",
+    "bulge",
+    "jump",
+    "points start",
+    "points residual",
+    "raw",
 ];
 
 /// Encodes curves into one block (curves fitted in parallel, then coded in
@@ -781,9 +796,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                     Some((back, at_end, _)) => {
                         m.back_anchor.put_unsigned(&mut enc, back as u64 - 1);
                         enc.bit(&mut m.anchor_end, at_end);
-                        let r = neighbours
-                            .anchor(before - back, at_end)
-                            .unwrap_or([0; 3]);
+                        let r = neighbours.anchor(before - back, at_end).unwrap_or([0; 3]);
                         let d = [0, 1, 2].map(|a| start[a] - r[a]);
                         put_lattice(&mut enc, &mut m.start_parity[0], &mut m.anchor_start, d);
                     }
@@ -928,7 +941,8 @@ pub fn decode_block(
                     };
                     let grids = neighbours.window();
                     let at_back = |b: usize| &grids[grids.len() - b][..];
-                    if at_back(first.0).len() < 2 || second.is_some_and(|(b, _)| at_back(b).len() < 2)
+                    if at_back(first.0).len() < 2
+                        || second.is_some_and(|(b, _)| at_back(b).len() < 2)
                     {
                         return Err(bad("a reference of fewer than two points".into()));
                     }

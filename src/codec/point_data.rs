@@ -52,9 +52,16 @@ pub fn carry(input: &[DVec3], values: &[f32], width: usize, output: &[DVec3]) ->
         }
         seg = best_seg;
         previous = Some(q);
-        let (a, b) = (&values[seg * width..][..width], &values[(seg + 1) * width..][..width]);
+        let (a, b) = (
+            &values[seg * width..][..width],
+            &values[(seg + 1) * width..][..width],
+        );
         let t = best_t as f32;
-        out.extend(a.iter().zip(b).map(|(&x, &y)| if t == 0.0 { x } else { x + (y - x) * t }));
+        out.extend(
+            a.iter()
+                .zip(b)
+                .map(|(&x, &y)| if t == 0.0 { x } else { x + (y - x) * t }),
+        );
     }
     out
 }
@@ -89,7 +96,11 @@ mod tests {
         let got = carry(&input, &values, 2, &output);
         assert_eq!(got.len(), 12);
         for (k, o) in output.iter().enumerate() {
-            assert!((got[2 * k] as f64 - o.x).abs() < 1e-6, "{k}: {}", got[2 * k]);
+            assert!(
+                (got[2 * k] as f64 - o.x).abs() < 1e-6,
+                "{k}: {}",
+                got[2 * k]
+            );
             assert!((got[2 * k + 1] as f64 + 2.0 * o.x).abs() < 1e-5);
         }
         // Identity: the input's own points get the input's own values.
@@ -103,7 +114,11 @@ mod tests {
         let mut input: Vec<DVec3> = (0..=10).map(|k| DVec3::new(k as f64, 0.0, 0.0)).collect();
         input.extend((0..=10).rev().map(|k| DVec3::new(k as f64, 0.3, 0.0)));
         let values: Vec<f32> = (0..input.len()).map(|k| k as f32).collect();
-        let output: Vec<DVec3> = input.iter().step_by(3).map(|p| *p + DVec3::new(0.0, 0.1, 0.0)).collect();
+        let output: Vec<DVec3> = input
+            .iter()
+            .step_by(3)
+            .map(|p| *p + DVec3::new(0.0, 0.1, 0.0))
+            .collect();
         let got = carry(&input, &values, 1, &output);
         for w in got.windows(2) {
             assert!(w[1] > w[0], "values run backwards: {got:?}");
@@ -114,7 +129,10 @@ mod tests {
     fn degenerate_inputs() {
         assert!(carry(&[], &[], 1, &[DVec3::ZERO]).is_empty());
         let one = [DVec3::ONE];
-        assert_eq!(carry(&one, &[7.0], 1, &[DVec3::ZERO, DVec3::X]), vec![7.0, 7.0]);
+        assert_eq!(
+            carry(&one, &[7.0], 1, &[DVec3::ZERO, DVec3::X]),
+            vec![7.0, 7.0]
+        );
         assert!(carry(&one, &[], 0, &[DVec3::ZERO]).is_empty());
     }
 }

@@ -53,7 +53,6 @@ impl Default for Steps {
     }
 }
 
-
 /// Steps in the data's units for one tolerance.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Quantiser {

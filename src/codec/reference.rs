@@ -173,7 +173,12 @@ impl Neighbours {
     /// [`walk`](Self::walk), and the first vertex at or beyond half the
     /// distance (relative to the same first point): the walked stretch's
     /// middle, from which its bulge is estimated.
-    pub fn walk_with_middle(&self, k: usize, at_end: bool, distance: f64) -> Option<(DVec3, DVec3)> {
+    pub fn walk_with_middle(
+        &self,
+        k: usize,
+        at_end: bool,
+        distance: f64,
+    ) -> Option<(DVec3, DVec3)> {
         let p = self.points.get(k)?.as_ref()?;
         if p.len() < 2 {
             return None;

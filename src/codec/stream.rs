@@ -10,7 +10,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::container::{
-    encode_block_bytes, BlockBytes, CurveIn, DecodedCurve, CodecHeader, CodecReader, CodecWriter,
+    encode_block_bytes, BlockBytes, CodecHeader, CodecReader, CodecWriter, CurveIn, DecodedCurve,
     BLOCK_CURVES,
 };
 use crate::io::{Curve, CurveReader, CurveWriter, IoError};

@@ -266,8 +266,16 @@ fn helix_prediction_continues_a_helix_where_second_order_misses() {
         let screw = own_prediction(&g, k, true);
         let linear = own_prediction(&g, k, false);
         let miss = |p: [i64; 3]| (0..3).map(|a| (g[k][a] - p[a]).abs()).max().unwrap();
-        assert!(miss(screw) <= 6, "point {k}: screw misses by {}", miss(screw));
-        assert!(miss(linear) > 300, "point {k}: second order misses by {}", miss(linear));
+        assert!(
+            miss(screw) <= 6,
+            "point {k}: screw misses by {}",
+            miss(screw)
+        );
+        assert!(
+            miss(linear) > 300,
+            "point {k}: second order misses by {}",
+            miss(linear)
+        );
     }
     // Collinear steps have no rotation: second order stands in.
     let line: Vec<[i64; 3]> = (0..8).map(|k| [2 * k, 4 * k, 6 * k]).collect();
@@ -305,6 +313,13 @@ fn coarse_curls_are_coded_by_screw_prediction_and_smaller() {
     });
     // (Measured: 1118 bits against 1920; the lattice's rounding, ±T on a
     // radius of 30 T, is what the screw still misses by.)
-    assert!(screw * 10 < linear * 7, "screw {screw} bits, second order {linear}");
-    assert!((block.bytes.len() as u64) * 8 < linear, "{} bytes", block.bytes.len());
+    assert!(
+        screw * 10 < linear * 7,
+        "screw {screw} bits, second order {linear}"
+    );
+    assert!(
+        (block.bytes.len() as u64) * 8 < linear,
+        "{} bytes",
+        block.bytes.len()
+    );
 }
