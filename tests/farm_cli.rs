@@ -395,41 +395,20 @@ fn dropped_data_are_named_and_strict_refuses() {
     // The default container keeps both; a version-1 container keeps
     // per-curve data, not per-point data.
     let sfh = dir.path().join("x.sfh");
-    let e = stderr(&ok(&[
-        "compress",
-        s(&trk),
-        "--tolerance",
-        "0.5",
-        "-o",
-        s(&sfh),
-        "--strict",
-    ]));
+    let compress = |extra: &[&'static str]| {
+        let mut args = vec!["compress", s(&trk), "--tolerance", "0.5", "-o", s(&sfh)];
+        args.extend_from_slice(extra);
+        args
+    };
+    let e = stderr(&ok(&compress(&["--strict"])));
     assert!(!e.contains("warning"), "{e}");
     let v1 = ["--distance", "ordered"];
-    let e = stderr(&ok(&[
-        &["compress", s(&trk), "--tolerance", "0.5", "-o", s(&sfh)][..],
-        &v1[..],
-    ]
-    .concat()));
+    let e = stderr(&ok(&compress(&v1)));
     assert!(
         e.contains("per-point data") && !e.contains("per-curve data"),
         "{e}"
     );
-    let e = fails(
-        &[
-            &[
-                "compress",
-                s(&trk),
-                "--tolerance",
-                "0.5",
-                "-o",
-                s(&sfh),
-                "--strict",
-            ][..],
-            &v1[..],
-        ]
-        .concat(),
-    );
+    let e = fails(&compress(&["--strict", v1[0], v1[1]]));
     assert!(e.contains("`fa`"), "{e}");
     // And decompressing to a format without per-curve data says so.
     let sfh2 = dir.path().join("y.sfh");

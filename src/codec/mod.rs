@@ -511,9 +511,10 @@ struct Models {
     /// Own prediction by screw continuation ([`helix_prediction`]).
     helix: Bit,
     point_start: [IntModel; 3],
-    /// Parity of lattice differences: reference start, reference
-    /// residual, own start, own residual.
-    parity: [Bit; 4],
+    /// Parity of lattice differences of a points curve's start: from its
+    /// reference's, from the previous points curve's (the residuals'
+    /// parities are in their context sets).
+    parity: [Bit; 2],
     back: IntModel,
     reversed: Bit,
     ref_start: [IntModel; 3],
@@ -752,7 +753,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                     None => {
                         enc.bit(&mut m.helix, *helix);
                         let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
-                        put_lattice(&mut enc, &mut m.parity[2], &mut m.point_start, d);
+                        put_lattice(&mut enc, &mut m.parity[1], &mut m.point_start, d);
                         enc.set_tag(11);
                         let mut ctx = RESIDUAL_CONTEXTS - 1;
                         for k in 1..grid.len() {
@@ -966,7 +967,7 @@ pub fn decode_block(
                     }
                 } else {
                     let helix = dec.bit(&mut m.helix);
-                    let d = get_lattice(&mut dec, &mut m.parity[2], &mut m.point_start);
+                    let d = get_lattice(&mut dec, &mut m.parity[1], &mut m.point_start);
                     g.push([0, 1, 2].map(|a| prev.point_start[a].wrapping_add(d[a])));
                     let mut ctx = RESIDUAL_CONTEXTS - 1;
                     for k in 1..n {
