@@ -12,6 +12,7 @@
 //! | `evaluate`    | `helix_eval.wgsl` (piecewise helices → points and tangents) |
 //! | `sample`      | `spline_sample.wgsl` (arc-length tables and inversion on the GPU; splines with cusps fall back to the `f64` reference) |
 //! | `integrate`   | `frenet_integrate.wgsl` (Euler spirals: end point and frame, or samples) |
+//! | `compress`    | `arc_check.wgsl`: the codec's candidate elements of all curves of a block checked together, a batch per round of the search; unsure verdicts (within rounding of the tolerance) and the entropy coding stay on the CPU, so the container is the same bytes |
 
 use std::sync::OnceLock;
 
@@ -19,6 +20,7 @@ use rayon::prelude::*;
 
 use crate::euler::{FrenetEnd, FrenetError, FrenetProblem};
 use crate::fit::{fit_splines, relaxed_pairs, FitError, FitOptions, FitScratch};
+use crate::gpu::arc_check::{ArcCheckGpu, GpuArcChecker};
 use crate::gpu::atph::AtphGpu;
 use crate::gpu::frenet::{FrenetGpu, SpiralSamples};
 use crate::gpu::ghosh::GhoshGpu;
@@ -63,6 +65,7 @@ pub struct GpuEngine {
     frenet: OnceLock<FrenetGpu>,
     spline_sample: OnceLock<SplineSampleGpu>,
     atph: OnceLock<AtphGpu>,
+    arc_check: OnceLock<ArcCheckGpu>,
 }
 
 impl GpuEngine {
@@ -85,6 +88,7 @@ impl GpuEngine {
             frenet: OnceLock::new(),
             spline_sample: OnceLock::new(),
             atph: OnceLock::new(),
+            arc_check: OnceLock::new(),
         })
     }
 
@@ -124,6 +128,15 @@ impl GpuEngine {
         Ok(self.atph.get_or_init(|| k))
     }
 
+    /// The codec's acceptance-test kernel (compiled once).
+    pub fn arc_check(&self) -> Result<&ArcCheckGpu, GpuError> {
+        if let Some(k) = self.arc_check.get() {
+            return Ok(k);
+        }
+        let k = ArcCheckGpu::new(&self.ctx, self.precision)?;
+        Ok(self.arc_check.get_or_init(|| k))
+    }
+
     /// The Frenet–Serret kernel (compiled once).
     pub fn frenet(&self) -> Result<&FrenetGpu, GpuError> {
         if let Some(k) = self.frenet.get() {
@@ -149,6 +162,20 @@ const FIT_BATCH_CURVES: usize = 1 << 15;
 const EVAL_BATCH_SAMPLES: usize = 1 << 22;
 
 impl Backend {
+    /// Where the codec checks its candidate elements: `None` on the CPU
+    /// (each curve's search checks its own, in parallel over curves), the
+    /// `arc_check` kernel on the GPU (all curves of a block together, one
+    /// batch per round; [`crate::codec::batch`]). Both give the same bytes.
+    pub fn arc_checker(&self) -> Result<Option<GpuArcChecker<'_>>, GpuError> {
+        match self {
+            Backend::Cpu => Ok(None),
+            Backend::Gpu(e) => Ok(Some(GpuArcChecker {
+                kernel: e.arc_check()?,
+                ctx: &e.ctx,
+            })),
+        }
+    }
+
     /// Open the backend the user chose. `auto` never fails: without an
     /// adapter it uses the CPU ([`Backend::open_explained`] says why).
     pub fn open(choice: BackendChoice, precision: PrecisionChoice) -> Result<Backend, GpuError> {

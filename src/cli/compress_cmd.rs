@@ -14,6 +14,8 @@ use super::inspect_cmd::parse_format;
 use super::io_util::{check_losses, report_skipped, write_failed, DelayedBar};
 use super::{CompressArgs, DistanceArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
+use crate::backend::Backend;
+use crate::codec::batch::ArcChecker;
 use crate::compress::{compress_curve, CompressOptions};
 use crate::io::container::{ContainerWriter, Header, Shape, SourceMeta, Storage, StoredCurve};
 use crate::io::{
@@ -62,9 +64,25 @@ pub struct CompressReport {
     pub dropped: Vec<String>,
     pub seconds: f64,
     pub curves_per_second: f64,
+    /// The candidate checks the GPU backend ran (`--backend gpu` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu_checks: Option<GpuChecks>,
 }
 
-pub fn run(args: &CompressArgs) -> Result<()> {
+/// What `compress --backend gpu` did on the GPU.
+#[derive(Debug, Default, Serialize)]
+pub struct GpuChecks {
+    /// Candidate elements checked on the GPU.
+    pub candidates: u64,
+    /// Batches (rounds of the search), summed over blocks.
+    pub rounds: u64,
+    /// Verdicts within rounding of the tolerance, decided by the CPU.
+    pub unsure: u64,
+    /// Blocks the GPU could not take (finished on the CPU).
+    pub blocks_on_cpu: u64,
+}
+
+pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
     if args.distance == DistanceArg::Hausdorff {
         let v1_only = [
             (args.elements.is_some(), "--elements"),
@@ -77,7 +95,7 @@ pub fn run(args: &CompressArgs) -> Result<()> {
                  Fréchet distance: add --distance ordered (or frechet)"
             );
         }
-        return run_codec(args);
+        return run_codec(args, backend);
     }
     let count = match (args.tolerance, args.elements, args.element_length) {
         (Some(t), None, None) => ElementCount::Tolerance(t),
@@ -296,7 +314,7 @@ fn open_input(
 /// `compress` with the arc codec into a version-3 container: every curve
 /// within `--tolerance` in the two-sided Hausdorff distance at default
 /// decompression.
-fn run_codec(args: &CompressArgs) -> Result<()> {
+fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
     use crate::codec::container::CodecHeader;
     use crate::codec::stream::compress_stream;
 
@@ -316,9 +334,16 @@ fn run_codec(args: &CompressArgs) -> Result<()> {
         meta.point_data_names.clone(),
     );
     let mut bar = DelayedBar::new(meta.count);
-    let summary = compress_stream(&mut *reader, &args.input, &args.output, &header, &mut |n| {
-        bar.set(n)
-    })
+    let checker = backend.arc_checker()?;
+    let checker = checker.as_ref().map(|c| c as &dyn ArcChecker);
+    let summary = compress_stream(
+        &mut *reader,
+        &args.input,
+        &args.output,
+        &header,
+        checker,
+        &mut |n| bar.set(n),
+    )
     .map_err(|mut e| {
         // An error about the input names its curve as counted in the
         // input, skipped curves included.
@@ -361,6 +386,12 @@ fn run_codec(args: &CompressArgs) -> Result<()> {
         dropped,
         seconds,
         curves_per_second: summary.curves as f64 / seconds.max(1e-9),
+        gpu_checks: matches!(backend, Backend::Gpu(_)).then_some(GpuChecks {
+            candidates: summary.batch_checked,
+            rounds: summary.batch_rounds,
+            unsure: summary.batch_unsure,
+            blocks_on_cpu: summary.batch_fallbacks,
+        }),
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -382,6 +413,13 @@ fn run_codec(args: &CompressArgs) -> Result<()> {
             report.verbatim,
             report.curves_per_second
         );
+        if let Some(g) = &report.gpu_checks {
+            eprintln!(
+                "GPU: {} candidate elements checked in {} rounds, {} too near the tolerance \
+                 (decided on the CPU), {} blocks on the CPU",
+                g.candidates, g.rounds, g.unsure, g.blocks_on_cpu
+            );
+        }
     }
     Ok(())
 }

@@ -30,7 +30,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::quantise::Steps;
-use super::{decode_block, encode_block, CodecParams, EncodedBlock};
+use super::{decode_block, CodecParams, EncodedBlock};
 use crate::io::container::{SourceMeta, MAGIC};
 use crate::io::{AtomicFile, IoError};
 
@@ -379,6 +379,19 @@ pub fn encode_block_bytes(
     n_curve_data: usize,
     n_point_data: usize,
 ) -> Result<BlockBytes, (usize, String)> {
+    encode_block_bytes_on(curves, params, n_curve_data, n_point_data, None)
+}
+
+/// [`encode_block_bytes`], the candidate elements checked in batches on
+/// `checker` where one is given (the same bytes;
+/// [`super::encode_block_on`]).
+pub fn encode_block_bytes_on(
+    curves: &[CurveIn],
+    params: &CodecParams,
+    n_curve_data: usize,
+    n_point_data: usize,
+    checker: Option<&dyn super::batch::ArcChecker>,
+) -> Result<BlockBytes, (usize, String)> {
     for (k, c) in curves.iter().enumerate() {
         if c.curve_data.len() != n_curve_data {
             return Err((
@@ -401,12 +414,7 @@ pub fn encode_block_bytes(
         }
     }
     let pts: Vec<&[DVec3]> = curves.iter().map(|c| c.points).collect();
-    let encode = if n_point_data > 0 {
-        super::encode_block_keeping
-    } else {
-        encode_block
-    };
-    let encoded = encode(&pts, params).map_err(|e| match e {
+    let encoded = super::encode_block_on(&pts, params, n_point_data > 0, checker).map_err(|e| match e {
         super::EncodeError::NonFinite { curve, point } => {
             (curve, format!("point {point} is not finite"))
         }

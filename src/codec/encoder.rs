@@ -30,6 +30,10 @@ pub struct CurveEncoder<'a> {
     pub tol2: f64,
     /// Points-mode lattice half step.
     pub grid: f64,
+    /// Where candidates are checked in batches (the GPU backend): each
+    /// check waits there for a verdict ([`super::batch`]); `None` checks
+    /// at once on this thread.
+    pub mailbox: Option<&'a super::batch::Mailbox>,
 }
 
 /// A checked candidate element.
@@ -77,8 +81,27 @@ impl<'a> CurveEncoder<'a> {
     }
 
     /// Accepts `arc` for input vertices `(from, to]` if the two-sided test
-    /// passes; returns its decoder samples.
-    fn accept(&self, arc: &Arc, from: usize, to: usize) -> Option<Vec<DVec3>> {
+    /// passes; returns its decoder samples. With a mailbox the test is
+    /// asked there first: a sure verdict is the reference's
+    /// ([`crate::twin::arc_check`]), an unsure one is decided here.
+    async fn accept(&self, arc: &Arc, from: usize, to: usize) -> Option<Vec<DVec3>> {
+        if let Some(mailbox) = self.mailbox {
+            match mailbox.ask(super::batch::CheckRequest { arc: *arc, from, to }).await {
+                super::batch::Verdict::Fail => return None,
+                super::batch::Verdict::Pass => {
+                    let mut samples = Vec::with_capacity(8);
+                    arc.sample_into(self.q.sagitta, &mut samples);
+                    return Some(samples);
+                }
+                super::batch::Verdict::Unsure => {}
+            }
+        }
+        self.accept_now(arc, from, to)
+    }
+
+    /// The reference acceptance test ([`accept`](Self::accept)), here and
+    /// now.
+    pub fn accept_now(&self, arc: &Arc, from: usize, to: usize) -> Option<Vec<DVec3>> {
         let mut samples = Vec::with_capacity(8);
         samples.push(arc.start);
         arc.sample_into(self.q.sagitta, &mut samples);
@@ -102,7 +125,7 @@ impl<'a> CurveEncoder<'a> {
     /// to the nearest step first, then to the other neighbour: a coarse
     /// length step slides the end along the curve, and one of the two
     /// usually stays within the input.
-    fn candidate(
+    async fn candidate(
         &self,
         state: &ChainState,
         from: usize,
@@ -118,14 +141,17 @@ impl<'a> CurveEncoder<'a> {
             if steps.abs() >= (1u64 << super::entropy::MAX_BITS) as f64 {
                 continue;
             }
-            if let Some(c) = self.candidate_with_length(state, from, j, kind, steps as i64) {
+            if let Some(c) = self
+                .candidate_with_length(state, from, j, kind, steps as i64)
+                .await
+            {
                 return Some(c);
             }
         }
         None
     }
 
-    fn candidate_with_length(
+    async fn candidate_with_length(
         &self,
         state: &ChainState,
         from: usize,
@@ -152,7 +178,7 @@ impl<'a> CurveEncoder<'a> {
             for b in tries.into_iter().take(count) {
                 let t = corner_from_code(state.point, end, state.normal, b, self.q.offset)?;
                 let arc = Arc::new(state.point, t, end).ok()?;
-                if let Some(samples) = self.accept(&arc, from, j) {
+                if let Some(samples) = self.accept(&arc, from, j).await {
                     code.bulge = b;
                     return Some(Candidate {
                         code,
@@ -169,7 +195,7 @@ impl<'a> CurveEncoder<'a> {
             _ => state.tangent,
         };
         let arc = Arc::new(state.point, tangent, end).ok()?;
-        let samples = self.accept(&arc, from, j)?;
+        let samples = self.accept(&arc, from, j).await?;
         Some(Candidate {
             code,
             arc,
@@ -206,7 +232,7 @@ impl<'a> CurveEncoder<'a> {
     /// the search starts there: one check usually confirms it, and the
     /// galloping or bisection then takes a few more, instead of growing
     /// from one vertex each time.
-    fn furthest(
+    async fn furthest(
         &self,
         state: &ChainState,
         from: usize,
@@ -217,7 +243,7 @@ impl<'a> CurveEncoder<'a> {
         let mut good = None;
         let mut bad = None;
         if guess > 4 && from + guess < last {
-            match self.candidate(state, from, from + guess, kind) {
+            match self.candidate(state, from, from + guess, kind).await {
                 Some(c) => good = Some(c),
                 None => bad = Some(from + guess),
             }
@@ -226,20 +252,23 @@ impl<'a> CurveEncoder<'a> {
             // The nearest vertex may be too close for the length step: take
             // the first of the next few that passes.
             for j in from + 1..=(from + 4).min(last) {
-                good = self.candidate(state, from, j, kind);
+                good = self.candidate(state, from, j, kind).await;
                 if good.is_some() {
                     break;
                 }
             }
         }
-        Some(gallop(good?, bad, (guess / 2).max(1), last, |j| {
-            self.candidate(state, from, j, kind)
-        }))
+        Some(
+            gallop(good?, bad, (guess / 2).max(1), last, async |j| {
+                self.candidate(state, from, j, kind).await
+            })
+            .await,
+        )
     }
 
     /// The arcs for this curve and the points they decode to, or `None`
     /// where some stretch has no element that passes.
-    pub fn arcs(&self) -> Option<(CurveCode, Vec<DVec3>)> {
+    pub async fn arcs(&self) -> Option<(CurveCode, Vec<DVec3>)> {
         let n = self.points.len();
         let start = self.start_index()?;
         let q0 = DVec3::new(
@@ -252,7 +281,7 @@ impl<'a> CurveEncoder<'a> {
         }
         let mut decoded = vec![q0];
         // First element: its end on the start grid, and a bulge.
-        let first = self.first_element(q0)?;
+        let first = self.first_element(q0).await?;
         decoded.extend_from_slice(&first.samples);
         let mut state = first.arc.next_state(self.q.length);
         let mut from = first.reach;
@@ -265,10 +294,10 @@ impl<'a> CurveEncoder<'a> {
             // Cheapest kind first; a costlier one only where it reaches
             // further (a straight segment costs a kind flag, a corner also
             // a bulge).
-            let mut chosen = self.furthest(&state, from, ElementKind::G1, span);
+            let mut chosen = self.furthest(&state, from, ElementKind::G1, span).await;
             if chosen.as_ref().is_none_or(|g| g.reach - from <= 2) {
                 for (kind, margin) in [(ElementKind::Straight, 0), (ElementKind::Corner, 1)] {
-                    if let Some(c) = self.furthest(&state, from, kind, span) {
+                    if let Some(c) = self.furthest(&state, from, kind, span).await {
                         if chosen.as_ref().is_none_or(|g| c.reach > g.reach + margin) {
                             chosen = Some(c);
                         }
@@ -277,7 +306,7 @@ impl<'a> CurveEncoder<'a> {
             }
             let chosen = match chosen {
                 Some(c) => c,
-                None => match self.jump(&state, from) {
+                None => match self.jump(&state, from).await {
                     Jump::To(c) => *c,
                     // The next vertex is within a start step of the chain's
                     // end, which is on the output: already covered.
@@ -310,7 +339,7 @@ impl<'a> CurveEncoder<'a> {
     /// the vertex), where no element passes: the vertex is then within the
     /// tolerance of the segment's end and the end of the vertex, so the test
     /// passes but for absurd margins.
-    fn jump(&self, state: &ChainState, from: usize) -> Jump {
+    async fn jump(&self, state: &ChainState, from: usize) -> Jump {
         let d = self.points[from + 1] - state.point;
         let k = [d.x, d.y, d.z].map(|x| Quantiser::index(x, self.q.first));
         let [Some(a), Some(b), Some(c)] = k else {
@@ -328,7 +357,7 @@ impl<'a> CurveEncoder<'a> {
         let Ok(arc) = Arc::new(state.point, (end - state.point).normalize(), end) else {
             return Jump::Impossible;
         };
-        match self.accept(&arc, from, from + 1) {
+        match self.accept(&arc, from, from + 1).await {
             Some(samples) => Jump::To(Box::new(Candidate {
                 code: ElementCode {
                     kind: ElementKind::Jump,
@@ -348,9 +377,9 @@ impl<'a> CurveEncoder<'a> {
 
     /// The first element: end on the start grid relative to `q0`, furthest
     /// reach by galloping as for the others.
-    fn first_element(&self, q0: DVec3) -> Option<Candidate> {
+    async fn first_element(&self, q0: DVec3) -> Option<Candidate> {
         let last = self.points.len() - 1;
-        let try_j = |j: usize| -> Option<Candidate> {
+        let try_j = async |j: usize| -> Option<Candidate> {
             let d = self.points[j] - q0;
             let k = [
                 Quantiser::index(d.x, self.q.first)?,
@@ -370,7 +399,7 @@ impl<'a> CurveEncoder<'a> {
             for bulge in [b, [0, 0]] {
                 let t = corner_from_code(q0, end, DVec3::ZERO, bulge, self.q.offset)?;
                 let arc = Arc::new(q0, t, end).ok()?;
-                if let Some(samples) = self.accept(&arc, 0, j) {
+                if let Some(samples) = self.accept(&arc, 0, j).await {
                     return Some(Candidate {
                         code: ElementCode {
                             kind: ElementKind::Corner,
@@ -396,10 +425,10 @@ impl<'a> CurveEncoder<'a> {
         let mut good = None;
         let mut j = 1;
         while good.is_none() && j <= last.min(8) {
-            good = try_j(j);
+            good = try_j(j).await;
             j += 1;
         }
-        Some(gallop(good?, None, 1, last, try_j))
+        Some(gallop(good?, None, 1, last, try_j).await)
     }
 
     /// The points on the body-centred cubic lattice (nearest point within
@@ -442,12 +471,12 @@ pub fn element_end(state: &ChainState, steps: i64, a1: i64, a2: i64, q: &Quantis
 /// known), the furthest-reaching candidate: reaches grow by `step`, doubling,
 /// up to vertex `last` until one fails, then bisection between the last pass
 /// and the first failure. `try_j(j)` is the candidate ending at vertex `j`.
-fn gallop(
+async fn gallop(
     mut good: Candidate,
     mut bad: Option<usize>,
     mut step: usize,
     last: usize,
-    try_j: impl Fn(usize) -> Option<Candidate>,
+    try_j: impl AsyncFn(usize) -> Option<Candidate>,
 ) -> Candidate {
     if bad.is_none() {
         loop {
@@ -455,7 +484,7 @@ fn gallop(
             if next == good.reach {
                 break;
             }
-            match try_j(next) {
+            match try_j(next).await {
                 Some(c) => {
                     good = c;
                     step *= 2;
@@ -470,7 +499,7 @@ fn gallop(
     if let Some(mut bad) = bad {
         while bad > good.reach + 1 {
             let mid = (good.reach + bad) / 2;
-            match try_j(mid) {
+            match try_j(mid).await {
                 Some(c) => good = c,
                 None => bad = mid,
             }

@@ -46,6 +46,7 @@
 //! assert!(block.bytes.len() < 200 * 12 / 20); // over 20 times smaller than f32
 //! ```
 
+pub mod batch;
 pub mod check;
 pub mod container;
 pub mod encoder;
@@ -179,6 +180,9 @@ pub struct EncodedBlock {
     /// Per curve, the points the decoder will write (only from
     /// [`encode_block_keeping`]: what per-point values are carried onto).
     pub decoded: Vec<Vec<DVec3>>,
+    /// The batched checks, where a checker was given
+    /// ([`encode_block_on`]).
+    pub checks: batch::BatchStats,
 }
 
 /// Upper bound of the points one curve may decode to (a corrupt stream
@@ -196,24 +200,49 @@ pub struct CurveOptions {
 
 /// Fits one curve both ways (no entropy coding; curves in parallel).
 pub fn curve_options(points: &[DVec3], params: &CodecParams, half: f64) -> CurveOptions {
-    let none = CurveOptions {
-        points: None,
-        arcs: None,
-    };
+    match curve_encoder(points, params, half) {
+        None => CurveOptions {
+            points: None,
+            arcs: None,
+        },
+        Some(enc) => {
+            let arcs = if points.len() >= 3 {
+                batch::now(enc.arcs())
+            } else {
+                None
+            };
+            finish_options(&enc, arcs)
+        }
+    }
+}
+
+/// The encoder of one curve (`None` for an empty curve, or one so far out
+/// that `f32` output leaves no tolerance).
+fn curve_encoder<'a>(
+    points: &'a [DVec3],
+    params: &CodecParams,
+    half: f64,
+) -> Option<CurveEncoder<'a>> {
     if points.is_empty() {
-        return none;
+        return None;
     }
     let tol = acceptance_tolerance(params.tolerance, points);
     if tol <= 0.0 {
-        return none;
+        return None;
     }
-    let enc = CurveEncoder {
+    Some(CurveEncoder {
         points,
         q: params.quantiser(),
         tol2: tol * tol,
         grid: half,
-    };
-    let arcs = if points.len() >= 3 { enc.arcs() } else { None };
+        mailbox: None,
+    })
+}
+
+/// A curve's options once its arcs are found: the points too, unless the
+/// arcs are cheap enough that the points are not worth quantising.
+fn finish_options(enc: &CurveEncoder, arcs: Option<(CurveCode, Vec<DVec3>)>) -> CurveOptions {
+    let points = enc.points;
     // Points cost about 4 bits each or more on the lattice, even with a
     // neighbour's prediction (1.3 bits per coordinate on the smoothest
     // shared data): where the arcs take under 3 bits per point, the points
@@ -615,7 +644,7 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
 ) -> Result<EncodedBlock, EncodeError> {
-    encode_block_with(curves, params, false, false).map(|(b, _)| b)
+    encode_block_with(curves, params, false, false, None).map(|(b, _)| b)
 }
 
 /// [`encode_block`], keeping each curve's decoded points in
@@ -624,7 +653,7 @@ pub fn encode_block_keeping<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
 ) -> Result<EncodedBlock, EncodeError> {
-    encode_block_with(curves, params, false, true).map(|(b, _)| b)
+    encode_block_with(curves, params, false, true, None).map(|(b, _)| b)
 }
 
 /// [`encode_block`], and with `tally` the ideal bits spent on each of
@@ -634,7 +663,20 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
     params: &CodecParams,
     tally: bool,
 ) -> Result<(EncodedBlock, Option<Vec<f64>>), EncodeError> {
-    encode_block_with(curves, params, tally, false)
+    encode_block_with(curves, params, tally, false, None)
+}
+
+/// [`encode_block`] (with `keep`, [`encode_block_keeping`]), every curve's
+/// candidate elements checked in batches on `checker` where one is given
+/// ([`batch`]): the same bytes as without, as the checker's sure verdicts
+/// are the reference's and the reference decides the rest.
+pub fn encode_block_on<C: AsRef<[DVec3]> + Sync>(
+    curves: &[C],
+    params: &CodecParams,
+    keep: bool,
+    checker: Option<&dyn batch::ArcChecker>,
+) -> Result<EncodedBlock, EncodeError> {
+    encode_block_with(curves, params, false, keep, checker).map(|(b, _)| b)
 }
 
 fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
@@ -642,7 +684,9 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     params: &CodecParams,
     tally: bool,
     keep: bool,
+    checker: Option<&dyn batch::ArcChecker>,
 ) -> Result<(EncodedBlock, Option<Vec<f64>>), EncodeError> {
+    let mut checks = batch::BatchStats::default();
     if !(params.tolerance.is_finite() && params.tolerance > 0.0) {
         return Err(EncodeError::BadTolerance(params.tolerance));
     }
@@ -667,10 +711,33 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
         Encoder::new()
     };
     enc.direct((scale_exp + 128) as u64, 8);
-    let options: Vec<CurveOptions> = curves
-        .par_iter()
-        .map(|pts| curve_options(pts.as_ref(), params, half))
-        .collect();
+    let options: Vec<CurveOptions> = match checker {
+        None => curves
+            .par_iter()
+            .map(|pts| curve_options(pts.as_ref(), params, half))
+            .collect(),
+        Some(checker) => {
+            // All curves' searches together, their checks in batches.
+            let encoders: Vec<Option<CurveEncoder>> = curves
+                .iter()
+                .map(|pts| curve_encoder(pts.as_ref(), params, half))
+                .collect();
+            let (arcs, s) = batch::search_block(&encoders, checker);
+            checks = s;
+            drop(encoders);
+            curves
+                .par_iter()
+                .zip(arcs)
+                .map(|(pts, arcs)| match curve_encoder(pts.as_ref(), params, half) {
+                    Some(enc) => finish_options(&enc, arcs),
+                    None => CurveOptions {
+                        points: None,
+                        arcs: None,
+                    },
+                })
+                .collect()
+        }
+    };
     let grid_step = half;
     let q_start = params.quantiser().start;
     let q_first = params.quantiser().first;
@@ -865,6 +932,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
             output_points,
             elements: n_elements,
             decoded,
+            checks,
         },
         tallied,
     ))

@@ -9,8 +9,10 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
+use super::batch::ArcChecker;
+
 use super::container::{
-    encode_block_bytes, BlockBytes, CodecHeader, CodecReader, CodecWriter, CurveIn, DecodedCurve,
+    encode_block_bytes_on, BlockBytes, CodecHeader, CodecReader, CodecWriter, CurveIn, DecodedCurve,
     BLOCK_CURVES,
 };
 use crate::io::{Curve, CurveReader, CurveWriter, IoError};
@@ -25,17 +27,30 @@ pub struct CompressSummary {
     /// Curves by how they are coded: empty, points, arcs, raw.
     pub kinds: [u64; 4],
     pub bytes: u64,
+    /// Candidate elements checked in batches by the backend (0 on the
+    /// CPU, where each curve checks its own).
+    pub batch_checked: u64,
+    /// Of those, the verdicts left to the `f64` reference (within rounding
+    /// of the tolerance, or the backend failed).
+    pub batch_unsure: u64,
+    /// Rounds of batched checks, summed over blocks.
+    pub batch_rounds: u64,
+    /// Blocks the backend could not take (finished on the CPU).
+    pub batch_fallbacks: u64,
 }
 
 /// Compresses every curve of `reader` into a version-3 container at `out`
-/// (written atomically). `progress` gets the number of curves done after
-/// each block. Errors name the input file and curve for bad input, the
-/// output for write failures.
+/// (written atomically). `checker`: where the candidate elements are
+/// checked ([`crate::backend::Backend::arc_checker`]; `None`: on the CPU,
+/// curves in parallel); the bytes are the same either way. `progress` gets
+/// the number of curves done after each block. Errors name the input file
+/// and curve for bad input, the output for write failures.
 pub fn compress_stream(
     reader: &mut dyn CurveReader,
     input: &Path,
     out: &Path,
     header: &CodecHeader,
+    checker: Option<&dyn ArcChecker>,
     progress: &mut dyn FnMut(u64),
 ) -> Result<CompressSummary, IoError> {
     let params = header.params();
@@ -84,7 +99,7 @@ pub fn compress_stream(
                                 curve_data: &c.curve_data,
                             })
                             .collect();
-                        encode_block_bytes(&ins, &params, n_cd, n_pd)
+                        encode_block_bytes_on(&ins, &params, n_cd, n_pd, checker)
                     })
                     .collect()
             },
@@ -106,6 +121,11 @@ pub fn compress_stream(
             for &k in &block.encoded.kinds {
                 summary.kinds[k as usize] += 1;
             }
+            let checks = &block.encoded.checks;
+            summary.batch_checked += checks.checked;
+            summary.batch_unsure += checks.unsure;
+            summary.batch_rounds += checks.rounds;
+            summary.batch_fallbacks += checks.fell_back as u64;
             pending.push((block, *first));
         }
     }

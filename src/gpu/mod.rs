@@ -7,6 +7,7 @@
 //! NVIDIA do) or `f32` (everywhere). WGSL's transcendental built-ins are
 //! never used on `real` (see [`crate::twin::math`]).
 
+pub mod arc_check;
 pub mod atph;
 mod context;
 mod dispatch;

@@ -19,6 +19,7 @@
 //! | `shaders/spline_sample.wgsl` | [`spline_sample`]      |
 //! | `shaders/atph_hermite.wgsl` | [`atph_hermite`]        |
 
+pub mod arc_check;
 pub mod atph_hermite;
 pub mod frenet_integrate;
 pub mod ghosh_bisect;
