@@ -148,6 +148,37 @@ pub struct BatchStats {
     pub fell_back: bool,
 }
 
+/// The checker's form of `req`, asked by the search of `enc`, whose points
+/// start at `base` in the block's flat points; `(origin, radius, origin
+/// scale)` as [`ArcCandidate`] says.
+pub(crate) fn candidate(
+    enc: &CurveEncoder,
+    req: &CheckRequest,
+    base: usize,
+    (o, radius, origin_scale): (DVec3, f64, f64),
+) -> ArcCandidate {
+    let base = base as u32;
+    let pieces = req.arc.pieces(enc.q.sagitta);
+    ArcCandidate {
+        start: req.arc.start - o,
+        tangent: req.arc.tangent,
+        normal: req.arc.normal,
+        end: req.arc.end - o,
+        curvature: req.arc.curvature,
+        step: req.arc.length / pieces as f64,
+        length: req.arc.length,
+        pieces: pieces as u32,
+        cover: (base + req.from as u32 + 1, base + req.to as u32),
+        window: (
+            base + req.from.saturating_sub(1) as u32,
+            base + (req.to + 1).min(enc.points.len() - 1) as u32,
+        ),
+        tol2: enc.tol2,
+        radius: radius.max((req.arc.start - o).abs().max_element()),
+        origin_scale,
+    }
+}
+
 type Search<'a> = Pin<Box<dyn Future<Output = Option<(CurveCode, Vec<DVec3>)>> + 'a>>;
 
 /// The arcs of every curve of a block (`None` where a curve has fewer than
@@ -186,13 +217,15 @@ pub fn search_block(
         .iter()
         .zip(&mailboxes)
         .map(|(e, m)| {
-            e.as_ref().filter(|e| e.points.len() >= 3).map(|e| CurveEncoder {
-                points: e.points,
-                q: e.q,
-                tol2: e.tol2,
-                grid: e.grid,
-                mailbox: Some(m),
-            })
+            e.as_ref()
+                .filter(|e| e.points.len() >= 3)
+                .map(|e| CurveEncoder {
+                    points: e.points,
+                    q: e.q,
+                    tol2: e.tol2,
+                    grid: e.grid,
+                    mailbox: Some(m),
+                })
         })
         .collect();
     let mut results: Vec<Option<(CurveCode, Vec<DVec3>)>> = (0..n).map(|_| None).collect();
@@ -231,28 +264,7 @@ pub fn search_block(
                 unreachable!("a waiting search has asked");
             };
             let enc = asking[c].as_ref().expect("live");
-            let (o, radius, origin_scale) = geometry[c];
-            let n_pts = enc.points.len();
-            let base = offsets[c] as u32;
-            let pieces = req.arc.pieces(enc.q.sagitta);
-            candidates.push(ArcCandidate {
-                start: req.arc.start - o,
-                tangent: req.arc.tangent,
-                normal: req.arc.normal,
-                end: req.arc.end - o,
-                curvature: req.arc.curvature,
-                step: req.arc.length / pieces as f64,
-                length: req.arc.length,
-                pieces: pieces as u32,
-                cover: (base + req.from as u32 + 1, base + req.to as u32),
-                window: (
-                    base + req.from.saturating_sub(1) as u32,
-                    base + (req.to + 1).min(n_pts - 1) as u32,
-                ),
-                tol2: enc.tol2,
-                radius: radius.max((req.arc.start - o).abs().max_element()),
-                origin_scale,
-            });
+            candidates.push(candidate(enc, &req, offsets[c], geometry[c]));
             who.push(c);
         }
         if candidates.is_empty() {
@@ -280,4 +292,227 @@ pub fn search_block(
     // The searches borrow the mailboxes and encoders: end them first.
     drop(searches);
     (results, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::codec::quantise::{Quantiser, Steps};
+    use crate::gpu::arc_check::verdicts_twin;
+    use crate::twin::Real;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A wiggly curve far from the origin (where absolute rounding is
+    /// largest), sampled every `step`.
+    fn wiggle(rng: &mut ChaCha8Rng, n: usize, far: f64) -> Vec<DVec3> {
+        let (a, b, c) = (
+            rng.gen_range(0.1..2.0),
+            rng.gen_range(0.1..2.0),
+            rng.gen_range(0.0..1.0),
+        );
+        let step = rng.gen_range(0.2..2.0);
+        let o = DVec3::new(far, -0.5 * far, 0.25 * far);
+        (0..n)
+            .map(|k| {
+                let s = k as f64 * step;
+                o + DVec3::new(
+                    s,
+                    a * (0.3 * s).sin() + 0.05 * rng.gen_range(-1.0..1.0),
+                    b * (0.2 * s + c).cos(),
+                )
+            })
+            .collect()
+    }
+
+    /// The reference's two-sided squared distance of a candidate (the
+    /// largest of its points' exact distances, both ways).
+    fn two_sided2(enc: &CurveEncoder, arc: &Arc, from: usize, to: usize) -> f64 {
+        use crate::codec::check::dist2_to_segment;
+        let mut poly = vec![arc.start];
+        arc.sample_into(enc.q.sagitta, &mut poly);
+        let n = enc.points.len();
+        let window = &enc.points[from.saturating_sub(1)..=(to + 1).min(n - 1)];
+        let near = |p: DVec3, line: &[DVec3]| {
+            line.windows(2)
+                .map(|w| dist2_to_segment(p, w[0], w[1]))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let a = enc.points[from + 1..=to].iter().map(|&p| near(p, &poly));
+        let b = poly[1..].iter().map(|&p| near(p, window));
+        a.chain(b).fold(0.0, f64::max)
+    }
+
+    /// Sure verdicts of the twin (`R`) against the reference on random
+    /// candidates, half of them within a hair of the tolerance: returns
+    /// (sure, unsure, reference passes, the largest relative distance from
+    /// the tolerance of an unsure verdict).
+    fn sure_verdicts_agree<R: Real>(seed: u64) -> (usize, usize, usize, f64) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let (mut sure, mut unsure, mut passes) = (0, 0, 0);
+        let mut widest = 0f64;
+        for _ in 0..300 {
+            let far = [0.0, 100.0, 1e4][rng.gen_range(0..3)];
+            let n = rng.gen_range(3..40);
+            let pts = wiggle(&mut rng, n, far);
+            let tol: f64 = rng.gen_range(0.01..1.0);
+            let base_enc = CurveEncoder {
+                points: &pts,
+                q: Quantiser::new(tol, Steps::default()),
+                tol2: tol * tol,
+                grid: tol,
+                mailbox: None,
+            };
+            let o = pts[0];
+            let radius = pts
+                .iter()
+                .map(|p| (*p - o).abs().max_element())
+                .fold(0.0, f64::max);
+            let flat: Vec<R> = pts
+                .iter()
+                .flat_map(|p| {
+                    let d = *p - o;
+                    [d.x, d.y, d.z]
+                })
+                .map(R::from_f64)
+                .collect();
+            for _ in 0..20 {
+                let from = rng.gen_range(0..pts.len() - 1);
+                let to = rng.gen_range(from + 1..pts.len());
+                // A tangent near the chord's, an end near the vertex: some
+                // pass, some fail, some within rounding of the tolerance.
+                let jitter = |rng: &mut ChaCha8Rng, s: f64| {
+                    DVec3::new(
+                        rng.gen_range(-s..s),
+                        rng.gen_range(-s..s),
+                        rng.gen_range(-s..s),
+                    )
+                };
+                let chord = pts[to] - pts[from];
+                let t = (chord.normalize() + jitter(&mut rng, 0.3)).normalize();
+                let end = pts[to] + jitter(&mut rng, tol);
+                let Ok(arc) = Arc::new(pts[from], t, end) else {
+                    continue;
+                };
+                let req = CheckRequest { arc, from, to };
+                // Half the time, the tolerance within a hair (1e-16 to 1e-4
+                // relative) of the candidate's own two-sided distance: the
+                // band is what decides there.
+                let mut enc = CurveEncoder {
+                    mailbox: None,
+                    ..base_enc
+                };
+                let d2 = two_sided2(&enc, &arc, from, to);
+                if rng.gen_bool(0.5) {
+                    let rel = 10f64.powf(rng.gen_range(-16.0..-4.0)) * rng.gen_range(-1.0..1.0);
+                    enc.tol2 = d2 * (1.0 + rel);
+                }
+                let reference = enc.accept_now(&arc, from, to).is_some();
+                passes += reference as usize;
+                let c = candidate(&enc, &req, 0, (o, radius, o.abs().max_element()));
+                match verdicts_twin::<R>(&flat, &[c])[0] {
+                    Verdict::Pass => {
+                        assert!(
+                            reference,
+                            "twin {} passes what the reference fails: {c:?}",
+                            R::WGSL
+                        );
+                        sure += 1;
+                    }
+                    Verdict::Fail => {
+                        assert!(
+                            !reference,
+                            "twin {} fails what the reference passes: {c:?}",
+                            R::WGSL
+                        );
+                        sure += 1;
+                    }
+                    Verdict::Unsure => {
+                        unsure += 1;
+                        widest = widest.max((d2 / enc.tol2 - 1.0).abs());
+                    }
+                }
+            }
+        }
+        (sure, unsure, passes, widest)
+    }
+
+    #[test]
+    fn arc_check_band_covers_the_reference() {
+        // Both outcomes occur; many are left unsure (the tolerance is put
+        // within 1e-16 of the distance), but only within a hair of it.
+        let (sure, unsure, passes, widest) = sure_verdicts_agree::<f64>(7);
+        assert!(
+            passes > 300 && passes + 300 < sure + unsure,
+            "{passes} of {}",
+            sure + unsure
+        );
+        assert!(
+            unsure > 100 && widest < 1e-8,
+            "f64: {unsure} unsure, up to {widest:e}"
+        );
+        let (sure, unsure, _, widest) = sure_verdicts_agree::<f32>(8);
+        // f32 is unsure of the near half (1e-4 is inside its band) and of
+        // few others.
+        assert!(
+            unsure < 3060 && widest < 0.05,
+            "f32: {unsure} unsure of {}, up to {widest:e}",
+            sure + unsure
+        );
+    }
+
+    /// A checker that answers every question unsure: the reference then
+    /// decides everything, through the batch machinery.
+    struct AllUnsure;
+    struct AllUnsureBlock;
+    impl ArcChecker for AllUnsure {
+        fn open(&self, _: &[DVec3]) -> Result<Box<dyn ArcCheckBlock + '_>, String> {
+            Ok(Box::new(AllUnsureBlock))
+        }
+    }
+    impl ArcCheckBlock for AllUnsureBlock {
+        fn verdicts(&mut self, c: &[ArcCandidate]) -> Result<Vec<Verdict>, String> {
+            Ok(vec![Verdict::Unsure; c.len()])
+        }
+    }
+    /// A checker that cannot take the block.
+    struct Broken;
+    impl ArcChecker for Broken {
+        fn open(&self, _: &[DVec3]) -> Result<Box<dyn ArcCheckBlock + '_>, String> {
+            Err("no device".into())
+        }
+    }
+
+    #[test]
+    fn batched_searches_write_the_bytes_of_the_cpu_path() {
+        use crate::codec::{encode_block, encode_block_on, CodecParams};
+        use crate::gpu::arc_check::TwinArcChecker;
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut curves: Vec<Vec<DVec3>> = (0..60)
+            .map(|k| wiggle(&mut rng, 2 + k % 50, [0.0, 50.0][k % 2]))
+            .collect();
+        curves.push(Vec::new());
+        curves.push(vec![DVec3::ONE]);
+        for tol in [0.05, 0.3] {
+            let params = CodecParams::new(tol);
+            let cpu = encode_block(&curves, &params).unwrap();
+            let checkers: [(&str, &dyn ArcChecker); 4] = [
+                ("twin f64", &TwinArcChecker::<f64>::default()),
+                ("twin f32", &TwinArcChecker::<f32>::default()),
+                ("all unsure", &AllUnsure),
+                ("broken", &Broken),
+            ];
+            for (name, checker) in checkers {
+                let b = encode_block_on(&curves, &params, false, Some(checker)).unwrap();
+                assert_eq!(b.bytes, cpu.bytes, "{name} at {tol}");
+                assert_eq!(b.output_points, cpu.output_points, "{name}");
+                assert!(
+                    b.checks.checked > 100 || name == "broken",
+                    "{name}: {:?}",
+                    b.checks
+                );
+                assert_eq!(b.checks.fell_back, name == "broken", "{name}");
+            }
+        }
+    }
 }

@@ -414,12 +414,13 @@ pub fn encode_block_bytes_on(
         }
     }
     let pts: Vec<&[DVec3]> = curves.iter().map(|c| c.points).collect();
-    let encoded = super::encode_block_on(&pts, params, n_point_data > 0, checker).map_err(|e| match e {
-        super::EncodeError::NonFinite { curve, point } => {
-            (curve, format!("point {point} is not finite"))
-        }
-        e => (0, e.to_string()),
-    })?;
+    let encoded =
+        super::encode_block_on(&pts, params, n_point_data > 0, checker).map_err(|e| match e {
+            super::EncodeError::NonFinite { curve, point } => {
+                (curve, format!("point {point} is not finite"))
+            }
+            e => (0, e.to_string()),
+        })?;
     let mut side = Vec::new();
     for c in curves {
         match c.id {

@@ -86,7 +86,14 @@ impl<'a> CurveEncoder<'a> {
     /// ([`crate::twin::arc_check`]), an unsure one is decided here.
     async fn accept(&self, arc: &Arc, from: usize, to: usize) -> Option<Vec<DVec3>> {
         if let Some(mailbox) = self.mailbox {
-            match mailbox.ask(super::batch::CheckRequest { arc: *arc, from, to }).await {
+            match mailbox
+                .ask(super::batch::CheckRequest {
+                    arc: *arc,
+                    from,
+                    to,
+                })
+                .await
+            {
                 super::batch::Verdict::Fail => return None,
                 super::batch::Verdict::Pass => {
                     let mut samples = Vec::with_capacity(8);

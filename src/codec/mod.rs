@@ -728,13 +728,15 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
             curves
                 .par_iter()
                 .zip(arcs)
-                .map(|(pts, arcs)| match curve_encoder(pts.as_ref(), params, half) {
-                    Some(enc) => finish_options(&enc, arcs),
-                    None => CurveOptions {
-                        points: None,
-                        arcs: None,
+                .map(
+                    |(pts, arcs)| match curve_encoder(pts.as_ref(), params, half) {
+                        Some(enc) => finish_options(&enc, arcs),
+                        None => CurveOptions {
+                            points: None,
+                            arcs: None,
+                        },
                     },
-                })
+                )
                 .collect()
         }
     };

@@ -12,8 +12,8 @@ use rayon::prelude::*;
 use super::batch::ArcChecker;
 
 use super::container::{
-    encode_block_bytes_on, BlockBytes, CodecHeader, CodecReader, CodecWriter, CurveIn, DecodedCurve,
-    BLOCK_CURVES,
+    encode_block_bytes_on, BlockBytes, CodecHeader, CodecReader, CodecWriter, CurveIn,
+    DecodedCurve, BLOCK_CURVES,
 };
 use crate::io::{Curve, CurveReader, CurveWriter, IoError};
 

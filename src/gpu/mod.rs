@@ -73,3 +73,29 @@ pub const MATH_WGSL: &str = include_str!("../../shaders/math.wgsl");
 pub fn shader_source<R: Real>(body: &str) -> String {
     format!("{}\n{}\n{}", prelude::<R>(), MATH_WGSL, body)
 }
+
+/// Every kernel's full source in precision `R`, by the name of its file in
+/// `shaders/` — exactly what its driver compiles (the Frenet–Serret kernel
+/// in both its modes: end point and frame, and 4 samples). For validating
+/// every kernel with naga on any machine, GPU or not
+/// (`tests/shaders_validate.rs`).
+pub fn kernel_sources<R: Real>() -> Vec<(&'static str, String)> {
+    vec![
+        ("arc_check", shader_source::<R>(arc_check::ARC_CHECK_WGSL)),
+        ("atph_hermite", shader_source::<R>(atph::ATPH_HERMITE_WGSL)),
+        (
+            "frenet_integrate",
+            shader_source::<R>(&frenet::kernel_body(0)),
+        ),
+        (
+            "frenet_integrate",
+            shader_source::<R>(&frenet::kernel_body(4)),
+        ),
+        ("ghosh_bisect", shader_source::<R>(ghosh::GHOSH_BISECT_WGSL)),
+        (
+            "helix_eval",
+            shader_source::<R>(helix_eval::HELIX_EVAL_WGSL),
+        ),
+        ("spline_sample", spline_sample::source::<R>()),
+    ]
+}
