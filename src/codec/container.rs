@@ -143,8 +143,17 @@ impl CodecHeader {
         for n in &m.curve_data_names {
             put_str(&mut b, n);
         }
-        put_varint(&mut b, m.extra.len() as u64);
-        for (k, v) in &m.extra {
+        // A .tck source's datatype is left out where it is what the .tck
+        // writer writes by default in the same place (Float32LE, after the
+        // other lines): 20 bytes of every such file.
+        let extra = match m.extra.split_last() {
+            Some(((k, v), rest)) if m.format == "tck" && k == "datatype" && v == "Float32LE" => {
+                rest
+            }
+            _ => &m.extra[..],
+        };
+        put_varint(&mut b, extra.len() as u64);
+        for (k, v) in extra {
             put_str(&mut b, k);
             put_str(&mut b, v);
         }
