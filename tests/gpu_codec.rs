@@ -21,8 +21,11 @@ fn curves(path: &Path, n: usize) -> Vec<Vec<DVec3>> {
     cs.into_iter().take(n).map(|c| c.points).collect()
 }
 
-/// The data sets: (name, curves, tolerances).
-fn data() -> Vec<(&'static str, Vec<Vec<DVec3>>, [f64; 2])> {
+/// A data set: name, curves, the two tolerances.
+type DataSet = (&'static str, Vec<Vec<DVec3>>, [f64; 2]);
+
+/// The data sets.
+fn data() -> Vec<DataSet> {
     let mut sets = vec![(
         "fornix",
         curves(

@@ -179,7 +179,11 @@ pub(crate) fn candidate(
     }
 }
 
-type Search<'a> = Pin<Box<dyn Future<Output = Option<(CurveCode, Vec<DVec3>)>> + 'a>>;
+/// A curve's arcs and the points they decode to (what
+/// [`CurveEncoder::arcs`] finds).
+pub type FoundArcs = Option<(CurveCode, Vec<DVec3>)>;
+
+type Search<'a> = Pin<Box<dyn Future<Output = FoundArcs> + 'a>>;
 
 /// The arcs of every curve of a block (`None` where a curve has fewer than
 /// three points or no element passes), all curves searched together with
@@ -188,7 +192,7 @@ type Search<'a> = Pin<Box<dyn Future<Output = Option<(CurveCode, Vec<DVec3>)>> +
 pub fn search_block(
     encoders: &[Option<CurveEncoder<'_>>],
     checker: &dyn ArcChecker,
-) -> (Vec<Option<(CurveCode, Vec<DVec3>)>>, BatchStats) {
+) -> (Vec<FoundArcs>, BatchStats) {
     let mut stats = BatchStats::default();
     let n = encoders.len();
     // Flat points relative to each curve's origin.
@@ -228,7 +232,7 @@ pub fn search_block(
                 })
         })
         .collect();
-    let mut results: Vec<Option<(CurveCode, Vec<DVec3>)>> = (0..n).map(|_| None).collect();
+    let mut results: Vec<FoundArcs> = (0..n).map(|_| None).collect();
     let mut searches: Vec<Option<Search<'_>>> = asking
         .iter()
         .map(|e| e.as_ref().map(|e| Box::pin(e.arcs()) as Search<'_>))

@@ -487,19 +487,52 @@ pub fn encode_block_bytes_on(
 /// Writes a version-3 container; [`finish`](Self::finish) writes the index
 /// and end record and renames the file into place.
 pub struct CodecWriter {
-    out: AtomicFile,
+    out: Sink,
     offset: u64,
     /// Per block: its bytes and curves.
     index: Vec<(u64, u32)>,
 }
 
+/// Where a [`CodecWriter`] writes: a file committed atomically at the end,
+/// or memory.
+enum Sink {
+    File(AtomicFile),
+    Memory(Vec<u8>),
+}
+
+/// The name a container in memory goes by in messages.
+pub const IN_MEMORY: &str = "<container in memory>";
+
+impl Sink {
+    fn write_all(&mut self, b: &[u8]) -> Result<(), IoError> {
+        match self {
+            Sink::File(f) => f.write_all(b).map_err(|e| f.err(e)),
+            Sink::Memory(v) => {
+                v.extend_from_slice(b);
+                Ok(())
+            }
+        }
+    }
+}
+
 impl CodecWriter {
+    /// A container written to `path` (atomically: under a temporary name
+    /// until [`finish`](Self::finish)).
     pub fn create(path: &Path, header: &CodecHeader) -> Result<Self, IoError> {
-        let mut out = AtomicFile::create(path)?;
+        Self::start(Sink::File(AtomicFile::create(path)?), header)
+    }
+
+    /// A container built in memory ([`finish_bytes`](Self::finish_bytes)).
+    pub fn in_memory(header: &CodecHeader) -> Self {
+        Self::start(Sink::Memory(Vec::new()), header).expect("memory does not fail")
+    }
+
+    fn start(mut out: Sink, header: &CodecHeader) -> Result<Self, IoError> {
         let raw = header.to_bytes();
         // A .trk source's 1000-byte header, or long titles, deflate well;
         // the usual few dozen bytes do not.
-        let packed = deflate(&raw).map_err(|e| out.err(e))?;
+        let packed = deflate(&raw)
+            .map_err(|e| IoError::new(Path::new(IN_MEMORY), format!("deflate: {e}")))?;
         let mut body = Vec::with_capacity(raw.len() + 1);
         if packed.len() + 4 < raw.len() {
             body.push(1);
@@ -515,7 +548,7 @@ impl CodecWriter {
         put_varint(&mut head, body.len() as u64);
         head.extend_from_slice(&body);
         head.extend_from_slice(&crc32fast::hash(&body).to_le_bytes());
-        out.write_all(&head).map_err(|e| out.err(e))?;
+        out.write_all(&head)?;
         Ok(CodecWriter {
             out,
             offset: head.len() as u64,
@@ -524,7 +557,10 @@ impl CodecWriter {
     }
 
     pub fn target(&self) -> &Path {
-        self.out.target()
+        match &self.out {
+            Sink::File(f) => f.target(),
+            Sink::Memory(_) => Path::new(IN_MEMORY),
+        }
     }
 
     /// Appends an encoded block.
@@ -542,7 +578,7 @@ impl CodecWriter {
         crc.update(&b.side);
         let crc = crc.finalize().to_le_bytes();
         for part in [&head[..], &b.geometry, &b.side, &crc] {
-            self.out.write_all(part).map_err(|e| self.out.err(e))?;
+            self.out.write_all(part)?;
         }
         let len = (head.len() + b.geometry.len() + b.side.len() + 4) as u64;
         self.index.push((len, b.curves));
@@ -551,7 +587,30 @@ impl CodecWriter {
     }
 
     /// Completes and commits the file; returns its size in bytes.
-    pub fn finish(mut self) -> Result<u64, IoError> {
+    pub fn finish(self) -> Result<u64, IoError> {
+        let (sink, size) = self.complete()?;
+        if let Sink::File(f) = sink {
+            f.commit()?;
+        }
+        Ok(size)
+    }
+
+    /// Completes a container built [`in_memory`](Self::in_memory) and
+    /// returns its bytes (a file-backed writer is committed, and its bytes
+    /// read back).
+    pub fn finish_bytes(self) -> Result<Vec<u8>, IoError> {
+        match self.complete()? {
+            (Sink::Memory(v), _) => Ok(v),
+            (Sink::File(f), _) => {
+                let path = f.target().to_path_buf();
+                f.commit()?;
+                std::fs::read(&path).map_err(|e| IoError::os(&path, "cannot read", e))
+            }
+        }
+    }
+
+    /// Writes the index and end record.
+    fn complete(mut self) -> Result<(Sink, u64), IoError> {
         let mut idx = Vec::with_capacity(4 * self.index.len() + 16);
         put_varint(&mut idx, self.index.len() as u64);
         for (len, n) in &self.index {
@@ -562,10 +621,9 @@ impl CodecWriter {
         end.extend_from_slice(&crc32fast::hash(&idx).to_le_bytes());
         end.extend_from_slice(&(idx.len() as u32).to_le_bytes());
         end.extend_from_slice(&END_MAGIC);
-        self.out.write_all(&idx).map_err(|e| self.out.err(e))?;
-        self.out.write_all(&end).map_err(|e| self.out.err(e))?;
-        self.out.commit()?;
-        Ok(self.offset + idx.len() as u64 + END_LEN)
+        self.out.write_all(&idx)?;
+        self.out.write_all(&end)?;
+        Ok((self.out, self.offset + idx.len() as u64 + END_LEN))
     }
 }
 
@@ -573,7 +631,7 @@ impl CodecWriter {
 /// demand.
 pub struct CodecReader {
     path: PathBuf,
-    file: BufReader<File>,
+    file: Box<dyn ReadSeek>,
     header: CodecHeader,
     /// Per block: offset, length in bytes, curves, first curve.
     blocks: Vec<(u64, u64, u32, u64)>,
@@ -603,17 +661,35 @@ fn read_varint(file: &mut impl Read) -> std::io::Result<(u64, Vec<u8>)> {
     ))
 }
 
+/// What a [`CodecReader`] reads from: a file or bytes in memory.
+pub trait ReadSeek: Read + Seek + Send {}
+impl<T: Read + Seek + Send> ReadSeek for T {}
+
 impl CodecReader {
     /// Opens a version-3 container (other versions are an error here; the
     /// caller's dispatch sends version 1 elsewhere).
     pub fn open(path: &Path) -> Result<Self, IoError> {
-        let err = |why: String| IoError::new(path, why);
         let f = File::open(path).map_err(|e| IoError::os(path, "cannot read", e))?;
         let size = f
             .metadata()
             .map_err(|e| IoError::os(path, "cannot read", e))?
             .len();
-        let mut file = BufReader::new(f);
+        Self::from_source(Box::new(BufReader::new(f)), size, path)
+    }
+
+    /// Opens a version-3 container held in memory; messages name it
+    /// [`IN_MEMORY`].
+    pub fn from_bytes(bytes: Vec<u8>) -> Result<Self, IoError> {
+        let size = bytes.len() as u64;
+        Self::from_source(
+            Box::new(std::io::Cursor::new(bytes)),
+            size,
+            Path::new(IN_MEMORY),
+        )
+    }
+
+    fn from_source(mut file: Box<dyn ReadSeek>, size: u64, path: &Path) -> Result<Self, IoError> {
+        let err = |why: String| IoError::new(path, why);
         let mut head = [0u8; 10];
         if size < 10 + END_LEN {
             return Err(err(format!(
@@ -989,6 +1065,55 @@ mod tests {
             w.write_block(&b).unwrap();
         }
         w.finish().unwrap()
+    }
+
+    #[test]
+    fn a_container_in_memory_is_the_file_and_reads_back_the_same() {
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let cs = curves(30, &mut rng);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.sfh");
+        write(&p, &cs, 7);
+        let file = std::fs::read(&p).unwrap();
+        // The same blocks into memory.
+        let h = header(2);
+        let mut w = CodecWriter::in_memory(&h);
+        assert_eq!(w.target(), Path::new(IN_MEMORY));
+        for chunk in cs.chunks(7) {
+            let values: Vec<Vec<f32>> = chunk.iter().map(|(_, p, _)| arc_values(p)).collect();
+            let ins: Vec<CurveIn> = chunk
+                .iter()
+                .zip(&values)
+                .map(|((id, p, d), v)| CurveIn {
+                    id: id.as_deref(),
+                    points: p,
+                    point_data: v,
+                    curve_data: d,
+                })
+                .collect();
+            w.write_block(&encode_block_bytes(&ins, &h.params(), 2, 1).unwrap())
+                .unwrap();
+        }
+        let memory = w.finish_bytes().unwrap();
+        assert_eq!(memory, file);
+        let mut from_file = CodecReader::open(&p).unwrap();
+        let mut from_bytes = CodecReader::from_bytes(memory.clone()).unwrap();
+        assert_eq!(from_bytes.block_count(), 5);
+        let a = read_range(&mut from_file, 3, 20).unwrap();
+        let b = read_range(&mut from_bytes, 3, 20).unwrap();
+        assert_eq!(a, b);
+        // Damage in memory is named as such.
+        let mut bad = memory;
+        let k = bad.len() / 2;
+        bad[k] ^= 0x55;
+        let e = CodecReader::from_bytes(bad)
+            .and_then(|mut r| {
+                let n = r.curve_count();
+                read_range(&mut r, 0, n)
+            })
+            .unwrap_err();
+        assert!(e.to_string().starts_with(IN_MEMORY), "{e}");
+        assert!(CodecReader::from_bytes(b"short".to_vec()).is_err());
     }
 
     #[test]

@@ -53,10 +53,26 @@ pub fn compress_stream(
     checker: Option<&dyn ArcChecker>,
     progress: &mut dyn FnMut(u64),
 ) -> Result<CompressSummary, IoError> {
+    let mut writer = CodecWriter::create(out, header)?;
+    let mut summary = compress_blocks(reader, input, &mut writer, header, checker, progress)?;
+    summary.bytes = writer.finish()?;
+    Ok(summary)
+}
+
+/// The blocks of [`compress_stream`], written to `writer` (a file or
+/// memory, [`CodecWriter::in_memory`]) made with the same `header`; the
+/// caller finishes it. `summary.bytes` is left 0.
+pub fn compress_blocks(
+    reader: &mut dyn CurveReader,
+    input: &Path,
+    writer: &mut CodecWriter,
+    header: &CodecHeader,
+    checker: Option<&dyn ArcChecker>,
+    progress: &mut dyn FnMut(u64),
+) -> Result<CompressSummary, IoError> {
     let params = header.params();
     let n_cd = header.source.curve_data_names.len();
     let n_pd = header.point_data_names.len();
-    let mut writer = CodecWriter::create(out, header)?;
     let mut summary = CompressSummary::default();
     // Blocks go in groups of one per thread: a group is fitted and coded in
     // parallel (each block's entropy coding is sequential), while the
@@ -129,7 +145,6 @@ pub fn compress_stream(
             pending.push((block, *first));
         }
     }
-    summary.bytes = writer.finish()?;
     Ok(summary)
 }
 

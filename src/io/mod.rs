@@ -40,6 +40,7 @@ use glam::{DMat4, DVec3};
 
 pub use atomic::{remove_unfinished_outputs, AtomicFile};
 pub use format::{data_losses, source_losses, Format};
+pub use polyline::VecReader;
 
 /// One curve as read from a file: points in world space, plus the per-point
 /// and per-curve values the file carried (carried through to writers of the

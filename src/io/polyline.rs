@@ -140,9 +140,20 @@ fn check_finite(points: &[DVec3]) -> Result<(), usize> {
     }
 }
 
-struct VecReader {
+/// Curves already in memory, as a [`CurveReader`] (e.g. arrays handed over
+/// by a program; the caller checks the points).
+pub struct VecReader {
     meta: Metadata,
     curves: std::vec::IntoIter<Curve>,
+}
+
+impl VecReader {
+    pub fn new(meta: Metadata, curves: Vec<Curve>) -> Self {
+        VecReader {
+            meta,
+            curves: curves.into_iter(),
+        }
+    }
 }
 
 impl Iterator for VecReader {

@@ -1,0 +1,300 @@
+//! `strandfit._strandfit`: the thin PyO3 layer over the Rust library. It
+//! converts arrays and errors and releases the GIL during the work; the
+//! Python package (`strandfit/__init__.py`) checks and normalises the
+//! inputs, documents the API and holds the adapters.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::{PyIndexError, PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+use strandfit::codec::container::{CodecHeader, CodecReader, CodecWriter, DecodedCurve};
+use strandfit::codec::stream::{compress_blocks, compress_stream, decompress_stream, read_range};
+use strandfit::io::container::SourceMeta;
+use strandfit::io::{
+    create_writer, curve_problem, open_reader_with, BadCurves, Curve, Format, IoError, Metadata,
+    VecReader,
+};
+use strandfit::DVec3;
+
+/// The name arrays go by in messages.
+const ARRAYS: &str = "<arrays>";
+
+/// An I/O error as Python's: `OSError` where the operating system refused,
+/// `ValueError` for bad data (the message names the file and curve).
+fn py_err(e: IoError) -> PyErr {
+    if e.os_error.is_some() {
+        PyOSError::new_err(e.to_string())
+    } else {
+        PyValueError::new_err(e.to_string())
+    }
+}
+
+fn check_tolerance(tolerance: f64) -> PyResult<()> {
+    if tolerance > 0.0 && tolerance.is_finite() {
+        Ok(())
+    } else {
+        Err(PyValueError::new_err(format!(
+            "tolerance must be positive and finite, got {tolerance}"
+        )))
+    }
+}
+
+/// Curves from `(P, 3)` positions and `C + 1` offsets, every point checked.
+fn curves_from(positions: &PyReadonlyArray2<f64>, offsets: &[i64]) -> PyResult<Vec<Curve>> {
+    let pos = positions.as_array();
+    if pos.ncols() != 3 {
+        return Err(PyValueError::new_err(format!(
+            "positions must have shape (P, 3), got (P, {})",
+            pos.ncols()
+        )));
+    }
+    let p = pos.nrows() as i64;
+    if offsets.is_empty() || offsets[0] != 0 || *offsets.last().unwrap() != p {
+        return Err(PyValueError::new_err(format!(
+            "offsets must run from 0 to the number of points ({p}), one more than the curves"
+        )));
+    }
+    let mut curves = Vec::with_capacity(offsets.len() - 1);
+    for (c, w) in offsets.windows(2).enumerate() {
+        if w[1] < w[0] {
+            return Err(PyValueError::new_err(format!(
+                "offsets must not decrease: offsets[{c}] = {} > offsets[{}] = {}",
+                w[0],
+                c + 1,
+                w[1]
+            )));
+        }
+        let points: Vec<DVec3> = (w[0] as usize..w[1] as usize)
+            .map(|k| DVec3::new(pos[[k, 0]], pos[[k, 1]], pos[[k, 2]]))
+            .collect();
+        if let Some(why) = curve_problem(&points) {
+            return Err(PyValueError::new_err(format!("{ARRAYS}, curve {c}: {why}")));
+        }
+        curves.push(Curve::from_points(points));
+    }
+    Ok(curves)
+}
+
+/// Decoded curves as NumPy arrays: `(positions, offsets)`.
+type Arrays<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<i64>>);
+
+/// Positions (float32, as files hold them and as the guarantee is made
+/// for) and offsets of decoded curves.
+fn to_arrays<'py>(py: Python<'py>, curves: &[DecodedCurve]) -> Arrays<'py> {
+    let total: usize = curves.iter().map(|c| c.points.len()).sum();
+    let mut flat = Vec::with_capacity(3 * total);
+    let mut offsets = Vec::with_capacity(curves.len() + 1);
+    offsets.push(0i64);
+    for c in curves {
+        for p in &c.points {
+            flat.extend([p.x as f32, p.y as f32, p.z as f32]);
+        }
+        offsets.push((flat.len() / 3) as i64);
+    }
+    let positions = Array2::from_shape_vec((total, 3), flat).expect("3 per point");
+    (positions.into_pyarray(py), offsets.into_pyarray(py))
+}
+
+/// compress_arrays(positions, offsets, tolerance) -> bytes (see the
+/// Python package's docstring).
+#[pyfunction]
+fn compress_arrays<'py>(
+    py: Python<'py>,
+    positions: PyReadonlyArray2<'py, f64>,
+    offsets: PyReadonlyArray1<'py, i64>,
+    tolerance: f64,
+) -> PyResult<Bound<'py, PyBytes>> {
+    check_tolerance(tolerance)?;
+    let curves = curves_from(&positions, offsets.as_slice()?)?;
+    let bytes = py
+        .allow_threads(|| -> Result<Vec<u8>, IoError> {
+            let meta = Metadata::new(Format::Json);
+            let mut source = SourceMeta::from_metadata(&meta, None);
+            source.format = "numpy".into();
+            let header = CodecHeader::new(tolerance, source, Vec::new());
+            let mut writer = CodecWriter::in_memory(&header);
+            let mut reader = VecReader::new(meta, curves);
+            compress_blocks(
+                &mut reader,
+                Path::new(ARRAYS),
+                &mut writer,
+                &header,
+                None,
+                &mut |_| {},
+            )?;
+            writer.finish_bytes()
+        })
+        .map_err(py_err)?;
+    Ok(PyBytes::new(py, &bytes))
+}
+
+/// decompress_arrays(data) -> (positions, offsets).
+#[pyfunction]
+fn decompress_arrays<'py>(py: Python<'py>, data: &[u8]) -> PyResult<Arrays<'py>> {
+    let data = data.to_vec();
+    let curves = py
+        .allow_threads(|| -> Result<Vec<DecodedCurve>, IoError> {
+            let mut reader = CodecReader::from_bytes(data)?;
+            let n = reader.curve_count();
+            read_range(&mut reader, 0, n)
+        })
+        .map_err(py_err)?;
+    Ok(to_arrays(py, &curves))
+}
+
+/// compress_file(src, dst, tolerance) -> dict: what `strandfit compress
+/// SRC --tolerance T -o DST` does (the same bytes).
+#[pyfunction]
+fn compress_file<'py>(
+    py: Python<'py>,
+    src: PathBuf,
+    dst: PathBuf,
+    tolerance: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    check_tolerance(tolerance)?;
+    let started = std::time::Instant::now();
+    let summary = py
+        .allow_threads(|| {
+            let mut reader = open_reader_with(&src, None, BadCurves::Fail)?;
+            let meta = reader.metadata().clone();
+            let header = CodecHeader::new(
+                tolerance,
+                SourceMeta::from_metadata(&meta, None),
+                meta.point_data_names.clone(),
+            );
+            compress_stream(&mut *reader, &src, &dst, &header, None, &mut |_| {})
+        })
+        .map_err(py_err)?;
+    let bytes_in = std::fs::metadata(&src).map(|m| m.len()).unwrap_or(0);
+    let d = PyDict::new(py);
+    d.set_item("input", src.display().to_string())?;
+    d.set_item("output", dst.display().to_string())?;
+    d.set_item("curves", summary.curves)?;
+    d.set_item("points", summary.points)?;
+    d.set_item("bytes_in", bytes_in)?;
+    d.set_item("bytes_out", summary.bytes)?;
+    d.set_item("ratio", bytes_in as f64 / summary.bytes.max(1) as f64)?;
+    d.set_item("distance", "hausdorff")?;
+    d.set_item("tolerance", tolerance)?;
+    d.set_item("container_version", 3)?;
+    d.set_item("max_distance", tolerance)?;
+    d.set_item("output_points", summary.output_points)?;
+    d.set_item("verbatim", summary.kinds[3])?;
+    d.set_item("points_cheaper", summary.kinds[1])?;
+    d.set_item("arcs", summary.kinds[2])?;
+    d.set_item("seconds", started.elapsed().as_secs_f64())?;
+    Ok(d)
+}
+
+/// decompress_file(src, dst) -> dict: what `strandfit decompress SRC -o
+/// DST` does with its defaults.
+#[pyfunction]
+fn decompress_file<'py>(
+    py: Python<'py>,
+    src: PathBuf,
+    dst: PathBuf,
+) -> PyResult<Bound<'py, PyDict>> {
+    let started = std::time::Instant::now();
+    let n = py
+        .allow_threads(|| -> Result<u64, IoError> {
+            let mut reader = CodecReader::open(&src)?;
+            let header = reader.header().clone();
+            let mut meta = header.source.to_metadata();
+            meta.point_data_names = header.point_data_names.clone();
+            let mut writer = create_writer(&dst, None, &meta)?;
+            let map = |c: DecodedCurve| Curve {
+                id: c.id,
+                points: c.points,
+                point_data: c.point_data,
+                curve_data: c.curve_data,
+            };
+            let n = decompress_stream(&mut reader, &mut *writer, &map, &mut |_| {})?;
+            writer.finish()?;
+            Ok(n)
+        })
+        .map_err(py_err)?;
+    let d = PyDict::new(py);
+    d.set_item("input", src.display().to_string())?;
+    d.set_item("output", dst.display().to_string())?;
+    d.set_item("curves", n)?;
+    d.set_item("seconds", started.elapsed().as_secs_f64())?;
+    Ok(d)
+}
+
+/// A container opened for random access (`strandfit.open`).
+#[pyclass(module = "strandfit._strandfit")]
+struct Container {
+    reader: Mutex<CodecReader>,
+    curves: u64,
+    blocks: Vec<(u64, u64)>,
+    tolerance: f64,
+}
+
+#[pymethods]
+impl Container {
+    #[new]
+    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let reader = py
+            .allow_threads(|| CodecReader::open(&path))
+            .map_err(py_err)?;
+        let blocks = (0..reader.block_count())
+            .map(|k| reader.block_span(k))
+            .collect();
+        Ok(Container {
+            curves: reader.curve_count(),
+            tolerance: reader.header().tolerance,
+            blocks,
+            reader: Mutex::new(reader),
+        })
+    }
+
+    fn __len__(&self) -> usize {
+        self.curves as usize
+    }
+
+    /// The tolerance the container was written with.
+    #[getter]
+    fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+
+    /// `(first curve, curve count)` of each block, in order.
+    #[getter]
+    fn blocks(&self) -> Vec<(u64, u64)> {
+        self.blocks.clone()
+    }
+
+    /// Curves `start..stop` as `(positions, offsets)`, decoding only the
+    /// blocks that hold them.
+    fn read<'py>(&self, py: Python<'py>, start: u64, stop: u64) -> PyResult<Arrays<'py>> {
+        if start > stop || stop > self.curves {
+            return Err(PyIndexError::new_err(format!(
+                "curves {start}..{stop} of a container of {}",
+                self.curves
+            )));
+        }
+        let curves = py
+            .allow_threads(|| {
+                let mut r = self.reader.lock().unwrap_or_else(|e| e.into_inner());
+                read_range(&mut r, start, stop - start)
+            })
+            .map_err(py_err)?;
+        Ok(to_arrays(py, &curves))
+    }
+}
+
+#[pymodule]
+fn _strandfit(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(compress_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(decompress_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(compress_file, m)?)?;
+    m.add_function(wrap_pyfunction!(decompress_file, m)?)?;
+    m.add_class::<Container>()?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
