@@ -24,6 +24,13 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
         return run_codec(args, to);
     }
     let reader = ContainerReader::open(&args.input)?;
+    if args.curves.is_some() {
+        bail!(
+            "{}: --curves reads version-3 containers (blocks and an index); this is a \
+             version-1 container",
+            args.input.display()
+        );
+    }
     let mut writer = output_writer(args, to, &reader.header().source.to_metadata())?;
     let mut n = 0u64;
     for c in reader {
@@ -109,7 +116,7 @@ fn output_writer(
 /// resampling of them when asked.
 fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
     use crate::codec::container::CodecReader;
-    use crate::codec::stream::decompress_stream;
+    use crate::codec::stream::decompress_range;
 
     let mut reader = CodecReader::open(&args.input)?;
     let header = reader.header().clone();
@@ -148,16 +155,35 @@ fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
             }
         }
     };
-    let mut bar = super::io_util::DelayedBar::new(Some(reader.curve_count()));
-    let n = decompress_stream(&mut reader, &mut *writer, &map, &mut |n| bar.set(n))
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let total = reader.curve_count();
+    let range = match args.curves {
+        None => 0..total,
+        Some((a, b)) => a.unwrap_or(0).min(total)..b.unwrap_or(total).min(total),
+    };
+    let mut bar = super::io_util::DelayedBar::new(Some(range.end - range.start));
+    let n = decompress_range(&mut reader, &mut *writer, &map, range.clone(), &mut |n| {
+        bar.set(n)
+    })
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
     bar.finish();
     writer.finish()?;
-    eprintln!(
-        "{} -> {}: {n} curves",
-        args.input.display(),
-        args.output.display()
-    );
+    if args.curves.is_some() {
+        eprintln!(
+            "{} -> {}: curves {}..{} of {total} ({n} curves; read {} of {} bytes)",
+            args.input.display(),
+            args.output.display(),
+            range.start,
+            range.end,
+            reader.bytes_read(),
+            reader.size()
+        );
+    } else {
+        eprintln!(
+            "{} -> {}: {n} curves",
+            args.input.display(),
+            args.output.display()
+        );
+    }
     Ok(())
 }
 

@@ -15,6 +15,7 @@ mod integrate_cmd;
 mod io_util;
 mod motion_cmd;
 mod sample_cmd;
+mod shards_cmd;
 mod sketch_cmd;
 
 use std::path::PathBuf;
@@ -122,6 +123,12 @@ pub enum Command {
     Inspect(InspectArgs),
     /// Convert curves between file formats (streamed, in world coordinates).
     Convert(ConvertArgs),
+    /// Cut a .sfh container (version 3) into shards of whole blocks, copied
+    /// as they are (no decoding): DIR/STEM-00000.sfh, STEM-00001.sfh, …
+    Split(SplitArgs),
+    /// Join .sfh containers with the same header into one, block by block,
+    /// curves in order (no decoding): undoes `split`, byte for byte.
+    Merge(MergeArgs),
     /// Fill the gap between point–tangent pairs ({"pairs":[{"id","p0","t0",
     /// "p1","t1"}]}) with 3D Euler spirals (batched on the chosen backend) or
     /// ATPH curves (closed form, optionally of a prescribed arc length).
@@ -336,10 +343,38 @@ pub struct DecompressArgs {
     /// Output format (default: from the extension).
     #[arg(long)]
     pub to: Option<String>,
+    /// Only curves A to B (0-based, B excluded; `A:` to the end, `:B` from
+    /// the start): only the blocks that hold them are read (version 3).
+    #[arg(long, value_parser = parse_range)]
+    pub curves: Option<(Option<u64>, Option<u64>)>,
     /// Treat per-curve data the output format cannot hold as an error
     /// instead of a warning.
     #[arg(long)]
     pub strict: bool,
+}
+
+/// `A:B`, `A:` or `:B` (curve indices).
+fn parse_range(s: &str) -> Result<(Option<u64>, Option<u64>), String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?}: expected A:B (curve indices, B excluded)"))?;
+    let num = |t: &str| -> Result<Option<u64>, String> {
+        if t.is_empty() {
+            Ok(None)
+        } else {
+            t.trim()
+                .parse()
+                .map(Some)
+                .map_err(|_| format!("{t:?} is not a curve index"))
+        }
+    };
+    let (a, b) = (num(a)?, num(b)?);
+    if let (Some(a), Some(b)) = (a, b) {
+        if b < a {
+            return Err(format!("{s:?}: the range ends before it starts"));
+        }
+    }
+    Ok((a, b))
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
@@ -430,6 +465,35 @@ pub struct SketchArgs {
 pub enum ResampleArg {
     Densify,
     Uniform,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct SplitArgs {
+    /// The container to split.
+    pub input: PathBuf,
+    /// Curves per shard at most, rounded down to whole blocks (4,096 curves
+    /// each); every shard holds at least one block.
+    #[arg(long)]
+    pub curves_per_shard: u64,
+    /// Folder for the shards (made if missing).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Machine-readable report on standard output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct MergeArgs {
+    /// The containers to join, in order.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// The joined container. Written atomically.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Machine-readable report on standard output.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(clap::Args, Debug)]
@@ -545,6 +609,8 @@ pub fn main() -> ExitCode {
         Command::Decompress(a) => decompress_cmd::run(a),
         Command::Inspect(a) => inspect_cmd::run(a),
         Command::Convert(a) => convert_cmd::run(a),
+        Command::Split(a) => shards_cmd::split(a),
+        Command::Merge(a) => shards_cmd::merge(a),
         Command::Bench(a) => cli.backend().and_then(|b| bench_cmd::run(a, &b)),
     };
     match result {

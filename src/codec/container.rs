@@ -565,25 +565,46 @@ impl CodecWriter {
 
     /// Appends an encoded block.
     pub fn write_block(&mut self, b: &BlockBytes) -> Result<(), IoError> {
+        self.write_parts(b.curves, &b.geometry, &b.side, b.side_len)
+    }
+
+    /// Appends a block read from another container with the same header,
+    /// as it was (no decoding, no re-encoding): its bytes are the same.
+    pub fn copy_block(&mut self, b: &RawBlock) -> Result<(), IoError> {
+        self.write_parts(b.curves, &b.geometry, &b.side, b.side_len)
+    }
+
+    fn write_parts(
+        &mut self,
+        curves: u32,
+        geometry: &[u8],
+        side: &[u8],
+        side_len: u32,
+    ) -> Result<(), IoError> {
         let mut head = Vec::with_capacity(16);
-        put_varint(&mut head, b.curves as u64);
-        put_varint(&mut head, b.geometry.len() as u64);
-        put_varint(&mut head, b.side.len() as u64);
-        if !b.side.is_empty() {
-            put_varint(&mut head, b.side_len as u64);
+        put_varint(&mut head, curves as u64);
+        put_varint(&mut head, geometry.len() as u64);
+        put_varint(&mut head, side.len() as u64);
+        if !side.is_empty() {
+            put_varint(&mut head, side_len as u64);
         }
         let mut crc = crc32fast::Hasher::new();
         crc.update(&head);
-        crc.update(&b.geometry);
-        crc.update(&b.side);
+        crc.update(geometry);
+        crc.update(side);
         let crc = crc.finalize().to_le_bytes();
-        for part in [&head[..], &b.geometry, &b.side, &crc] {
+        for part in [&head[..], geometry, side, &crc] {
             self.out.write_all(part)?;
         }
-        let len = (head.len() + b.geometry.len() + b.side.len() + 4) as u64;
-        self.index.push((len, b.curves));
+        let len = (head.len() + geometry.len() + side.len() + 4) as u64;
+        self.index.push((len, curves));
         self.offset += len;
         Ok(())
+    }
+
+    /// Curves written so far.
+    pub fn curves(&self) -> u64 {
+        self.index.iter().map(|&(_, n)| n as u64).sum()
     }
 
     /// Completes and commits the file; returns its size in bytes.
@@ -636,6 +657,10 @@ pub struct CodecReader {
     /// Per block: offset, length in bytes, curves, first curve.
     blocks: Vec<(u64, u64, u32, u64)>,
     curves: u64,
+    /// Bytes read from the source so far (header, end record, index and
+    /// the blocks read).
+    bytes_read: u64,
+    size: u64,
 }
 
 fn u32_at(b: &[u8], at: usize) -> u32 {
@@ -811,6 +836,8 @@ impl CodecReader {
             header,
             blocks,
             curves: first,
+            bytes_read: data_start + END_LEN + idx_len,
+            size,
         })
     }
 
@@ -828,6 +855,17 @@ impl CodecReader {
 
     pub fn block_count(&self) -> usize {
         self.blocks.len()
+    }
+
+    /// Bytes read from the container so far: its header, end record and
+    /// index at opening, then each block read.
+    pub fn bytes_read(&self) -> u64 {
+        self.bytes_read
+    }
+
+    /// Size of the container in bytes.
+    pub fn size(&self) -> u64 {
+        self.size
     }
 
     /// First curve and curve count of block `k`.
@@ -853,6 +891,7 @@ impl CodecReader {
             .seek(SeekFrom::Start(off))
             .and_then(|_| self.file.read_exact(&mut b))
             .map_err(|e| err(format!("cannot read the block: {e}")))?;
+        self.bytes_read += len;
         let (body, crc) = b.split_at(b.len() - 4);
         if crc32fast::hash(body) != u32_at(crc, 0) {
             return Err(err("block checksum mismatch (the file is corrupt)".into()));

@@ -55,6 +55,7 @@ pub mod point_data;
 pub mod predict;
 pub mod quantise;
 pub mod reference;
+pub mod shards;
 pub mod stream;
 
 use glam::DVec3;

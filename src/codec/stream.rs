@@ -160,21 +160,44 @@ pub fn decompress_stream(
     map: &(dyn Fn(DecodedCurve) -> Curve + Sync),
     progress: &mut dyn FnMut(u64),
 ) -> Result<u64, IoError> {
+    let all = 0..reader.curve_count();
+    decompress_range(reader, writer, map, all, progress)
+}
+
+/// [`decompress_stream`] for curves `range` only (clamped to the
+/// container): only the blocks that hold them are read
+/// ([`CodecReader::bytes_read`] says how much).
+pub fn decompress_range(
+    reader: &mut CodecReader,
+    writer: &mut dyn CurveWriter,
+    map: &(dyn Fn(DecodedCurve) -> Curve + Sync),
+    range: std::ops::Range<u64>,
+    progress: &mut dyn FnMut(u64),
+) -> Result<u64, IoError> {
     let header = reader.header().clone();
     let path = reader.path().to_path_buf();
     let mut written = 0u64;
-    let n = reader.block_count();
-    let mut k = 0;
-    while k < n {
-        let end = (k + BLOCKS_AT_ONCE).min(n);
-        let raw = (k..end)
-            .map(|b| reader.read_block_bytes(b))
+    let wanted: Vec<usize> = (0..reader.block_count())
+        .filter(|&b| {
+            let (first, count) = reader.block_span(b);
+            first < range.end && first + count > range.start
+        })
+        .collect();
+    for group in wanted.chunks(BLOCKS_AT_ONCE) {
+        let raw = group
+            .iter()
+            .map(|&b| reader.read_block_bytes(b))
             .collect::<Result<Vec<_>, _>>()?;
         let decoded: Vec<Result<Vec<Curve>, IoError>> = raw
             .par_iter()
             .map(|b| {
-                b.decode(&path, &header)
-                    .map(|cs| cs.into_iter().map(map).collect())
+                b.decode(&path, &header).map(|cs| {
+                    cs.into_iter()
+                        .enumerate()
+                        .filter(|(k, _)| range.contains(&(b.first + *k as u64)))
+                        .map(|(_, c)| map(c))
+                        .collect()
+                })
             })
             .collect();
         for block in decoded {
@@ -184,7 +207,6 @@ pub fn decompress_stream(
             }
         }
         progress(written);
-        k = end;
     }
     Ok(written)
 }

@@ -1,0 +1,69 @@
+//! `strandfit split` and `strandfit merge`: containers cut into shards of
+//! whole blocks and joined again ([`crate::codec::shards`]).
+
+use anyhow::Result;
+use serde::Serialize;
+
+use super::{MergeArgs, SplitArgs};
+use crate::codec::shards::{self, Shard};
+
+#[derive(Serialize)]
+struct Report<'a> {
+    input: Vec<String>,
+    output: String,
+    curves: u64,
+    shards: &'a [Shard],
+}
+
+pub fn split(args: &SplitArgs) -> Result<()> {
+    let out = shards::split(&args.input, &args.output, args.curves_per_shard)?;
+    let curves = out.iter().map(|s| s.curves).sum();
+    if args.json {
+        let r = Report {
+            input: vec![args.input.display().to_string()],
+            output: args.output.display().to_string(),
+            curves,
+            shards: &out,
+        };
+        println!("{}", serde_json::to_string_pretty(&r)?);
+    } else {
+        eprintln!(
+            "{} -> {}: {curves} curves in {} shards ({} .. {})",
+            args.input.display(),
+            args.output.display(),
+            out.len(),
+            out.first()
+                .map(|s| s.path.display().to_string())
+                .unwrap_or_default(),
+            out.last()
+                .map(|s| s.path.display().to_string())
+                .unwrap_or_default(),
+        );
+    }
+    Ok(())
+}
+
+pub fn merge(args: &MergeArgs) -> Result<()> {
+    let parts = shards::merge(&args.inputs, &args.output)?;
+    let curves = parts.iter().map(|s| s.curves).sum();
+    if args.json {
+        let r = Report {
+            input: args
+                .inputs
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect(),
+            output: args.output.display().to_string(),
+            curves,
+            shards: &parts,
+        };
+        println!("{}", serde_json::to_string_pretty(&r)?);
+    } else {
+        eprintln!(
+            "{} containers -> {}: {curves} curves",
+            parts.len(),
+            args.output.display()
+        );
+    }
+    Ok(())
+}
