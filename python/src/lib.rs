@@ -16,8 +16,8 @@ use strandfit::codec::container::{CodecHeader, CodecReader, CodecWriter, Decoded
 use strandfit::codec::stream::{compress_blocks, compress_stream, decompress_stream, read_range};
 use strandfit::io::container::SourceMeta;
 use strandfit::io::{
-    create_writer, curve_problem, open_reader_with, BadCurves, Curve, Format, IoError, Metadata,
-    VecReader,
+    create_writer, curve_problem, open_reader_with, BadCurves, Curve, CurveReader, Format, IoError,
+    Metadata, VecReader,
 };
 use strandfit::DVec3;
 
@@ -191,6 +191,103 @@ fn compress_file<'py>(
     Ok(d)
 }
 
+/// Curves `first..first + count` of another reader (the rest is read past
+/// and dropped): one shard of a file for [`compress_file_range`].
+struct RangeReader {
+    inner: Box<dyn CurveReader>,
+    skip: u64,
+    left: u64,
+}
+
+impl Iterator for RangeReader {
+    type Item = Result<Curve, IoError>;
+    fn next(&mut self) -> Option<Self::Item> {
+        while self.skip > 0 {
+            match self.inner.next()? {
+                Ok(_) => self.skip -= 1,
+                Err(e) => return Some(Err(e)),
+            }
+        }
+        if self.left == 0 {
+            return None;
+        }
+        self.left -= 1;
+        self.inner.next()
+    }
+}
+
+impl CurveReader for RangeReader {
+    fn metadata(&self) -> &Metadata {
+        self.inner.metadata()
+    }
+}
+
+/// compress_file_range(src, dst, tolerance, first, count) -> dict: curves
+/// `first..first + count` of `src` compressed as `compress_file` would
+/// compress them (for shards: with `first` a multiple of the block size,
+/// the shard's blocks are those of the whole file's container).
+#[pyfunction]
+fn compress_file_range<'py>(
+    py: Python<'py>,
+    src: PathBuf,
+    dst: PathBuf,
+    tolerance: f64,
+    first: u64,
+    count: u64,
+) -> PyResult<Bound<'py, PyDict>> {
+    check_tolerance(tolerance)?;
+    let summary = py
+        .allow_threads(|| {
+            let inner = open_reader_with(&src, None, BadCurves::Fail)?;
+            let meta = inner.metadata().clone();
+            let header = CodecHeader::new(
+                tolerance,
+                SourceMeta::from_metadata(&meta, None),
+                meta.point_data_names.clone(),
+            );
+            let mut reader = RangeReader {
+                inner,
+                skip: first,
+                left: count,
+            };
+            // Errors about the input name its curve as counted in the file.
+            compress_stream(&mut reader, &src, &dst, &header, None, &mut |_| {}).map_err(|mut e| {
+                if e.path == src {
+                    e.curve = e.curve.map(|c| c + first);
+                }
+                e
+            })
+        })
+        .map_err(py_err)?;
+    let d = PyDict::new(py);
+    d.set_item("input", src.display().to_string())?;
+    d.set_item("output", dst.display().to_string())?;
+    d.set_item("first", first)?;
+    d.set_item("curves", summary.curves)?;
+    d.set_item("points", summary.points)?;
+    d.set_item("bytes_out", summary.bytes)?;
+    d.set_item("output_points", summary.output_points)?;
+    d.set_item("tolerance", tolerance)?;
+    Ok(d)
+}
+
+/// count_curves(src) -> int: the number of curves in a curve file, read
+/// through (a header's count is advisory: planning shards by a wrong one
+/// would drop curves).
+#[pyfunction]
+fn count_curves(py: Python<'_>, src: PathBuf) -> PyResult<u64> {
+    py.allow_threads(|| -> Result<u64, IoError> {
+        let mut reader = open_reader_with(&src, None, BadCurves::Fail)?;
+        let mut n = 0u64;
+        for c in &mut reader {
+            c?;
+            n += 1;
+        }
+        Ok(n)
+    })
+    .map_err(py_err)
+}
+
 /// decompress_file(src, dst) -> dict: what `strandfit decompress SRC -o
 /// DST` does with its defaults.
 #[pyfunction]
@@ -294,6 +391,8 @@ fn _strandfit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(decompress_arrays, m)?)?;
     m.add_function(wrap_pyfunction!(compress_file, m)?)?;
     m.add_function(wrap_pyfunction!(decompress_file, m)?)?;
+    m.add_function(wrap_pyfunction!(compress_file_range, m)?)?;
+    m.add_function(wrap_pyfunction!(count_curves, m)?)?;
     m.add_class::<Container>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
