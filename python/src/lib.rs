@@ -13,11 +13,13 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
 use strandfit::codec::container::{CodecHeader, CodecReader, CodecWriter, DecodedCurve};
-use strandfit::codec::stream::{compress_blocks, compress_stream, decompress_stream, read_range};
+use strandfit::codec::stream::{
+    compress_blocks, compress_stream, decompress_stream, output_curve, read_range,
+};
 use strandfit::io::container::SourceMeta;
 use strandfit::io::{
-    create_writer, curve_problem, open_reader_with, BadCurves, Curve, CurveReader, Format, IoError,
-    Metadata, VecReader,
+    create_writer, curve_problem, data_losses, open_reader_with, source_losses, BadCurves, Curve,
+    CurveReader, Format, IoError, Metadata, VecReader,
 };
 use strandfit::DVec3;
 
@@ -133,61 +135,157 @@ fn compress_arrays<'py>(
     Ok(PyBytes::new(py, &bytes))
 }
 
-/// decompress_arrays(data) -> (positions, offsets).
+/// `points` at least 2 and `step` positive, as the command line checks.
+fn check_resampling(points: Option<usize>, step: Option<f64>) -> PyResult<()> {
+    if points.is_some() && step.is_some() {
+        return Err(PyValueError::new_err("give points or step, not both"));
+    }
+    if matches!(points, Some(m) if m < 2) {
+        return Err(PyValueError::new_err("points must be at least 2"));
+    }
+    if let Some(s) = step {
+        if !(s > 0.0 && s.is_finite()) {
+            return Err(PyValueError::new_err(format!(
+                "step must be positive, got {s}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Decoded curves resampled as asked (`None`, `None`: as decoded).
+fn resampled(
+    curves: Vec<DecodedCurve>,
+    points: Option<usize>,
+    step: Option<f64>,
+) -> Vec<DecodedCurve> {
+    if points.is_none() && step.is_none() {
+        return curves;
+    }
+    curves
+        .into_iter()
+        .map(|c| {
+            let out = output_curve(c, points, step, 0);
+            DecodedCurve {
+                id: out.id,
+                points: out.points,
+                point_data: out.point_data,
+                curve_data: out.curve_data,
+            }
+        })
+        .collect()
+}
+
+/// decompress_arrays(data, points=None, step=None) -> (positions, offsets).
 #[pyfunction]
-fn decompress_arrays<'py>(py: Python<'py>, data: &[u8]) -> PyResult<Arrays<'py>> {
+#[pyo3(signature = (data, points=None, step=None))]
+fn decompress_arrays<'py>(
+    py: Python<'py>,
+    data: &[u8],
+    points: Option<usize>,
+    step: Option<f64>,
+) -> PyResult<Arrays<'py>> {
+    check_resampling(points, step)?;
     let data = data.to_vec();
     let curves = py
         .allow_threads(|| -> Result<Vec<DecodedCurve>, IoError> {
             let mut reader = CodecReader::from_bytes(data)?;
             let n = reader.curve_count();
-            read_range(&mut reader, 0, n)
+            Ok(resampled(read_range(&mut reader, 0, n)?, points, step))
         })
         .map_err(py_err)?;
     Ok(to_arrays(py, &curves))
 }
 
-/// compress_file(src, dst, tolerance) -> dict: what `strandfit compress
-/// SRC --tolerance T -o DST` does (the same bytes).
+/// compress_file(src, dst, tolerance, strict=False, skip_bad=False) ->
+/// dict: what `strandfit compress SRC --tolerance T -o DST --json` does
+/// (the same bytes, the same report).
 #[pyfunction]
+#[pyo3(signature = (src, dst, tolerance, strict=false, skip_bad=false))]
 fn compress_file<'py>(
     py: Python<'py>,
     src: PathBuf,
     dst: PathBuf,
     tolerance: f64,
+    strict: bool,
+    skip_bad: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     check_tolerance(tolerance)?;
     let started = std::time::Instant::now();
-    let summary = py
+    let bad = if skip_bad {
+        BadCurves::Skip
+    } else {
+        BadCurves::Fail
+    };
+    let (summary, dropped, skipped) = py
         .allow_threads(|| {
-            let mut reader = open_reader_with(&src, None, BadCurves::Fail)?;
+            let mut reader = open_reader_with(&src, None, bad)?;
             let meta = reader.metadata().clone();
+            let mut dropped = source_losses(&meta);
+            dropped.extend(data_losses(&meta, |_| true, true, "sfh"));
+            if strict && !dropped.is_empty() {
+                return Err(IoError::new(
+                    &src,
+                    format!(
+                        "writing {} would drop {} (strict)",
+                        dst.display(),
+                        dropped.join("; ")
+                    ),
+                ));
+            }
             let header = CodecHeader::new(
                 tolerance,
                 SourceMeta::from_metadata(&meta, None),
                 meta.point_data_names.clone(),
             );
-            compress_stream(&mut *reader, &src, &dst, &header, None, &mut |_| {})
+            let summary = compress_stream(&mut *reader, &src, &dst, &header, None, &mut |_| {})
+                .map_err(|mut e| {
+                    // As counted in the input, skipped curves included.
+                    if e.path == src {
+                        if let Some(mut c) = e.curve {
+                            for s in reader.skipped() {
+                                if s.index <= c {
+                                    c += 1;
+                                }
+                            }
+                            e.curve = Some(c);
+                        }
+                    }
+                    e
+                })?;
+            let skipped: Vec<u64> = reader.skipped().iter().map(|s| s.index).collect();
+            Ok((summary, dropped, skipped))
         })
         .map_err(py_err)?;
     let bytes_in = std::fs::metadata(&src).map(|m| m.len()).unwrap_or(0);
+    let seconds = started.elapsed().as_secs_f64();
+    // The keys of the command line's `--json` report, in its order.
     let d = PyDict::new(py);
     d.set_item("input", src.display().to_string())?;
     d.set_item("output", dst.display().to_string())?;
     d.set_item("curves", summary.curves)?;
     d.set_item("points", summary.points)?;
+    d.set_item("elements", 0)?;
     d.set_item("bytes_in", bytes_in)?;
     d.set_item("bytes_out", summary.bytes)?;
     d.set_item("ratio", bytes_in as f64 / summary.bytes.max(1) as f64)?;
     d.set_item("distance", "hausdorff")?;
     d.set_item("tolerance", tolerance)?;
     d.set_item("container_version", 3)?;
+    d.set_item("mean_distance", py.None())?;
     d.set_item("max_distance", tolerance)?;
     d.set_item("output_points", summary.output_points)?;
+    d.set_item("over_tolerance", 0)?;
     d.set_item("verbatim", summary.kinds[3])?;
     d.set_item("points_cheaper", summary.kinds[1])?;
     d.set_item("arcs", summary.kinds[2])?;
-    d.set_item("seconds", started.elapsed().as_secs_f64())?;
+    d.set_item("skipped", skipped)?;
+    d.set_item("dropped", dropped)?;
+    d.set_item("seconds", seconds)?;
+    d.set_item(
+        "curves_per_second",
+        summary.curves as f64 / seconds.max(1e-9),
+    )?;
     Ok(d)
 }
 
@@ -288,37 +386,53 @@ fn count_curves(py: Python<'_>, src: PathBuf) -> PyResult<u64> {
     .map_err(py_err)
 }
 
-/// decompress_file(src, dst) -> dict: what `strandfit decompress SRC -o
-/// DST` does with its defaults.
+/// decompress_file(src, dst, points=None, step=None, strict=False) ->
+/// dict: what `strandfit decompress SRC -o DST` does (by default the points
+/// the guarantee is about).
 #[pyfunction]
+#[pyo3(signature = (src, dst, points=None, step=None, strict=false))]
 fn decompress_file<'py>(
     py: Python<'py>,
     src: PathBuf,
     dst: PathBuf,
+    points: Option<usize>,
+    step: Option<f64>,
+    strict: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
+    check_resampling(points, step)?;
     let started = std::time::Instant::now();
-    let n = py
-        .allow_threads(|| -> Result<u64, IoError> {
+    let (n, dropped) = py
+        .allow_threads(|| -> Result<(u64, Vec<String>), IoError> {
             let mut reader = CodecReader::open(&src)?;
             let header = reader.header().clone();
             let mut meta = header.source.to_metadata();
             meta.point_data_names = header.point_data_names.clone();
-            let mut writer = create_writer(&dst, None, &meta)?;
-            let map = |c: DecodedCurve| Curve {
-                id: c.id,
-                points: c.points,
-                point_data: c.point_data,
-                curve_data: c.curve_data,
-            };
+            let format = Format::from_path(&dst)?;
+            let dropped = format.losses(&meta);
+            if strict && !dropped.is_empty() {
+                return Err(IoError::new(
+                    &src,
+                    format!(
+                        "writing {} would drop {} (strict)",
+                        dst.display(),
+                        dropped.join("; ")
+                    ),
+                ));
+            }
+            let mut writer = create_writer(&dst, Some(format), &meta)?;
+            let width = header.point_data_names.len();
+            let map = move |c: DecodedCurve| output_curve(c, points, step, width);
             let n = decompress_stream(&mut reader, &mut *writer, &map, &mut |_| {})?;
             writer.finish()?;
-            Ok(n)
+            Ok((n, dropped))
         })
         .map_err(py_err)?;
     let d = PyDict::new(py);
     d.set_item("input", src.display().to_string())?;
     d.set_item("output", dst.display().to_string())?;
     d.set_item("curves", n)?;
+    d.set_item("guaranteed", points.is_none() && step.is_none())?;
+    d.set_item("dropped", dropped)?;
     d.set_item("seconds", started.elapsed().as_secs_f64())?;
     Ok(d)
 }

@@ -27,7 +27,8 @@ True
 from __future__ import annotations
 
 import os
-from typing import Iterator, List, Sequence, Tuple, Union
+import warnings
+from typing import Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -104,37 +105,72 @@ def compress_arrays(positions, offsets, tolerance: float = 0.5) -> bytes:
     return _strandfit.compress_arrays(_positions(positions), _offsets(offsets), _tolerance(tolerance))
 
 
-def decompress_arrays(data: bytes) -> Tuple[np.ndarray, np.ndarray]:
+def _resampling(points, step):
+    if points is not None or step is not None:
+        warnings.warn(
+            "resampling (points or step) gives up the guarantee that every curve is within "
+            "the container's tolerance of its input; it holds for the default points",
+            stacklevel=3,
+        )
+    return (None if points is None else int(points), None if step is None else float(step))
+
+
+def decompress_arrays(data: bytes, points: Optional[int] = None, step: Optional[float] = None) -> Tuple[np.ndarray, np.ndarray]:
     """Decode container bytes into ``(positions, offsets)``.
 
     ``positions`` is float32 of shape ``(P, 3)``, ``offsets`` int64 of shape
-    ``(C + 1,)``: the points ``strandfit decompress`` writes by default, each
-    curve within the container's tolerance of its input. A corrupt or
-    truncated container raises ``ValueError`` saying where.
+    ``(C + 1,)``: by default the points ``strandfit decompress`` writes, each
+    curve within the container's tolerance of its input. ``points=N`` gives
+    every curve N points equally spaced in arc length, ``step=S`` points S
+    apart (both ends kept): a ``UserWarning`` says that this gives up the
+    guarantee. A corrupt or truncated container raises ``ValueError`` saying
+    where.
+
+    >>> import numpy as np, strandfit
+    >>> line = np.array([[0.0, 0, 0], [10, 0, 0]])
+    >>> p, o = strandfit.decompress_arrays(strandfit.compress_arrays(line, [0, 2], 0.1))
+    >>> import warnings; warnings.simplefilter("ignore")
+    >>> p, o = strandfit.decompress_arrays(strandfit.compress_arrays(line, [0, 2], 0.1), points=5)
+    >>> o.tolist(), bool(abs(p[-1, 0] - 10) <= 0.1), bool(np.ptp(np.diff(p[:, 0])) < 1e-4)
+    ([0, 5], True, True)
     """
-    return _strandfit.decompress_arrays(bytes(data))
+    points, step = _resampling(points, step)
+    return _strandfit.decompress_arrays(bytes(data), points, step)
 
 
-def compress_file(src: PathLike, dst: PathLike, tolerance: float = 0.5) -> dict:
+def _warn_dropped(report: dict) -> dict:
+    for d in report.get("dropped", []):
+        warnings.warn(f"{report['input']}: dropped {d}; strict=True makes this an error", stacklevel=3)
+    return report
+
+
+def compress_file(src: PathLike, dst: PathLike, tolerance: float = 0.5, strict: bool = False, skip_bad: bool = False) -> dict:
     """Compress a curve file (.tck .trk .trx .vtk .hair .json .csv) to a container.
 
-    The same as ``strandfit compress SRC --tolerance T -o DST``: the same
-    bytes, written atomically. Returns the report of the command's
-    ``--json`` (``curves``, ``points``, ``bytes_in``, ``bytes_out``,
-    ``ratio``, ``output_points``, ``arcs``, ``points_cheaper``, ``verbatim``,
-    ``seconds``, ...). ``OSError`` when a file cannot be read or written,
-    ``ValueError`` for bad data, naming the file and curve.
+    The same as ``strandfit compress SRC --tolerance T -o DST --json``: the
+    same bytes, written atomically, and the same report (``curves``,
+    ``points``, ``bytes_in``, ``bytes_out``, ``ratio``, ``output_points``,
+    ``arcs``, ``points_cheaper``, ``verbatim``, ``skipped``, ``dropped``,
+    ``seconds``, ...). What the container cannot hold is listed in
+    ``dropped`` and warned about (``strict=True``: an error); ``skip_bad=True``
+    leaves out curves with unusable points (listed in ``skipped``) instead of
+    failing. ``OSError`` when a file cannot be read or written, ``ValueError``
+    for bad data, naming the file and curve.
     """
-    return _strandfit.compress_file(os.fspath(src), os.fspath(dst), _tolerance(tolerance))
+    report = _strandfit.compress_file(os.fspath(src), os.fspath(dst), _tolerance(tolerance), bool(strict), bool(skip_bad))
+    return _warn_dropped(report)
 
 
-def decompress_file(src: PathLike, dst: PathLike) -> dict:
+def decompress_file(src: PathLike, dst: PathLike, points: Optional[int] = None, step: Optional[float] = None, strict: bool = False) -> dict:
     """Decompress a container to a curve file, its format from ``dst``'s extension.
 
-    The same as ``strandfit decompress SRC -o DST`` with its defaults.
-    Returns ``{"input", "output", "curves", "seconds"}``.
+    The same as ``strandfit decompress SRC -o DST`` (``--points``/``--step``
+    with ``points``/``step``, ``--strict`` with ``strict``). Returns
+    ``{"input", "output", "curves", "guaranteed", "dropped", "seconds"}``.
     """
-    return _strandfit.decompress_file(os.fspath(src), os.fspath(dst))
+    points, step = _resampling(points, step)
+    report = _strandfit.decompress_file(os.fspath(src), os.fspath(dst), points, step, bool(strict))
+    return _warn_dropped(report)
 
 
 def _split(positions: np.ndarray, offsets: np.ndarray) -> List[np.ndarray]:

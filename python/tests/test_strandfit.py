@@ -188,3 +188,46 @@ def test_no_memory_growth_over_repeated_calls():
     # Peak resident memory may not grow by more than a few MiB over 200
     # round trips of ~0.3 MB of points each (60 MB in all).
     assert rss_kib() - before < 8 * 1024
+
+
+def test_the_report_is_the_command_lines_json(tmp_path):
+    import json
+
+    report = strandfit.compress_file(FORNIX, tmp_path / "py.sfh", tolerance=0.3)
+    out = subprocess.run(
+        [BIN, "compress", str(FORNIX), "--tolerance", "0.3", "--json", "-o", str(tmp_path / "cli.sfh")],
+        check=True,
+        capture_output=True,
+    )
+    cli = json.loads(out.stdout)
+    assert list(report) == list(cli)
+    for k in cli:
+        if k not in ("output", "seconds", "curves_per_second"):
+            assert report[k] == cli[k], k
+
+
+def test_resampling_warns_and_matches_the_command_line(tmp_path):
+    rng = np.random.default_rng(6)
+    positions, offsets = pack(random_curves(rng, 20))
+    data = strandfit.compress_arrays(positions, offsets, 0.2)
+    with pytest.warns(UserWarning, match="gives up the guarantee"):
+        p, o = strandfit.decompress_arrays(data, points=7)
+    assert np.all(np.diff(o) == 7) and len(o) == 21
+    with pytest.warns(UserWarning):
+        p, o = strandfit.decompress_arrays(data, step=0.5)
+    lengths = np.diff(o)
+    assert np.all(lengths >= 2)
+    for bad in [dict(points=1), dict(step=-1.0), dict(points=3, step=1.0)]:
+        with pytest.raises(ValueError), pytest.warns(UserWarning):
+            strandfit.decompress_arrays(data, **bad)
+    sfh = tmp_path / "f.sfh"
+    strandfit.compress_file(FORNIX, sfh, 0.5)
+    with pytest.warns(UserWarning):
+        r = strandfit.decompress_file(sfh, tmp_path / "py.tck", points=12)
+    assert r["curves"] == 300 and r["guaranteed"] is False
+    subprocess.run(
+        [BIN, "decompress", str(sfh), "--points", "12", "-o", str(tmp_path / "cli.tck")],
+        check=True,
+        capture_output=True,
+    )
+    assert (tmp_path / "py.tck").read_bytes() == (tmp_path / "cli.tck").read_bytes()

@@ -39,7 +39,7 @@ pub struct CompressReport {
     pub ratio: f64,
     pub distance: &'static str,
     pub tolerance: Option<f64>,
-    /// Container version written (2: the arc codec; 1: helix chains).
+    /// Container version written (3: the arc codec; 1: helix chains).
     pub container_version: u16,
     /// Mean fitted distance (version 1 only: version 3 checks each curve
     /// against the tolerance, and does not measure below it).
@@ -374,7 +374,7 @@ fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
         ratio: bytes_in as f64 / summary.bytes.max(1) as f64,
         distance: "hausdorff",
         tolerance: Some(tolerance),
-        container_version: 2,
+        container_version: 3,
         mean_distance: None,
         max_distance: tolerance,
         output_points: summary.output_points,

@@ -240,3 +240,73 @@ pub fn read_range(
     }
     Ok(out)
 }
+
+/// A decoded curve as written: as decoded (`points` and `step` `None`: the
+/// points the guarantee is about), or resampled to `points` points or every
+/// `step` along its arc length, its per-point values (`width` per point)
+/// carried onto the new points ([`super::point_data::carry`]). Resampling
+/// gives up the guarantee.
+pub fn output_curve(
+    c: DecodedCurve,
+    points: Option<usize>,
+    step: Option<f64>,
+    width: usize,
+) -> Curve {
+    match (points, step) {
+        (None, None) => Curve {
+            id: c.id,
+            points: c.points,
+            point_data: c.point_data,
+            curve_data: c.curve_data,
+        },
+        (m, s) => {
+            let resampled = resample_polyline(&c.points, m, s);
+            Curve {
+                id: c.id,
+                point_data: super::point_data::carry(&c.points, &c.point_data, width, &resampled),
+                points: resampled,
+                curve_data: c.curve_data,
+            }
+        }
+    }
+}
+
+/// `m` points equally spaced in arc length along the polyline (or points
+/// `step` apart, both ends kept).
+pub fn resample_polyline(
+    p: &[glam::DVec3],
+    m: Option<usize>,
+    step: Option<f64>,
+) -> Vec<glam::DVec3> {
+    if p.len() < 2 {
+        return p.to_vec();
+    }
+    let mut cum = Vec::with_capacity(p.len());
+    let mut total = 0.0;
+    cum.push(0.0);
+    for w in p.windows(2) {
+        total += w[0].distance(w[1]);
+        cum.push(total);
+    }
+    let m = match (m, step) {
+        (Some(m), _) => m.max(2),
+        (None, Some(s)) => ((total / s).ceil() as usize + 1).clamp(2, 1 << 24),
+        (None, None) => p.len(),
+    };
+    let mut out = Vec::with_capacity(m);
+    let mut seg = 0;
+    for k in 0..m {
+        let s = total * k as f64 / (m - 1) as f64;
+        while seg + 2 < p.len() && cum[seg + 1] < s {
+            seg += 1;
+        }
+        let len = cum[seg + 1] - cum[seg];
+        let t = if len > 0.0 {
+            ((s - cum[seg]) / len).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        out.push(p[seg].lerp(p[seg + 1], t));
+    }
+    out
+}
