@@ -28,6 +28,16 @@ fn ok(args: &[&str]) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
+/// The files of `dir`, sorted by name.
+fn sorted_files(dir: &Path) -> Vec<PathBuf> {
+    let mut names: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    names.sort();
+    names
+}
+
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -78,11 +88,7 @@ fn split_then_merge_gives_back_the_container_byte_for_byte() {
         .map(|s| s["curves"].as_u64().unwrap())
         .collect();
     assert_eq!(counts, [4096, 4096 + 808]);
-    let mut names: Vec<PathBuf> = std::fs::read_dir(&shards)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
-    names.sort();
+    let names = sorted_files(&shards);
     assert_eq!(names.len(), 2);
     assert!(names[0].ends_with("c9000_0.2-00000.sfh"), "{names:?}");
     // Each shard decodes to its curves of the whole.
@@ -109,11 +115,7 @@ fn split_then_merge_gives_back_the_container_byte_for_byte() {
     // merge the same way.
     let small = dir.path().join("small");
     ok(&["split", s(&c), "--curves-per-shard", "1", "-o", s(&small)]);
-    let mut names: Vec<PathBuf> = std::fs::read_dir(&small)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
-    names.sort();
+    let names = sorted_files(&small);
     assert_eq!(names.len(), 3);
     let mut args = vec!["merge"];
     args.extend(names.iter().map(|p| s(p)));

@@ -135,6 +135,22 @@ fn compress_arrays<'py>(
     Ok(PyBytes::new(py, &bytes))
 }
 
+/// With `strict`, what the output cannot hold is an error (as the command
+/// line's `--strict`); otherwise it is reported in the result's `dropped`.
+fn refuse_losses(src: &Path, dst: &Path, dropped: &[String], strict: bool) -> Result<(), IoError> {
+    if strict && !dropped.is_empty() {
+        return Err(IoError::new(
+            src,
+            format!(
+                "writing {} would drop {} (strict)",
+                dst.display(),
+                dropped.join("; ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// `points` at least 2 and `step` positive, as the command line checks.
 fn check_resampling(points: Option<usize>, step: Option<f64>) -> PyResult<()> {
     if points.is_some() && step.is_some() {
@@ -223,16 +239,7 @@ fn compress_file<'py>(
             let meta = reader.metadata().clone();
             let mut dropped = source_losses(&meta);
             dropped.extend(data_losses(&meta, |_| true, true, "sfh"));
-            if strict && !dropped.is_empty() {
-                return Err(IoError::new(
-                    &src,
-                    format!(
-                        "writing {} would drop {} (strict)",
-                        dst.display(),
-                        dropped.join("; ")
-                    ),
-                ));
-            }
+            refuse_losses(&src, &dst, &dropped, strict)?;
             let header = CodecHeader::new(
                 tolerance,
                 SourceMeta::from_metadata(&meta, None),
@@ -409,16 +416,7 @@ fn decompress_file<'py>(
             meta.point_data_names = header.point_data_names.clone();
             let format = Format::from_path(&dst)?;
             let dropped = format.losses(&meta);
-            if strict && !dropped.is_empty() {
-                return Err(IoError::new(
-                    &src,
-                    format!(
-                        "writing {} would drop {} (strict)",
-                        dst.display(),
-                        dropped.join("; ")
-                    ),
-                ));
-            }
+            refuse_losses(&src, &dst, &dropped, strict)?;
             let mut writer = create_writer(&dst, Some(format), &meta)?;
             let width = header.point_data_names.len();
             let map = move |c: DecodedCurve| output_curve(c, points, step, width);

@@ -1087,6 +1087,17 @@ mod tests {
     fn write(path: &Path, cs: &[(Option<String>, Vec<DVec3>, Vec<f32>)], per_block: usize) -> u64 {
         let h = header(2);
         let mut w = CodecWriter::create(path, &h).unwrap();
+        write_blocks(&mut w, &h, cs, per_block);
+        w.finish().unwrap()
+    }
+
+    /// Encodes `cs` in blocks of `per_block` curves into `w`.
+    fn write_blocks(
+        w: &mut CodecWriter,
+        h: &CodecHeader,
+        cs: &[(Option<String>, Vec<DVec3>, Vec<f32>)],
+        per_block: usize,
+    ) {
         for chunk in cs.chunks(per_block) {
             let values: Vec<Vec<f32>> = chunk.iter().map(|(_, p, _)| arc_values(p)).collect();
             let ins: Vec<CurveIn> = chunk
@@ -1103,7 +1114,6 @@ mod tests {
             b.verify(&h.params()).unwrap();
             w.write_block(&b).unwrap();
         }
-        w.finish().unwrap()
     }
 
     #[test]
@@ -1118,21 +1128,7 @@ mod tests {
         let h = header(2);
         let mut w = CodecWriter::in_memory(&h);
         assert_eq!(w.target(), Path::new(IN_MEMORY));
-        for chunk in cs.chunks(7) {
-            let values: Vec<Vec<f32>> = chunk.iter().map(|(_, p, _)| arc_values(p)).collect();
-            let ins: Vec<CurveIn> = chunk
-                .iter()
-                .zip(&values)
-                .map(|((id, p, d), v)| CurveIn {
-                    id: id.as_deref(),
-                    points: p,
-                    point_data: v,
-                    curve_data: d,
-                })
-                .collect();
-            w.write_block(&encode_block_bytes(&ins, &h.params(), 2, 1).unwrap())
-                .unwrap();
-        }
+        write_blocks(&mut w, &h, &cs, 7);
         let memory = w.finish_bytes().unwrap();
         assert_eq!(memory, file);
         let mut from_file = CodecReader::open(&p).unwrap();
