@@ -11,6 +11,9 @@ use crate::io::inspect::CurveStats;
 use crate::io::{open_reader, Format};
 
 pub fn run(args: &InspectArgs) -> Result<()> {
+    if let (Some(out), Some(source)) = (&args.preview, &args.source) {
+        return preview(args, source, out);
+    }
     if crate::codec::container::container_version(&args.input).is_some_and(|v| v >= 2) {
         return inspect_codec_container(args);
     }
@@ -290,4 +293,61 @@ fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
         Some(e) => Err(anyhow::anyhow!("{e} (after {curves} complete curves)")),
         None => Ok(()),
     }
+}
+
+/// `inspect CONTAINER --preview OUT.svg --source INPUT`: the picture of
+/// [`crate::metrics::preview_svg`], written atomically.
+fn preview(args: &InspectArgs, source: &std::path::Path, out: &std::path::Path) -> Result<()> {
+    use crate::codec::container::{container_version, CodecReader};
+    use crate::codec::stream::read_range;
+    use std::io::Write;
+
+    if container_version(&args.input) != Some(3) {
+        anyhow::bail!(
+            "{}: --preview draws a version-3 container (written by compress --tolerance)",
+            args.input.display()
+        );
+    }
+    let mut reader = CodecReader::open(&args.input)?;
+    let tolerance = reader.header().tolerance;
+    let n = reader.curve_count().min(args.preview_curves);
+    let decoded: Vec<Vec<glam::DVec3>> = read_range(&mut reader, 0, n)?
+        .into_iter()
+        .map(|c| c.points)
+        .collect();
+    let format = args.format.as_deref().map(parse_format).transpose()?;
+    let mut input = Vec::with_capacity(decoded.len());
+    for c in open_reader(source, format)?.take(n as usize) {
+        input.push(c?.points);
+    }
+    if input.len() != decoded.len() {
+        anyhow::bail!(
+            "{}: {} curves, but {} holds at least {}: is it the file the container was made from?",
+            source.display(),
+            input.len(),
+            args.input.display(),
+            decoded.len()
+        );
+    }
+    let svg = crate::metrics::preview_svg(&input, &decoded, tolerance);
+    let worst = input
+        .iter()
+        .zip(&decoded)
+        .flat_map(|(i, d)| {
+            d.iter()
+                .map(move |p| crate::metrics::distance_to_polyline(*p, i))
+        })
+        .fold(0.0, f64::max);
+    let mut file = crate::io::AtomicFile::create(out)?;
+    file.write_all(svg.as_bytes()).map_err(|e| file.err(e))?;
+    file.commit()?;
+    eprintln!(
+        "{}: {} curves of {} drawn over {}; largest distance of a decoded point from its input {:.4} (tolerance {tolerance})",
+        out.display(),
+        decoded.len(),
+        args.input.display(),
+        source.display(),
+        worst
+    );
+    Ok(())
 }

@@ -500,6 +500,17 @@ pub struct MergeArgs {
 pub struct InspectArgs {
     /// The file to inspect.
     pub input: PathBuf,
+    /// With a .sfh container (version 3): draw its decoded curves over
+    /// those of --source in three orthographic views, coloured by the
+    /// local error, as an SVG picture.
+    #[arg(long, requires = "source")]
+    pub preview: Option<PathBuf>,
+    /// The file the container was compressed from (for --preview).
+    #[arg(long, requires = "preview")]
+    pub source: Option<PathBuf>,
+    /// Curves drawn by --preview at most (the first ones).
+    #[arg(long, default_value_t = 2000)]
+    pub preview_curves: u64,
     /// Its format (default: from the extension): tck, trk, trx, vtk, hair, json, csv.
     #[arg(long)]
     pub format: Option<String>,
