@@ -80,16 +80,17 @@ fn split_then_merge_gives_back_the_container_byte_for_byte() {
         "--json",
     ]);
     let report: serde_json::Value = serde_json::from_str(&report).unwrap();
-    // Whole blocks of 4,096 (the last 808), at most 5,000 a shard.
+    // At most 5,000 a shard, rounded down to whole blocks of 4,096: the
+    // shards of `strandfit.dask.compress_sharded` with the same N.
     let counts: Vec<u64> = report["shards"]
         .as_array()
         .unwrap()
         .iter()
         .map(|s| s["curves"].as_u64().unwrap())
         .collect();
-    assert_eq!(counts, [4096, 4096 + 808]);
+    assert_eq!(counts, [4096, 4096, 808]);
     let names = sorted_files(&shards);
-    assert_eq!(names.len(), 2);
+    assert_eq!(names.len(), 3);
     assert!(names[0].ends_with("c9000_0.2-00000.sfh"), "{names:?}");
     // Each shard decodes to its curves of the whole.
     let full_tck = dir.path().join("full.tck");
@@ -112,8 +113,28 @@ fn split_then_merge_gives_back_the_container_byte_for_byte() {
     ok(&args);
     assert_eq!(std::fs::read(&merged).unwrap(), std::fs::read(&c).unwrap());
     // Shards of one block each (fewer curves asked than a block holds)
-    // merge the same way.
+    // merge the same way; a split into bigger shards in the same folder
+    // leaves none of the earlier ones behind.
     let small = dir.path().join("small");
+    ok(&[
+        "split",
+        s(&c),
+        "--curves-per-shard",
+        "9000",
+        "-o",
+        s(&small),
+    ]);
+    ok(&["split", s(&c), "--curves-per-shard", "1", "-o", s(&small)]);
+    assert_eq!(sorted_files(&small).len(), 3);
+    ok(&[
+        "split",
+        s(&c),
+        "--curves-per-shard",
+        "8192",
+        "-o",
+        s(&small),
+    ]);
+    assert_eq!(sorted_files(&small).len(), 2);
     ok(&["split", s(&c), "--curves-per-shard", "1", "-o", s(&small)]);
     let names = sorted_files(&small);
     assert_eq!(names.len(), 3);

@@ -180,7 +180,9 @@ fn resampled(
     }
     curves
         .into_iter()
-        .map(|c| {
+        .map(|mut c| {
+            // Per-point values are not returned with arrays.
+            c.point_data.clear();
             let out = output_curve(c, points, step, 0);
             DecodedCurve {
                 id: out.id,
@@ -355,9 +357,10 @@ fn compress_file_range<'py>(
                 skip: first,
                 left: count,
             };
-            // Errors about the input name its curve as counted in the file.
+            // Errors name curves as counted in the file: the reader's
+            // already do; the encoder's count from the range's start.
             compress_stream(&mut reader, &src, &dst, &header, None, &mut |_| {}).map_err(|mut e| {
-                if e.path == src {
+                if e.path == src && e.reason.starts_with("cannot be compressed") {
                     e.curve = e.curve.map(|c| c + first);
                 }
                 e

@@ -26,6 +26,7 @@ True
 
 from __future__ import annotations
 
+import operator
 import os
 import warnings
 from typing import Iterator, List, Optional, Sequence, Tuple, Union
@@ -106,6 +107,12 @@ def compress_arrays(positions, offsets, tolerance: float = 0.5) -> bytes:
 
 
 def _resampling(points, step):
+    if points is not None and step is not None:
+        raise ValueError("give points or step, not both")
+    if points is not None and int(points) < 2:
+        raise ValueError(f"points must be at least 2, got {points}")
+    if step is not None and not (float(step) > 0 and np.isfinite(float(step))):
+        raise ValueError(f"step must be positive, got {step}")
     if points is not None or step is not None:
         warnings.warn(
             "resampling (points or step) gives up the guarantee that every curve is within "
@@ -198,6 +205,8 @@ def compress_streamlines(streamlines, tolerance: float = 0.5) -> bytes:
     for i, a in enumerate(arrays):
         if a.ndim != 2 or (a.size and a.shape[1] != 3):
             raise ValueError(f"streamline {i} has shape {a.shape}, expected (n, 3)")
+        if a.dtype not in (np.float32, np.float64):
+            raise ValueError(f"streamline {i} is {a.dtype}; positions must be float32 or float64")
     lengths = np.array([len(a) for a in arrays], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
     positions = (
@@ -247,11 +256,14 @@ class Container:
     def __getitem__(self, key):
         n = len(self)
         if isinstance(key, slice):
-            start, stop, step = key.indices(n)
-            if step != 1:
-                return [self[i] for i in range(start, stop, step)]
-            return _split(*self.read(start, max(start, stop)))
-        i = int(key)
+            indices = range(*key.indices(n))
+            if len(indices) == 0:
+                return []
+            # One read of the span: each block is decoded once.
+            lo, hi = min(indices), max(indices) + 1
+            curves = _split(*self.read(lo, hi))
+            return [curves[i - lo] for i in indices]
+        i = operator.index(key)
         if i < 0:
             i += n
         if not 0 <= i < n:

@@ -113,4 +113,10 @@ def compress_sharded(
         (src, os.path.join(out_dir, f"{_stem(src)}-{k:05d}.sfh"), float(tolerance), a, min(per, n - a))
         for k, a in enumerate(firsts)
     ]
-    return _run(_client(client), _compress_range, tasks)
+    reports = _run(_client(client), _compress_range, tasks)
+    # Shards of an earlier, longer run would be taken for this one's.
+    k = len(tasks)
+    while os.path.isfile(os.path.join(out_dir, f"{_stem(src)}-{k:05d}.sfh")):
+        os.remove(os.path.join(out_dir, f"{_stem(src)}-{k:05d}.sfh"))
+        k += 1
+    return reports

@@ -82,3 +82,20 @@ def test_compress_sharded_writes_the_shards_of_compress_then_split(tmp_path, cli
     merged = tmp_path / "merged.sfh"
     cli("merge", *mine, "-o", merged)
     assert merged.read_bytes() == whole.read_bytes()
+
+
+def test_sharding_rounds_to_whole_blocks_like_split_and_clears_old_shards(tmp_path):
+    rng = np.random.default_rng(8)
+    curves = [o + np.cumsum(rng.normal(0, 1, (int(rng.integers(2, 9)), 3)), axis=0) for o in rng.uniform(-9, 9, (5000, 3))]
+    src = tmp_path / "five.tck"
+    write_tck(src, curves)
+    out = tmp_path / "dask"
+    strandfit.dask.compress_sharded(src, out, 9000, tolerance=0.3)  # one shard
+    reports = strandfit.dask.compress_sharded(src, out, 5000, tolerance=0.3)
+    assert [r["curves"] for r in reports] == [4096, 904]
+    whole = tmp_path / "whole.sfh"
+    cli("compress", src, "--tolerance", "0.3", "-o", whole)
+    cli("split", whole, "--curves-per-shard", "5000", "-o", tmp_path / "split")
+    mine = sorted(out.glob("*.sfh"))
+    theirs = sorted((tmp_path / "split").glob("*.sfh"))
+    assert [p.read_bytes() for p in mine] == [p.read_bytes() for p in theirs]

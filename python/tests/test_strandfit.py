@@ -218,7 +218,7 @@ def test_resampling_warns_and_matches_the_command_line(tmp_path):
     lengths = np.diff(o)
     assert np.all(lengths >= 2)
     for bad in [dict(points=1), dict(step=-1.0), dict(points=3, step=1.0)]:
-        with pytest.raises(ValueError), pytest.warns(UserWarning):
+        with pytest.raises(ValueError):
             strandfit.decompress_arrays(data, **bad)
     sfh = tmp_path / "f.sfh"
     strandfit.compress_file(FORNIX, sfh, 0.5)
@@ -231,3 +231,22 @@ def test_resampling_warns_and_matches_the_command_line(tmp_path):
         capture_output=True,
     )
     assert (tmp_path / "py.tck").read_bytes() == (tmp_path / "cli.tck").read_bytes()
+
+
+def test_container_slices_with_steps_read_each_block_once(tmp_path):
+    rng = np.random.default_rng(12)
+    positions, offsets = pack(random_curves(rng, 5000))
+    path = tmp_path / "s.sfh"
+    path.write_bytes(strandfit.compress_arrays(positions, offsets, tolerance=0.3))
+    full = strandfit.decompress_streamlines(path.read_bytes())
+    c = strandfit.open(path)
+    for key in [slice(None, None, -1), slice(10, 4200, 97), slice(4999, 0, -250), slice(3, 3)]:
+        got, want = c[key], full[key]
+        assert len(got) == len(want) and all(np.array_equal(g, w) for g, w in zip(got, want))
+    with pytest.raises(TypeError):
+        c[1.7]
+    for bad in [dict(points=-3), dict(points=1), dict(step=0.0)]:
+        with pytest.raises(ValueError):
+            strandfit.decompress_arrays(path.read_bytes(), **bad)
+    with pytest.raises(ValueError, match="float32 or float64"):
+        strandfit.compress_streamlines([np.zeros((3, 3), dtype=np.int64)])

@@ -302,9 +302,10 @@ fn preview(args: &InspectArgs, source: &std::path::Path, out: &std::path::Path) 
     use crate::codec::stream::read_range;
     use std::io::Write;
 
-    if container_version(&args.input) != Some(3) {
+    if let Some(v) = container_version(&args.input).filter(|&v| v != 3) {
         anyhow::bail!(
-            "{}: --preview draws a version-3 container (written by compress --tolerance)",
+            "{}: --preview draws a version-3 container (written by compress --tolerance); \
+             this is version {v}",
             args.input.display()
         );
     }
@@ -316,8 +317,12 @@ fn preview(args: &InspectArgs, source: &std::path::Path, out: &std::path::Path) 
         .map(|c| c.points)
         .collect();
     let format = args.format.as_deref().map(parse_format).transpose()?;
+    // The source's bad curves are left out, as `compress --skip-bad` left
+    // them out (without it, a source with bad curves could not have been
+    // compressed): the curves then pair by index.
     let mut input = Vec::with_capacity(decoded.len());
-    for c in open_reader(source, format)?.take(n as usize) {
+    let bad = crate::io::BadCurves::Skip;
+    for c in crate::io::open_reader_with(source, format, bad)?.take(n as usize) {
         input.push(c?.points);
     }
     if input.len() != decoded.len() {

@@ -488,6 +488,35 @@ mod tests {
     }
 
     #[test]
+    fn f32_checks_of_huge_and_tiny_curves_defer_to_the_reference() {
+        use crate::codec::{encode_block, encode_block_on, CodecParams};
+        use crate::gpu::arc_check::TwinArcChecker;
+        // Squared lengths beyond f32 (overflow to infinity), and a
+        // tolerance whose square is below f32's normal range.
+        let huge = vec![
+            DVec3::ZERO,
+            DVec3::new(4e19, 0.0, 0.0),
+            DVec3::new(8e19, 5e14, 0.0),
+            DVec3::new(1.2e20, 2e15, 1e14),
+        ];
+        let tiny: Vec<DVec3> = (0..12)
+            .map(|k| DVec3::new(k as f64, (k as f64 * 0.7).sin(), 0.0) * 1e-22)
+            .collect();
+        for (curve, tol) in [(huge, 1e15), (tiny, 3e-23)] {
+            let params = CodecParams::new(tol);
+            let cpu = encode_block(&[curve.clone()], &params).unwrap();
+            let checker = TwinArcChecker::<f32>::default();
+            let b = encode_block_on(&[curve], &params, false, Some(&checker)).unwrap();
+            assert_eq!(b.bytes, cpu.bytes, "tolerance {tol}");
+            assert!(
+                b.checks.checked > 0 && b.checks.unsure == b.checks.checked,
+                "{:?}",
+                b.checks
+            );
+        }
+    }
+
+    #[test]
     fn batched_searches_write_the_bytes_of_the_cpu_path() {
         use crate::codec::{encode_block, encode_block_on, CodecParams};
         use crate::gpu::arc_check::TwinArcChecker;

@@ -67,6 +67,20 @@ pub struct CodecHeader {
 impl CodecHeader {
     /// A header for the current model with the default steps.
     pub fn new(tolerance: f64, source: SourceMeta, point_data_names: Vec<String>) -> Self {
+        // A .tck source's datatype is left out where it is what the .tck
+        // writer writes by default in the same place (Float32LE, after the
+        // other lines): 20 bytes of every such file. Here, not when the
+        // header is written, so that a header read back (split, merge) is
+        // written as it was.
+        let mut source = source;
+        if source.format == "tck"
+            && source
+                .extra
+                .last()
+                .is_some_and(|(k, v)| k == "datatype" && v == "Float32LE")
+        {
+            source.extra.pop();
+        }
         CodecHeader {
             model: MODEL,
             tolerance,
@@ -143,17 +157,8 @@ impl CodecHeader {
         for n in &m.curve_data_names {
             put_str(&mut b, n);
         }
-        // A .tck source's datatype is left out where it is what the .tck
-        // writer writes by default in the same place (Float32LE, after the
-        // other lines): 20 bytes of every such file.
-        let extra = match m.extra.split_last() {
-            Some(((k, v), rest)) if m.format == "tck" && k == "datatype" && v == "Float32LE" => {
-                rest
-            }
-            _ => &m.extra[..],
-        };
-        put_varint(&mut b, extra.len() as u64);
-        for (k, v) in extra {
+        put_varint(&mut b, m.extra.len() as u64);
+        for (k, v) in &m.extra {
             put_str(&mut b, k);
             put_str(&mut b, v);
         }
@@ -531,8 +536,11 @@ impl CodecWriter {
         let raw = header.to_bytes();
         // A .trk source's 1000-byte header, or long titles, deflate well;
         // the usual few dozen bytes do not.
-        let packed = deflate(&raw)
-            .map_err(|e| IoError::new(Path::new(IN_MEMORY), format!("deflate: {e}")))?;
+        let target = match &out {
+            Sink::File(f) => f.target().to_path_buf(),
+            Sink::Memory(_) => PathBuf::from(IN_MEMORY),
+        };
+        let packed = deflate(&raw).map_err(|e| IoError::new(&target, format!("deflate: {e}")))?;
         let mut body = Vec::with_capacity(raw.len() + 1);
         if packed.len() + 4 < raw.len() {
             body.push(1);

@@ -38,13 +38,17 @@ pub fn shard_path(input: &Path, dir: &Path, k: usize) -> PathBuf {
 
 /// Cuts the container at `input` into shards of whole blocks holding at
 /// most `curves_per_shard` curves each (but at least one block), written
-/// atomically into `dir` (made if missing) as [`shard_path`] names them.
-/// On an error the shards already written are removed: nothing is left
-/// half done.
+/// atomically into `dir` (made if missing) as [`shard_path`] names them;
+/// shards of an earlier, longer split of the same input in `dir` are
+/// removed. On an error the shards already written are removed: nothing
+/// is left half done.
 pub fn split(input: &Path, dir: &Path, curves_per_shard: u64) -> Result<Vec<Shard>, IoError> {
     if curves_per_shard == 0 {
         return Err(IoError::new(input, "curves per shard must be at least 1"));
     }
+    // Whole blocks: the capacity is rounded down to them, one at least.
+    let block = super::container::BLOCK_CURVES as u64;
+    let capacity = (curves_per_shard / block).max(1) * block;
     let mut reader = CodecReader::open(input)?;
     let header = reader.header().clone();
     // The folder is made once the input is known good, and removed again
@@ -58,7 +62,7 @@ pub fn split(input: &Path, dir: &Path, curves_per_shard: u64) -> Result<Vec<Shar
             let (first, count) = reader.block_span(b);
             let full = current
                 .as_ref()
-                .is_some_and(|(w, _)| w.curves() + count > curves_per_shard);
+                .is_some_and(|(w, _)| w.curves() + count > capacity);
             if full {
                 let (w, mut s) = current.take().expect("open shard");
                 s.bytes = w.finish()?;
@@ -101,7 +105,16 @@ pub fn split(input: &Path, dir: &Path, curves_per_shard: u64) -> Result<Vec<Shar
         Ok(())
     })();
     match result {
-        Ok(()) => Ok(shards),
+        Ok(()) => {
+            // Shards of an earlier, longer split of the same input would
+            // be taken for this one's by `merge DIR/*.sfh`: removed.
+            let mut k = shards.len();
+            while shard_path(input, dir, k).is_file() {
+                let _ = std::fs::remove_file(shard_path(input, dir, k));
+                k += 1;
+            }
+            Ok(shards)
+        }
         Err(e) => {
             for s in &shards {
                 let _ = std::fs::remove_file(&s.path);

@@ -62,10 +62,20 @@ pub fn pack<R: Real>(c: &ArcCandidate) -> ([R; IN_STRIDE], [u32; IDX_STRIDE]) {
     (rec, idx)
 }
 
-/// Whether a candidate's records are usable in `R` (finite after the
-/// conversion); others are answered unsure.
-fn fits<R: Real>(rec: &[R]) -> bool {
-    rec.iter().all(|x| x.is_finite())
+/// Whether a candidate can be checked in `R` (others are answered
+/// unsure): its records finite after the conversion; no squared length the
+/// kernel forms (at most `(2(radius + length))²`) overflowing; `tol²`
+/// comfortably in `R`'s normal range, so that no squared distance near it
+/// is flushed to zero.
+fn fits<R: Real>(rec: &[R], c: &ArcCandidate) -> bool {
+    let max = R::from_f64(f64::MAX).to_f64();
+    let min_normal = if std::mem::size_of::<R>() == 4 {
+        f32::MIN_POSITIVE as f64
+    } else {
+        f64::MIN_POSITIVE
+    };
+    let span = c.radius + c.length;
+    rec.iter().all(|x| x.is_finite()) && 16.0 * span * span < max && c.tol2 > 1e6 * min_normal
 }
 
 fn verdict(v: u32) -> Verdict {
@@ -182,7 +192,7 @@ impl ArcCheckSession<'_> {
         let mut usable = vec![true; n];
         for (k, c) in candidates.iter().enumerate() {
             let (r, i) = pack::<R>(c);
-            usable[k] = fits(&r);
+            usable[k] = fits(&r, c);
             rec[k * IN_STRIDE..(k + 1) * IN_STRIDE].copy_from_slice(&r);
             idx[k * IDX_STRIDE..(k + 1) * IDX_STRIDE].copy_from_slice(&i);
             if !usable[k] {
@@ -350,7 +360,7 @@ pub fn verdicts_twin<R: Real>(points: &[R], candidates: &[ArcCandidate]) -> Vec<
         .iter()
         .map(|c| {
             let (rec, idx) = pack::<R>(c);
-            if fits(&rec) {
+            if fits(&rec, c) {
                 verdict(twin::arc_check(&rec, &idx, points))
             } else {
                 Verdict::Unsure

@@ -177,9 +177,16 @@ fn classify<R: Real>(
             *near = k;
         }
     }
+    verdict_of(best, lo, hi)
+}
+
+/// PASS at or below `lo`, FAIL above `hi` (finite: an overflow is never a
+/// sure fail), UNSURE between.
+#[inline]
+fn verdict_of<R: Real>(best: R, lo: R, hi: R) -> u32 {
     if best <= lo {
         PASS
-    } else if best > hi {
+    } else if best > hi && best.is_finite() {
         FAIL
     } else {
         UNSURE
@@ -220,14 +227,7 @@ pub fn arc_check<R: Real>(rec: &[R], idx: &[u32], points: &[R]) -> u32 {
         let q = arc.sample(k);
         let v = if segs == 0 {
             let d = sub(q, point(w0));
-            let d = dot(d, d);
-            if d <= lo {
-                PASS
-            } else if d > hi {
-                FAIL
-            } else {
-                UNSURE
-            }
+            verdict_of(dot(d, d), lo, hi)
         } else {
             classify(q, segs, &mut near, lo, hi, |k, p| {
                 dist2_to_segment(p, point(w0 + k), point(w0 + k + 1))
