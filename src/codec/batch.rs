@@ -504,7 +504,7 @@ mod tests {
             .collect();
         for (curve, tol) in [(huge, 1e15), (tiny, 3e-23)] {
             let params = CodecParams::new(tol);
-            let cpu = encode_block(&[curve.clone()], &params).unwrap();
+            let cpu = encode_block(std::slice::from_ref(&curve), &params).unwrap();
             let checker = TwinArcChecker::<f32>::default();
             let b = encode_block_on(&[curve], &params, false, Some(&checker)).unwrap();
             assert_eq!(b.bytes, cpu.bytes, "tolerance {tol}");

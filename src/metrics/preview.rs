@@ -82,7 +82,7 @@ impl Pen {
         let tenths = |v: i64| {
             let sign = if v < 0 { "-" } else { "" };
             let a = v.unsigned_abs();
-            if a % 10 == 0 {
+            if a.is_multiple_of(10) {
                 format!("{sign}{}", a / 10)
             } else {
                 format!("{sign}{}.{}", a / 10, a % 10)
