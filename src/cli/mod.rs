@@ -612,7 +612,7 @@ pub fn main() -> ExitCode {
         Command::Sketch(a) => sketch_cmd::run(a),
         // The codec's checks run on the GPU only when asked for: its GPU
         // path gives the same bytes but is not yet measured faster than the
-        // CPU's (README, "Backends"), so auto keeps compress on the CPU.
+        // CPU's (docs/reference.md, "Backends"), so auto keeps compress on the CPU.
         Command::Compress(a) if cli.backend == BackendArg::Gpu => {
             cli.backend().and_then(|b| compress_cmd::run(a, &b))
         }

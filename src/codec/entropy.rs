@@ -6,7 +6,7 @@
 //! codes is ours: the codec's model is the choice of *which* adaptive
 //! context each bit goes through ([`IntModel`]). Measured against zstd -19
 //! on the same integer streams it is what makes the residuals small (see
-//! the README's compression section); a general-purpose compressor cannot
+//! docs/reference.md, "Compression, measured"); a general-purpose compressor cannot
 //! learn that the third bit of a chord length is nearly always 1.
 //!
 //! Integers are binarised as in CABAC's Exp-Golomb scheme: a zero flag, a

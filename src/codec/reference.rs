@@ -13,7 +13,7 @@
 //!
 //! On the resampled bundles of the shared data (20 points 4–11 mm apart)
 //! the best of the 32 previous curves cuts the residuals' entropy from 3.5
-//! to 2.4 bits per coordinate at 0.5 mm (benches note in the README); the
+//! to 2.4 bits per coordinate at 0.5 mm (docs/reference.md, "Compression, measured"); the
 //! encoder picks by estimated cost, so a curve with no good neighbour
 //! keeps its own second-order prediction.
 

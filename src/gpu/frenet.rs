@@ -138,7 +138,7 @@ impl FrenetGpu {
 
     /// Each problem's end point and frame after `steps` steps: what
     /// [`FrenetProblem::integrate`]`(steps)` returns, up to the kernel's
-    /// rounding (the README's tolerance table).
+    /// rounding (the tolerance table of docs/reference.md).
     pub fn integrate(
         &self,
         ctx: &GpuContext,
