@@ -511,8 +511,8 @@ mod tests {
         }
     }
 
-    #[test]
-    fn example_5_5_inserts_the_printed_points() {
+    /// Example 5.5's stream, its MinAJ2 references and initial frame.
+    fn example_5_5() -> ([DVec3; 3], Vec<DVec3>, [DVec3; 3]) {
         let p = [
             DVec3::new(0.0, 0.0, 0.0),
             DVec3::new(-5.0, 5.0, 2.0),
@@ -520,6 +520,12 @@ mod tests {
         ];
         let r = minaj2_references(&p);
         let frame = default_frame(r[0]).unwrap();
+        (p, r, frame)
+    }
+
+    #[test]
+    fn example_5_5_inserts_the_printed_points() {
+        let (p, r, frame) = example_5_5();
         for (c, want) in [
             (0.125, DVec3::new(-2.29636, 8.60499, 2.18027)),
             (0.25, DVec3::new(0.40729, 12.20998, 2.36054)),
@@ -566,13 +572,7 @@ mod tests {
         // The last segment (p_m to p_2) of Example 5.5: its end tangent is
         // on the boundary of the admissible set, whose two ends score
         // 0.94118 and 0.94116 against the reference: (5.4) takes the first.
-        let p = [
-            DVec3::new(0.0, 0.0, 0.0),
-            DVec3::new(-5.0, 5.0, 2.0),
-            DVec3::new(2.0, 2.0, 0.0),
-        ];
-        let r = minaj2_references(&p);
-        let frame = default_frame(r[0]).unwrap();
+        let (p, r, frame) = example_5_5();
         let reference = r[2].normalize();
         // c = 1/8: the admissible arc's ends score 0.9411777 and 0.9411615.
         for (c, at_least) in [(0.125, 0.94117), (0.25, 0.0)] {
