@@ -372,7 +372,7 @@ fn noisy_drawings_give_a_bounded_projection_error() {
         let r = lift_sketch(
             &sketch,
             &SketchOptions {
-                emax: 3e-3,
+                emax: Some(3e-3),
                 ..Default::default()
             },
         )
@@ -413,7 +413,10 @@ fn bad_sketches_are_refused_with_a_reason() {
     );
     let e = lift_sketch(
         &p(&[[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]]),
-        &SketchOptions { emax: 0.0, ..o },
+        &SketchOptions {
+            emax: Some(0.0),
+            ..o
+        },
     );
     assert!(matches!(e, Err(SketchError::Options(_))));
     let e = lift_sketch(
@@ -436,4 +439,154 @@ fn bad_sketches_are_refused_with_a_reason() {
     );
     let r = lift_sketch(&p(&[[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]]), &o).unwrap();
     assert!(r.points_3d.iter().all(|q| q.is_finite()));
+}
+
+/// Gaussian noise of `sigma` on each coordinate of each vertex (Box–Muller
+/// on ChaCha8, the generator of `benches/sketch_noise.rs`, so the seeds
+/// there are the drawings here).
+fn with_noise(d: &[DVec2], sigma: f64, seed: u64) -> Vec<DVec2> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut gauss = move || {
+        let u: f64 = rng.gen_range(f64::MIN_POSITIVE..1.0);
+        let v: f64 = rng.gen();
+        (-2.0 * u.ln()).sqrt() * (TAU * v).cos()
+    };
+    d.iter()
+        .map(|&p| {
+            let (x, y) = (gauss(), gauss());
+            p + sigma * DVec2::new(x, y)
+        })
+        .collect()
+}
+
+fn polyline_length(d: &[DVec2]) -> f64 {
+    d.windows(2).map(|w| (w[1] - w[0]).length()).sum()
+}
+
+fn depth(r: &strandfit::sketch::SketchLift) -> f64 {
+    spread(r.points_3d.iter().map(|p| p.z))
+}
+
+#[test]
+fn the_noise_of_a_drawing_is_estimated() {
+    use strandfit::sketch::estimate::estimate_noise;
+    use strandfit::synthetic::synthetic_sketch_curls;
+    for k in 1..=4 {
+        let d = synthetic_sketch_curls(500, k);
+        let l = polyline_length(&d);
+        let exact = estimate_noise(&d);
+        assert!(exact < 1e-5 * l, "{k} curls: {} of the length", exact / l);
+        for (i, f) in [1e-4, 1e-3, 3e-3].into_iter().enumerate() {
+            let sigma = f * l;
+            let found = estimate_noise(&with_noise(&d, sigma, i as u64));
+            assert!(
+                (found / sigma - 1.0).abs() < 0.15,
+                "{k} curls, σ = {f} L: found {}",
+                found / sigma
+            );
+        }
+    }
+}
+
+#[test]
+fn noisy_drawings_are_lifted_to_few_plausible_helices() {
+    // Issue 22: at 0.1 % noise (half a pixel on a 500-pixel stroke) the
+    // paper's E_max equals the noise, and the stroke came back as 34–50
+    // helices with depths to 10⁵ times the exact drawing's. E_max is now
+    // set from the noise the drawing shows, and helices seen end-on are
+    // refused. Measured (benches/sketch_noise.rs, seeds 0–2): at 0.1 %
+    // the count exact on 10 of 12 drawings of 1–3 helices (the others 3
+    // for 2 and 4 for 2), the depth within 2× on 11, the projection error
+    // at most 4.6 σ on 11 (15 σ on one, a stretch taken over by its
+    // neighbour); at 0.3 %, depth at most 14× the exact's on 1–4 helices.
+    use rayon::prelude::*;
+    use strandfit::synthetic::{synthetic_sketch, synthetic_sketch_curls};
+    let drawings: Vec<(usize, Vec<DVec2>)> = vec![
+        (2, synthetic_sketch(500)),
+        (1, synthetic_sketch_curls(500, 1)),
+        (2, synthetic_sketch_curls(500, 2)),
+        (3, synthetic_sketch_curls(500, 3)),
+    ];
+    let o = SketchOptions::default();
+    let exact_depth: Vec<f64> = drawings
+        .iter()
+        .map(|(_, d)| depth(&lift_sketch(d, &o).unwrap()))
+        .collect();
+    let runs: Vec<(usize, usize, f64, f64, f64)> = (0..drawings.len() * 3)
+        .into_par_iter()
+        .map(|n| {
+            let (i, seed) = (n / 3, (n % 3) as u64);
+            let (helices, d) = &drawings[i];
+            let sigma = 1e-3 * polyline_length(d);
+            let r = lift_sketch(&with_noise(d, sigma, seed), &o).unwrap();
+            // The threshold follows the noise found, 5σ̂.
+            assert!(
+                (r.emax / (5.0 * r.noise) - 1.0).abs() < 1e-12,
+                "{} {}",
+                r.emax,
+                r.noise
+            );
+            assert!((r.noise / sigma - 1.0).abs() < 0.15, "{}", r.noise / sigma);
+            for h in &r.helices {
+                assert!(h.helix.a.abs() < 10.0 * r.length, "{h:?}");
+            }
+            let ratio = depth(&r) / exact_depth[i];
+            (
+                *helices,
+                r.helices.len(),
+                ratio,
+                r.max_error / sigma,
+                r.rms_error / sigma,
+            )
+        })
+        .collect();
+    let exact_count = runs.iter().filter(|r| r.0 == r.1).count();
+    let near_depth = runs.iter().filter(|r| (0.5..=2.0).contains(&r.2)).count();
+    eprintln!("{runs:?}");
+    assert!(
+        exact_count >= 10,
+        "{exact_count}/12 with the right count: {runs:?}"
+    );
+    assert!(
+        near_depth >= 10,
+        "{near_depth}/12 with depth within 2×: {runs:?}"
+    );
+    for (want, got, ratio, max_err, rms) in &runs {
+        assert!(*got <= 2 * want, "{runs:?}");
+        assert!((0.25..=4.0).contains(ratio), "{runs:?}");
+        assert!(*max_err < 20.0 && *rms < 2.0, "{runs:?}");
+    }
+    // 0.3 %: fewer good answers, never a wild one.
+    let wild: Vec<(usize, f64)> = [(0usize, 0u64), (3, 1)]
+        .into_par_iter()
+        .map(|(i, seed)| {
+            let d = &drawings[i].1;
+            let r = lift_sketch(&with_noise(d, 3e-3 * polyline_length(d), seed), &o).unwrap();
+            (r.helices.len(), depth(&r) / exact_depth[i])
+        })
+        .collect();
+    for (count, ratio) in &wild {
+        assert!(*count <= 5 && *ratio < 20.0, "{wild:?}");
+    }
+}
+
+#[test]
+fn an_emax_given_overrides_the_noise() {
+    use strandfit::synthetic::synthetic_sketch_curls;
+    let d = synthetic_sketch_curls(300, 1);
+    let sigma = 1e-3 * polyline_length(&d);
+    let noisy = with_noise(&d, sigma, 0);
+    let auto = lift_sketch(&noisy, &SketchOptions::default()).unwrap();
+    assert!(auto.emax > 4.0 * sigma, "{} vs σ {sigma}", auto.emax);
+    let given = SketchOptions {
+        emax: Some(2e-2),
+        ..Default::default()
+    };
+    let r = lift_sketch(&noisy, &given).unwrap();
+    assert_eq!(r.emax, 2e-2 * r.length);
+    assert!(r.noise > 0.0);
+    // An exact drawing keeps the paper's 0.1 %.
+    let r = lift_sketch(&d, &SketchOptions::default()).unwrap();
+    assert_eq!(r.emax, 1e-3 * r.length);
 }

@@ -435,9 +435,10 @@ pub struct SketchArgs {
     /// Output JSON (absent: standard output). Written atomically.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// E_max, the coverage threshold, as a fraction of the drawing's length.
-    #[arg(long, default_value_t = 1e-3)]
-    pub emax: f64,
+    /// E_max, the coverage threshold, as a fraction of the drawing's length
+    /// [default: 0.1 %, or 5 times the noise the drawing shows if larger].
+    #[arg(long)]
+    pub emax: Option<f64>,
     /// Weight of tangent continuity in the fine fitting, in [0, 1).
     #[arg(long = "alpha-t", default_value_t = 0.5)]
     pub alpha_t: f64,

@@ -56,7 +56,10 @@ struct SketchOut {
     resampled: bool,
     /// `densify` or `uniform`; applied only where `resampled`.
     resampling: &'static str,
+    /// The coverage threshold used, in the drawing's units.
     emax: f64,
+    /// The drawing's noise as estimated (per coordinate, drawing units).
+    noise: f64,
     alpha_t: f64,
     helices: Vec<HelixOut>,
     junctions: Vec<JunctionOut>,
@@ -176,7 +179,8 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
             Resampling::Densify => "densify",
             Resampling::Uniform => "uniform",
         },
-        emax: opts.emax * r.length,
+        emax: r.emax,
+        noise: r.noise,
         alpha_t: opts.alpha_t,
         helices,
         max_tangent_angle_deg: junctions
@@ -222,7 +226,7 @@ pub fn run(args: &SketchArgs) -> Result<()> {
         },
         ..Default::default()
     };
-    if !(opts.emax > 0.0 && opts.emax < 1.0) {
+    if opts.emax.is_some_and(|e| !(e > 0.0 && e < 1.0)) {
         bail!("--emax must be in (0, 1): a fraction of the drawing's length");
     }
     if !(opts.alpha_t >= 0.0 && opts.alpha_t < 1.0) {
@@ -237,7 +241,7 @@ pub fn run(args: &SketchArgs) -> Result<()> {
         write_preview_svg(preview, &points, &projected_pieces(&r), &junctions)?;
     }
     let g1 = if args.g1 {
-        let t = args.g1_tolerance.unwrap_or(opts.emax * r.length);
+        let t = args.g1_tolerance.unwrap_or(r.emax);
         if !(t > 0.0 && t.is_finite()) {
             bail!("--g1-tolerance must be positive and finite");
         }

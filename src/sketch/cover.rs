@@ -105,6 +105,23 @@ const MERGE_PROBE_ITERATIONS: usize = 15;
 const MERGE_STEPS: usize = 3;
 const MERGE_PROBE_LIMIT: f64 = 8.0;
 
+/// Beyond the paper, the bounds of a plausible helix on a drawing of unit
+/// length: its radius at most `MAX_RADIUS` lengths, its depth slope
+/// ([`Piece::depth_slope`]) at most `MAX_DEPTH_SLOPE` (84° out of the
+/// plane on average). On a noisy drawing, where `E_max` is set above the
+/// noise, short stretches are fitted within `E_max` by helices of any size
+/// seen almost end-on (measured at 0.1 % noise: radii to 175 lengths,
+/// depths to 4000 times the drawn length); those are refused, so a stretch
+/// goes to a plausible helix or to its neighbours.
+const MAX_RADIUS: f64 = 10.0;
+const MAX_DEPTH_SLOPE: f64 = 10.0;
+
+/// Whether a piece is a helix a drawing of unit length can show (see
+/// [`MAX_RADIUS`]).
+pub(super) fn plausible(piece: &Piece) -> bool {
+    piece.helix.helix.a.abs() <= MAX_RADIUS && piece.depth_slope() <= MAX_DEPTH_SLOPE
+}
+
 /// Starting tilts `c` of the two-vertex fits.
 const START_TILTS: [f64; 3] = [0.0, 0.9, -0.9];
 
@@ -156,8 +173,18 @@ fn walk(
     let h = h.evaluator();
     while i >= lo as isize && i <= hi as isize {
         let v = points[i as usize];
-        let tn = next_parameter(&h, v, t);
-        if (tn - t) * dir as f64 * orient <= 0.0 || (h.jet(tn).0 - v).length() > emax {
+        let mut tn = next_parameter(&h, v, t);
+        if (tn - t) * dir as f64 * orient <= 0.0 {
+            // A foot behind the last one: the helix turns back, or (on a
+            // noisy drawing, where noise along the stroke is a good part
+            // of an edge) the vertex lies a little behind its predecessor.
+            // The latter goes on from the last foot, if near enough.
+            if (h.jet(tn).0 - h.jet(t).0).length() > emax {
+                break;
+            }
+            tn = t;
+        }
+        if (h.jet(tn).0 - v).length() > emax {
             break;
         }
         out.push(tn);
@@ -339,7 +366,14 @@ fn fit_one(
     // walk resumed, repeatedly; the refined piece covering most wins (a
     // refinement can stop in a local minimum — the distance to a curve
     // that loops has many — so one start is not enough).
-    candidates.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.total_cmp(&y.1)));
+    // Implausible candidates last (they are grown only where nothing else
+    // is left).
+    candidates.sort_by(|x, y| {
+        plausible(&y.2)
+            .cmp(&plausible(&x.2))
+            .then(y.0.cmp(&x.0))
+            .then(x.1.total_cmp(&y.1))
+    });
     let obj = Objective {
         alpha_t: 0.0,
         emax: opts.emax,
@@ -363,9 +397,12 @@ fn fit_one(
     // In candidate order, so the result does not depend on the threads.
     let mut best: Option<Piece> = None;
     for piece in grown {
-        let better = best.as_ref().map_or(true, |b| {
+        let better = best.as_ref().is_none_or(|b| {
             let (nb, np) = (b.last - b.first, piece.last - piece.first);
-            np > nb || np == nb && piece.max_distance(points) < b.max_distance(points)
+            let (ob, op) = (plausible(b), plausible(&piece));
+            op && !ob
+                || op == ob
+                    && (np > nb || np == nb && piece.max_distance(points) < b.max_distance(points))
         });
         if better {
             best = Some(piece);
@@ -541,6 +578,7 @@ pub fn cover(points: &[DVec2], geometry: &[(DVec2, f64)], opts: &CoverOptions) -
         let before = out.len();
         merge(points, &mut out, opts);
         absorb(points, &mut out, opts);
+        take_over_implausible(points, &mut out, opts);
         if out.len() == before {
             break;
         }
@@ -550,6 +588,54 @@ pub fn cover(points: &[DVec2], geometry: &[(DVec2, f64)], opts: &CoverOptions) -
 
 /// Passes of junction polishing, merging and absorption.
 const POST_PASSES: usize = 4;
+
+/// Beyond the paper: a piece that is no plausible helix ([`plausible`];
+/// on a noisy drawing, where the covering found nothing better for a
+/// stretch) is taken over by the neighbour that, grown over it and
+/// refitted, stays plausible and fits it best, even beyond `E_max`: a
+/// drawing with a few vertices farther off is a better answer than a helix
+/// seen end-on. Pieces without a neighbour are kept.
+fn take_over_implausible(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
+    let obj = Objective {
+        alpha_t: 0.0,
+        emax: opts.emax,
+    };
+    let mut i = 0;
+    while i < pieces.len() {
+        if plausible(&pieces[i]) || pieces.len() < 2 {
+            i += 1;
+            continue;
+        }
+        let (first, last) = (pieces[i].first, pieces[i].last);
+        let sides: Vec<usize> = [i.checked_sub(1), Some(i + 1)]
+            .into_iter()
+            .flatten()
+            .filter(|&j| j < pieces.len())
+            .collect();
+        let trials: Vec<(f64, usize, Piece)> = sides
+            .into_par_iter()
+            .filter_map(|j| {
+                let mut trial = pieces[j].clone();
+                let (f, l) = (trial.first.min(first), trial.last.max(last));
+                stretch(&mut trial, points, f, l);
+                refine(points, &mut trial, &obj, GROW_ITERATIONS);
+                hop(points, &mut trial, &obj);
+                plausible(&trial).then(|| (trial.max_distance(points), j, trial))
+            })
+            .collect();
+        match trials
+            .into_iter()
+            .min_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)))
+        {
+            Some((_, j, merged)) => {
+                pieces[j] = merged;
+                pieces.remove(i);
+                i = i.saturating_sub(1);
+            }
+            None => i += 1,
+        }
+    }
+}
 
 /// Beyond the paper: a piece between two others is dropped if its
 /// neighbours, extended to meet at one of its vertices, fit within `E_max`
@@ -669,7 +755,7 @@ fn merge(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
                 refine(points, &mut trial, &obj, GROW_ITERATIONS);
                 hop(points, &mut trial, &obj);
                 let d = trial.max_distance(points);
-                (d <= opts.emax).then_some((d, trial))
+                (d <= opts.emax && plausible(&trial)).then_some((d, trial))
             })
             .collect();
         let best = trials

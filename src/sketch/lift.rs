@@ -20,10 +20,10 @@
 
 use glam::{DVec2, DVec3};
 
-use super::cover::{cover, CoverOptions};
-use super::estimate::{densify, resample, tangents_and_curvatures};
+use super::cover::{cover, plausible, CoverOptions};
+use super::estimate::{densify, estimate_noise, resample, smoothed, tangents_and_curvatures};
 use super::placed::PlacedHelix;
-use super::refine::{refine, Objective, Piece, RefineReport};
+use super::refine::{objective, refine, Objective, Piece, RefineReport};
 use super::ProjectedHelix;
 
 /// Inputs whose longest edge is within this factor of the shortest are
@@ -48,11 +48,23 @@ pub enum Resampling {
     Uniform,
 }
 
+/// The paper's `E_max`, as a fraction of the sketch's length (Section 6.3).
+pub const EMAX_FRACTION: f64 = 1e-3;
+
+/// The automatic `E_max` is at least this many times the drawing's noise
+/// (per coordinate): every vertex of a helix's stretch must lie within
+/// `E_max` of it for the covering to go on, and of 500 vertices with
+/// Gaussian noise the farthest is about 3.3 σ from the true curve.
+pub const NOISE_FACTOR: f64 = 5.0;
+
 /// Options of [`lift_sketch`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SketchOptions {
-    /// `E_max` as a fraction of the sketch length (paper: 0.1 %).
-    pub emax: f64,
+    /// `E_max` as a fraction of the sketch length. `None` (the default):
+    /// chosen from the drawing, the paper's 0.1 % ([`EMAX_FRACTION`]) or
+    /// [`NOISE_FACTOR`] times the noise the drawing shows
+    /// ([`estimate_noise`]), whichever is larger.
+    pub emax: Option<f64>,
     /// `α_T` of the fine fitting, in `[0, 1)` (0: distances only).
     pub alpha_t: f64,
     /// `NMAX`: neighbours of each seed tried on each side (Section 6.3).
@@ -68,7 +80,7 @@ pub struct SketchOptions {
 impl Default for SketchOptions {
     fn default() -> Self {
         SketchOptions {
-            emax: 1e-3,
+            emax: None,
             alpha_t: 0.5,
             nmax: 12,
             window: 3,
@@ -182,6 +194,11 @@ pub struct SketchLift {
     pub rms_error: f64,
     /// Length of the sketch polyline.
     pub length: f64,
+    /// The drawing's noise as estimated (standard deviation of a vertex
+    /// about a smooth curve, per coordinate, in the sketch's units).
+    pub noise: f64,
+    /// The `E_max` the covering used, in the sketch's units.
+    pub emax: f64,
     /// The fine fitting (Section 7).
     pub fine_fit: RefineReport,
 }
@@ -204,10 +221,12 @@ fn check(points: &[DVec2]) -> Result<Vec<DVec2>, SketchError> {
 
 /// Lift a 2D polyline to a 3D piecewise helix.
 pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift, SketchError> {
-    if !(opts.emax > 0.0 && opts.emax < 1.0) {
-        return Err(SketchError::Options(
-            "emax must be in (0, 1) (a fraction of the length)",
-        ));
+    if let Some(e) = opts.emax {
+        if !(e > 0.0 && e < 1.0) {
+            return Err(SketchError::Options(
+                "emax must be in (0, 1) (a fraction of the length)",
+            ));
+        }
     }
     if !(opts.alpha_t >= 0.0 && opts.alpha_t < 1.0) {
         return Err(SketchError::Options("alpha_t must be in [0, 1)"));
@@ -216,12 +235,27 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
         return Err(SketchError::Options("nmax and window must be at least 1"));
     }
     let clean = check(points)?;
-    let edges: Vec<f64> = clean.windows(2).map(|w| (w[1] - w[0]).length()).collect();
+    let edge_lengths =
+        |p: &[DVec2]| -> Vec<f64> { p.windows(2).map(|w| (w[1] - w[0]).length()).collect() };
+    let edges = edge_lengths(&clean);
     let length: f64 = edges.iter().sum();
     if !(length > 0.0) || !length.is_finite() {
         return Err(SketchError::ZeroLength);
     }
-    let (shortest, longest) = edges
+    let noise = estimate_noise(&clean);
+    let emax = opts
+        .emax
+        .unwrap_or(EMAX_FRACTION.max(NOISE_FACTOR * noise / length));
+    // Where the noise sets E_max it moves vertices by a good part of an
+    // edge, and the edges' spread is the noise's: the sampling is judged
+    // on the drawing smoothed.
+    let noisy = NOISE_FACTOR * noise > EMAX_FRACTION * length;
+    let judged = if noisy {
+        edge_lengths(&smoothed(&clean))
+    } else {
+        edges.clone()
+    };
+    let (shortest, longest) = judged
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
     let resampled = longest > UNIFORM_RATIO * shortest;
@@ -242,7 +276,7 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
 
     let geometry = tangents_and_curvatures(&unit, opts.window);
     let cover_opts = CoverOptions {
-        emax: opts.emax,
+        emax,
         nmax: opts.nmax,
         end_guard: opts.window,
     };
@@ -250,9 +284,22 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
     choose_mirrors(&mut pieces);
     let obj = Objective {
         alpha_t: opts.alpha_t,
-        emax: opts.emax,
+        emax,
     };
-    let fine_fit = refine(&unit, &mut pieces, &obj, opts.fine_iterations);
+    let covered = pieces.clone();
+    let mut fine_fit = refine(&unit, &mut pieces, &obj, opts.fine_iterations);
+    // Tangent continuity can pull a short piece of a noisy drawing to a
+    // helix seen end-on; such a piece keeps its covering fit.
+    let mut kept = false;
+    for (p, c) in pieces.iter_mut().zip(&covered) {
+        if !plausible(p) && plausible(c) {
+            *p = c.clone();
+            kept = true;
+        }
+    }
+    if kept {
+        fine_fit.after = objective(&unit, &pieces, &obj);
+    }
     let z0 = z_offsets(&pieces);
 
     // Back to the sketch's units.
@@ -313,6 +360,8 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
         max_error,
         rms_error: (sum2 / count.max(1) as f64).sqrt(),
         length,
+        noise,
+        emax: emax * length,
         fine_fit,
     })
 }

@@ -85,6 +85,35 @@ impl Piece {
             .fold(0.0, f64::max)
     }
 
+    /// How steeply the lift leaves the sketch plane: the range of `z` over
+    /// the piece's vertices' parameters, over the length of the projected
+    /// curve between them (0 for fewer than two vertices). Beyond the
+    /// paper: a drawing is a view of its curve, and a piece whose depth
+    /// runs to many times its drawn length (a curve seen almost end-on)
+    /// fits noise, not a stroke (see [`cover`](super::cover)).
+    pub fn depth_slope(&self) -> f64 {
+        let e = self.helix.evaluator();
+        let (mut lo, mut hi, mut drawn) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
+        let mut last: Option<DVec2> = None;
+        for &t in &self.ts {
+            let z = self.helix.point_3d(t, false, 0.0).z;
+            lo = lo.min(z);
+            hi = hi.max(z);
+            let p = e.jet(t).0;
+            if let Some(q) = last {
+                drawn += (p - q).length();
+            }
+            last = Some(p);
+        }
+        if self.ts.len() < 2 {
+            0.0
+        } else if drawn > 0.0 {
+            (hi - lo) / drawn
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// `+1` if `t` increases along the sketch on this piece, `−1` if it
     /// decreases.
     pub fn orientation(&self) -> f64 {
