@@ -15,7 +15,9 @@ use std::sync::{mpsc, Arc};
 use std::time::Instant;
 
 use super::{Gpu, GpuContext, GpuError};
-use crate::kernels::{source, Access, Batch, Data, Elem, Field, Kernel, Timings, WORKGROUP};
+use crate::kernels::{
+    source, Access, Batch, Data, Elem, Exec, Field, Kernel, Limits, Precision, Timings, WORKGROUP,
+};
 use crate::twin::Real;
 
 /// A compiled kernel: one pipeline per entry point, one bind group layout.
@@ -133,7 +135,12 @@ struct Slot {
     pending: Option<Pending>,
 }
 
-fn buffer(ctx: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+fn buffer(
+    ctx: &GpuContext,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: size.max(16),
@@ -218,11 +225,40 @@ fn bytes_of<R: Real>(elem: Elem, n: usize) -> u64 {
     }) as u64
 }
 
-impl Gpu<'_> {
-    /// [`crate::kernels::Exec::run`] on the GPU: the compiled kernel (from
-    /// the context's cache), two slots of buffers, each batch uploaded,
-    /// dispatched pass after pass in one compute pass, read back in order.
-    pub(crate) fn stream<'a, K: Kernel, R: Real>(
+impl Exec for Gpu<'_> {
+    type Resident<R: Real> = wgpu::Buffer;
+
+    fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    fn limits(&self) -> Limits {
+        Limits {
+            max_binding_bytes: self.ctx.max_binding_bytes(),
+            max_groups_per_dim: self.ctx.max_groups_per_dim(),
+        }
+    }
+
+    fn resident<R: Real>(&self, data: Data<'_, R>) -> Result<wgpu::Buffer, GpuError> {
+        let bytes = data.bytes();
+        if bytes.len() as u64 > self.ctx.max_binding_bytes() {
+            return Err(GpuError::Execution(format!(
+                "{} bytes do not fit one binding",
+                bytes.len()
+            )));
+        }
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let buffer = buffer(self.ctx, "resident", bytes.len() as u64, usage);
+        if !bytes.is_empty() {
+            self.ctx.queue.write_buffer(&buffer, 0, bytes);
+        }
+        Ok(buffer)
+    }
+
+    /// The compiled kernel (from the context's cache), two slots of
+    /// buffers, each batch uploaded, dispatched pass after pass in one
+    /// compute pass, read back in order.
+    fn run<'a, K: Kernel, R: Real>(
         &self,
         cfg: K::Config,
         resident: &[&wgpu::Buffer],
@@ -311,7 +347,9 @@ impl Gpu<'_> {
         }
         Ok(())
     }
+}
 
+impl Gpu<'_> {
     /// Bytes of each binding of `batch` (resident: 0), refusing buffers
     /// larger than one binding may be.
     fn sizes<K: Kernel, R: Real>(&self, batch: &Batch<'_, R>) -> Result<Vec<u64>, GpuError> {

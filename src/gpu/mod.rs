@@ -1,7 +1,7 @@
 //! The GPU engine: one cached device context ([`GpuContext`]) and one
 //! generic dispatcher that runs any kernel of [`crate::kernels`] from its
 //! description. [`Gpu`] — a context in one precision — is the GPU
-//! [`Exec`]utor the kernels' host code runs on; the CPU twin is
+//! executor ([`crate::kernels::Exec`]) the kernels' host code runs on; the CPU twin is
 //! [`crate::kernels::Twin`].
 //!
 //! Precision: every kernel is written once over a scalar alias `real` and
@@ -15,9 +15,6 @@ mod dispatch;
 pub use crate::kernels::{kernel_sources, prelude, GpuError, Precision, Timings, MATH_WGSL};
 pub use context::{list_adapters, GpuContext, ADAPTER_ENV};
 
-use crate::kernels::{Batch, Data, Exec, Kernel, Limits};
-use crate::twin::Real;
-
 impl Precision {
     /// `f64` where the adapter has it, else `f32`.
     pub fn best(ctx: &GpuContext) -> Precision {
@@ -25,7 +22,7 @@ impl Precision {
     }
 }
 
-/// An opened GPU in one precision: the GPU [`Exec`]utor.
+/// An opened GPU in one precision: the GPU executor ([`crate::kernels::Exec`]).
 #[derive(Clone, Copy, Debug)]
 pub struct Gpu<'a> {
     pub ctx: &'a GpuContext,
@@ -45,51 +42,5 @@ impl GpuContext {
             ctx: self,
             precision,
         })
-    }
-}
-
-impl Exec for Gpu<'_> {
-    type Resident<R: Real> = wgpu::Buffer;
-
-    fn precision(&self) -> Precision {
-        self.precision
-    }
-
-    fn limits(&self) -> Limits {
-        Limits {
-            max_binding_bytes: self.ctx.max_binding_bytes(),
-            max_groups_per_dim: self.ctx.max_groups_per_dim(),
-        }
-    }
-
-    fn resident<R: Real>(&self, data: Data<'_, R>) -> Result<wgpu::Buffer, GpuError> {
-        let bytes = data.bytes();
-        if bytes.len() as u64 > self.ctx.max_binding_bytes() {
-            return Err(GpuError::Execution(format!(
-                "{} bytes do not fit one binding",
-                bytes.len()
-            )));
-        }
-        let buffer = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("resident"),
-            size: (bytes.len() as u64).max(16),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        if !bytes.is_empty() {
-            self.ctx.queue.write_buffer(&buffer, 0, bytes);
-        }
-        Ok(buffer)
-    }
-
-    fn run<'a, K: Kernel, R: Real>(
-        &self,
-        cfg: K::Config,
-        resident: &[&wgpu::Buffer],
-        batches: &mut dyn Iterator<Item = Batch<'a, R>>,
-        done: &mut dyn FnMut(usize, &Data<'_, R>),
-        timings: &mut Timings,
-    ) -> Result<(), GpuError> {
-        self.stream::<K, R>(cfg, resident, batches, done, timings)
     }
 }

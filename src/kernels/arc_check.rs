@@ -81,7 +81,7 @@ impl Kernel for ArcCheck {
             let first = (rng.range(0.0, 350.0)) as u32;
             let last = first + 2 + (rng.range(0.0, 40.0) as u32).min(398 - first);
             let a = kappa * step * first as f64;
-            let start = points[first as usize] + 0.01 * rng.unit();
+            let start = points[first as usize] + 0.01 * rng.unit_vector();
             let length = step * (last - first) as f64 * rng.range(0.97, 1.03);
             let tangent = DVec3::new(a.cos(), a.sin(), 0.0);
             let normal = DVec3::new(-a.sin(), a.cos(), 0.0);

@@ -27,10 +27,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::{
-    by_precision, map, map_batch, map_bindings, map_twin, Batch, Binding, Data, Exec, GpuError,
-    Kernel, MapKernel, Rng, Timings, Twin,
-};
+use super::{by_precision, map, Exec, GpuError, MapKernel, Rng, Timings, Twin};
 use crate::atph::{
     check_ends, interpolate_field, tangent_field, AtphCurve, AtphError, Bernstein, FieldKind,
     HermitePair, SphericalTangent, SINGULAR_TOL,
@@ -38,44 +35,13 @@ use crate::atph::{
 use crate::twin::atph_hermite::{self as twin, IN_STRIDE, OUT_REL_DET, OUT_STRIDE};
 use crate::twin::Real;
 
-/// The kernel.
-pub struct AtphHermite;
-
-impl Kernel for AtphHermite {
-    const NAME: &'static str = "atph_hermite";
-    const WGSL: &'static str = include_str!("../../shaders/atph_hermite.wgsl");
-    const PARAMS: &'static [(&'static str, super::Field)] = crate::map_params!("unused");
-    const BINDINGS: &'static [Binding] = &map_bindings("rec_in", "rec_out");
-    const PARITY_EPS: f64 = 4096.0;
-    type Config = ();
-
-    fn configs() -> Vec<()> {
-        vec![()]
-    }
-    fn twin<R: Real>(cfg: (), batch: &Batch<'_, R>, _: &[&Data<'_, R>]) -> Data<'static, R> {
-        map_twin::<Self, R>(cfg, batch)
-    }
-    fn parity_batch<R: Real>(cfg: (), rng: &mut Rng) -> (Batch<'static, R>, Vec<Data<'static, R>>) {
-        let mut records = Vec::new();
-        for k in 0..500 {
-            let p1 = DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
-            let p2 = p1 + rng.range(0.5, 2.0) * rng.unit();
-            let length = (k % 2 == 1).then(|| (p2 - p1).length() * rng.range(1.1, 1.6));
-            if let Prepared::Kernel { record, .. } =
-                prepare(&(p1, rng.unit(), p2, rng.unit()), length)
-            {
-                // Well-conditioned systems only: the twin's and the GPU's
-                // rounding are amplified by 1/rel_det.
-                if twin::atph_hermite(&record)[OUT_REL_DET] > 0.05 {
-                    records.extend_from_slice(&record);
-                }
-            }
-        }
-        map_batch::<Self, R>(cfg, 0.0, &records)
+crate::map_kernel! {
+    /// The kernel.
+    AtphHermite {
+        name: "atph_hermite",
+        scalar: "unused",
+        buffers: ("rec_in", "rec_out"),
+        parity_eps: 4096.0,
     }
 }
 
@@ -86,6 +52,28 @@ impl MapKernel for AtphHermite {
     }
     fn twin_record<R: Real>(_: (), _: f32, rec: &[R], out: &mut [R]) {
         out.copy_from_slice(&twin::atph_hermite(rec));
+    }
+    fn parity_records(_: (), rng: &mut Rng) -> (f32, Vec<f64>) {
+        let mut records = Vec::new();
+        for k in 0..500 {
+            let p1 = DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            let p2 = p1 + rng.range(0.5, 2.0) * rng.unit_vector();
+            let length = (k % 2 == 1).then(|| (p2 - p1).length() * rng.range(1.1, 1.6));
+            if let Prepared::Kernel { record, .. } =
+                prepare(&(p1, rng.unit_vector(), p2, rng.unit_vector()), length)
+            {
+                // Well-conditioned systems only: the twin's and the GPU's
+                // rounding are amplified by 1/rel_det.
+                if twin::atph_hermite(&record)[OUT_REL_DET] > 0.05 {
+                    records.extend_from_slice(&record);
+                }
+            }
+        }
+        (0.0, records)
     }
 }
 

@@ -65,22 +65,8 @@ impl Kernel for FrenetIntegrate {
         cfg: usize,
         rng: &mut Rng,
     ) -> (Batch<'static, R>, Vec<Data<'static, R>>) {
-        let mut records = Vec::new();
-        for _ in 0..300 {
-            let t = rng.unit();
-            let n = t.any_orthonormal_vector();
-            let p = FrenetProblem {
-                start: DVec3::ZERO,
-                frame: [t, n, t.cross(n)],
-                length: rng.range(0.5, 3.0),
-                kappa0: rng.range(-1.0, 1.0),
-                gamma: rng.range(-1.0, 1.0),
-                tau0: rng.range(-1.0, 1.0),
-                delta: rng.range(-1.0, 1.0),
-            };
-            records.extend_from_slice(&record(&p));
-        }
-        map_batch::<Self, R>(cfg, 16.0, &records)
+        let (steps, records) = Self::parity_records(cfg, rng);
+        map_batch::<Self, R>(cfg, steps, &records)
     }
 }
 
@@ -99,6 +85,24 @@ impl MapKernel for FrenetIntegrate {
         } else {
             twin::frenet_sample(rec, samples, steps as u32, out);
         }
+    }
+    fn parity_records(_: usize, rng: &mut Rng) -> (f32, Vec<f64>) {
+        let mut records = Vec::new();
+        for _ in 0..300 {
+            let t = rng.unit_vector();
+            let n = t.any_orthonormal_vector();
+            let p = FrenetProblem {
+                start: DVec3::ZERO,
+                frame: [t, n, t.cross(n)],
+                length: rng.range(0.5, 3.0),
+                kappa0: rng.range(-1.0, 1.0),
+                gamma: rng.range(-1.0, 1.0),
+                tau0: rng.range(-1.0, 1.0),
+                delta: rng.range(-1.0, 1.0),
+            };
+            records.extend_from_slice(&record(&p));
+        }
+        (16.0, records)
     }
 }
 

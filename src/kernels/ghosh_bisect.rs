@@ -16,33 +16,32 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::{
-    by_precision, map, map_batch, map_bindings, map_twin, Batch, Binding, Data, Exec, GpuError,
-    Kernel, MapKernel, Rng, Timings, Twin,
-};
+use super::{by_precision, map, Exec, GpuError, MapKernel, Rng, Timings, Twin};
 use crate::helix::ghosh::ghosh_basis;
 use crate::helix::{HelixElement, HelixError, HermitePair, ShortHelix};
 use crate::twin::ghosh_bisect::{self as twin, status, IN_STRIDE, OUT_STRIDE};
 use crate::twin::Real;
 
-/// The kernel.
-pub struct GhoshBisect;
-
-impl Kernel for GhoshBisect {
-    const NAME: &'static str = "ghosh_bisect";
-    const WGSL: &'static str = include_str!("../../shaders/ghosh_bisect.wgsl");
-    const PARAMS: &'static [(&'static str, super::Field)] = crate::map_params!("tol");
-    const BINDINGS: &'static [Binding] = &map_bindings("seg_in", "seg_out");
-    const PARITY_EPS: f64 = 64.0;
-    type Config = ();
-
-    fn configs() -> Vec<()> {
-        vec![()]
+crate::map_kernel! {
+    /// The kernel.
+    GhoshBisect {
+        name: "ghosh_bisect",
+        scalar: "tol",
+        buffers: ("seg_in", "seg_out"),
+        parity_eps: 64.0,
     }
-    fn twin<R: Real>(cfg: (), batch: &Batch<'_, R>, _: &[&Data<'_, R>]) -> Data<'static, R> {
-        map_twin::<Self, R>(cfg, batch)
+}
+
+impl MapKernel for GhoshBisect {
+    const IN_STRIDE: usize = IN_STRIDE;
+    fn out_stride(_: ()) -> usize {
+        OUT_STRIDE
     }
-    fn parity_batch<R: Real>(cfg: (), rng: &mut Rng) -> (Batch<'static, R>, Vec<Data<'static, R>>) {
+    fn twin_record<R: Real>(_: (), tol: f32, rec: &[R], out: &mut [R]) {
+        let rec: &[R; IN_STRIDE] = rec.try_into().expect("stride");
+        out.copy_from_slice(&twin::ghosh_bisect(rec, R::from_f64(tol as f64)));
+    }
+    fn parity_records(_: (), rng: &mut Rng) -> (f32, Vec<f64>) {
         let mut records = Vec::new();
         for _ in 0..500 {
             let e = HelixElement {
@@ -63,18 +62,7 @@ impl Kernel for GhoshBisect {
                 records.extend_from_slice(&rec);
             }
         }
-        map_batch::<Self, R>(cfg, 1e-6, &records)
-    }
-}
-
-impl MapKernel for GhoshBisect {
-    const IN_STRIDE: usize = IN_STRIDE;
-    fn out_stride(_: ()) -> usize {
-        OUT_STRIDE
-    }
-    fn twin_record<R: Real>(_: (), tol: f32, rec: &[R], out: &mut [R]) {
-        let rec: &[R; IN_STRIDE] = rec.try_into().expect("stride");
-        out.copy_from_slice(&twin::ghosh_bisect(rec, R::from_f64(tol as f64)));
+        (1e-6, records)
     }
 }
 

@@ -15,10 +15,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::{
-    by_precision, map, map_batch, map_bindings, map_twin, Batch, Binding, Data, Exec, GpuError,
-    Kernel, MapKernel, Rng, Timings, Twin,
-};
+use super::{by_precision, map, Exec, GpuError, MapKernel, Rng, Timings, Twin};
 use crate::helix::{HelixElement, PiecewiseHelix};
 use crate::twin::helix_eval::{self as twin, IN_STRIDE, OUT_STRIDE};
 use crate::twin::Real;
@@ -26,27 +23,28 @@ use crate::twin::Real;
 /// Points and unit tangents of one sampled chain.
 pub type ChainSamples = crate::sampled::SampledCurve;
 
-/// The kernel.
-pub struct HelixEval;
-
-impl Kernel for HelixEval {
-    const NAME: &'static str = "helix_eval";
-    const WGSL: &'static str = include_str!("../../shaders/helix_eval.wgsl");
-    const PARAMS: &'static [(&'static str, super::Field)] = crate::map_params!("unused");
-    const BINDINGS: &'static [Binding] = &map_bindings("rec_in", "rec_out");
-    const PARITY_EPS: f64 = 64.0;
-    type Config = ();
-
-    fn configs() -> Vec<()> {
-        vec![()]
+crate::map_kernel! {
+    /// The kernel.
+    HelixEval {
+        name: "helix_eval",
+        scalar: "unused",
+        buffers: ("rec_in", "rec_out"),
+        parity_eps: 64.0,
     }
-    fn twin<R: Real>(cfg: (), batch: &Batch<'_, R>, _: &[&Data<'_, R>]) -> Data<'static, R> {
-        map_twin::<Self, R>(cfg, batch)
+}
+
+impl MapKernel for HelixEval {
+    const IN_STRIDE: usize = IN_STRIDE;
+    fn out_stride(_: ()) -> usize {
+        OUT_STRIDE
     }
-    fn parity_batch<R: Real>(cfg: (), rng: &mut Rng) -> (Batch<'static, R>, Vec<Data<'static, R>>) {
+    fn twin_record<R: Real>(_: (), _: f32, rec: &[R], out: &mut [R]) {
+        out.copy_from_slice(&twin::helix_eval(rec));
+    }
+    fn parity_records(_: (), rng: &mut Rng) -> (f32, Vec<f64>) {
         let mut records = Vec::new();
         for _ in 0..1000 {
-            let t = rng.unit();
+            let t = rng.unit_vector();
             let n = t.any_orthonormal_vector();
             let e = HelixElement {
                 start: DVec3::ZERO,
@@ -64,17 +62,7 @@ impl Kernel for HelixEval {
                 records.extend_from_slice(&rec);
             }
         }
-        map_batch::<Self, R>(cfg, 0.0, &records)
-    }
-}
-
-impl MapKernel for HelixEval {
-    const IN_STRIDE: usize = IN_STRIDE;
-    fn out_stride(_: ()) -> usize {
-        OUT_STRIDE
-    }
-    fn twin_record<R: Real>(_: (), _: f32, rec: &[R], out: &mut [R]) {
-        out.copy_from_slice(&twin::helix_eval(rec));
+        (0.0, records)
     }
 }
 

@@ -237,6 +237,60 @@ pub trait MapKernel: Kernel {
     fn out_stride(cfg: Self::Config) -> usize;
     /// The twin on one record; `scalar` as the kernel sees it.
     fn twin_record<R: Real>(cfg: Self::Config, scalar: f32, rec: &[R], out: &mut [R]);
+    /// Random `f64` records the host could hand the kernel, and the scalar
+    /// (for [`Kernel::parity_batch`]).
+    fn parity_records(cfg: Self::Config, rng: &mut Rng) -> (f32, Vec<f64>);
+}
+
+/// Declares a [`MapKernel`] without configurations: the struct and its
+/// [`Kernel`] impl from the file name, the scalar's name, the buffers'
+/// names and the parity tolerance (the [`MapKernel`] impl is written by
+/// hand next to it).
+#[macro_export]
+#[doc(hidden)]
+macro_rules! map_kernel {
+    ($(#[$m:meta])* $k:ident {
+        name: $name:literal,
+        scalar: $scalar:literal,
+        buffers: ($input:literal, $output:literal),
+        parity_eps: $eps:expr $(,)?
+    }) => {
+        $(#[$m])*
+        pub struct $k;
+
+        impl $crate::kernels::Kernel for $k {
+            const NAME: &'static str = $name;
+            const WGSL: &'static str = include_str!(concat!("../../shaders/", $name, ".wgsl"));
+            const PARAMS: &'static [(&'static str, $crate::kernels::Field)] =
+                $crate::map_params!($scalar);
+            const BINDINGS: &'static [$crate::kernels::Binding] =
+                &$crate::kernels::map_bindings($input, $output);
+            const PARITY_EPS: f64 = $eps;
+            type Config = ();
+
+            fn configs() -> Vec<()> {
+                vec![()]
+            }
+            fn twin<R: $crate::twin::Real>(
+                cfg: (),
+                batch: &$crate::kernels::Batch<'_, R>,
+                _: &[&$crate::kernels::Data<'_, R>],
+            ) -> $crate::kernels::Data<'static, R> {
+                $crate::kernels::map_twin::<Self, R>(cfg, batch)
+            }
+            fn parity_batch<R: $crate::twin::Real>(
+                cfg: (),
+                rng: &mut $crate::kernels::Rng,
+            ) -> (
+                $crate::kernels::Batch<'static, R>,
+                Vec<$crate::kernels::Data<'static, R>>,
+            ) {
+                let (scalar, records) =
+                    <Self as $crate::kernels::MapKernel>::parity_records(cfg, rng);
+                $crate::kernels::map_batch::<Self, R>(cfg, scalar, &records)
+            }
+        }
+    };
 }
 
 /// The parameter block of a [`MapKernel`] whose scalar is called `scalar`.
@@ -625,40 +679,8 @@ macro_rules! by_precision {
 }
 pub(crate) use by_precision;
 
-/// A small deterministic generator for the parity batches (splitmix64).
-#[derive(Clone, Debug)]
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Rng(seed)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[lo, hi)`.
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-    /// A random unit vector.
-    pub fn unit(&mut self) -> glam::DVec3 {
-        loop {
-            let v = glam::DVec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let l = v.length();
-            if l > 0.2 && l < 1.0 {
-                return v / l;
-            }
-        }
-    }
-}
+/// The generator of the parity batches.
+pub use crate::synthetic::SplitMix64 as Rng;
 
 /// Compares a GPU output with the twin's under `K`'s stated tolerance;
 /// `Err` names the first value out of it. (The generated parity tests.)
@@ -666,55 +688,41 @@ pub fn parity_check<K: Kernel, R: Real>(
     gpu: &Data<'_, R>,
     twin: &Data<'_, R>,
 ) -> Result<f64, String> {
-    match (gpu, twin) {
+    if gpu.len() != twin.len() {
+        return Err(format!(
+            "{}: {} outputs, twin {}",
+            K::NAME,
+            gpu.len(),
+            twin.len()
+        ));
+    }
+    // Integers exactly; reals within PARITY_EPS ε relative to max(1, |twin|).
+    let (g, t, tol): (Vec<f64>, Vec<f64>, f64) = match (gpu, twin) {
         (Data::U32(g), Data::U32(t)) => {
-            if g.len() != t.len() {
-                return Err(format!(
-                    "{}: {} outputs, twin {}",
-                    K::NAME,
-                    g.len(),
-                    t.len()
-                ));
-            }
-            match g.iter().zip(t.iter()).position(|(a, b)| a != b) {
-                Some(i) => Err(format!(
-                    "{}: output {i}: GPU {} twin {}",
-                    K::NAME,
-                    g[i],
-                    t[i]
-                )),
-                None => Ok(0.0),
-            }
+            let f = |v: &[u32]| v.iter().map(|&x| x as f64).collect();
+            (f(g), f(t), 0.0)
         }
         (Data::Real(g), Data::Real(t)) => {
-            if g.len() != t.len() {
-                return Err(format!(
-                    "{}: {} outputs, twin {}",
-                    K::NAME,
-                    g.len(),
-                    t.len()
-                ));
-            }
-            let eps = R::EPSILON.to_f64();
-            let mut worst = 0.0f64;
-            for (i, (a, b)) in g.iter().zip(t.iter()).enumerate() {
-                let (a, b) = (a.to_f64(), b.to_f64());
-                if a == b || (a.is_nan() && b.is_nan()) {
-                    continue;
-                }
-                let e = (a - b).abs() / (eps * b.abs().max(1.0));
-                if !(e <= K::PARITY_EPS) {
-                    return Err(format!(
-                        "{} ({}): output {i}: GPU {a:e} twin {b:e} ({e:.1} ε > {})",
-                        K::NAME,
-                        R::WGSL,
-                        K::PARITY_EPS
-                    ));
-                }
-                worst = worst.max(e);
-            }
-            Ok(worst)
+            let f = |v: &[R]| v.iter().map(|x| x.to_f64()).collect();
+            (f(g), f(t), K::PARITY_EPS)
         }
-        _ => Err(format!("{}: output types differ", K::NAME)),
+        _ => return Err(format!("{}: output types differ", K::NAME)),
+    };
+    let eps = R::EPSILON.to_f64();
+    let mut worst = 0.0f64;
+    for (i, (&a, &b)) in g.iter().zip(&t).enumerate() {
+        if a == b || (a.is_nan() && b.is_nan()) {
+            continue;
+        }
+        let e = (a - b).abs() / (eps * b.abs().max(1.0));
+        if !(e <= tol) {
+            return Err(format!(
+                "{} ({}): output {i}: GPU {a:e} twin {b:e} ({e:.1} ε > {tol})",
+                K::NAME,
+                R::WGSL,
+            ));
+        }
+        worst = worst.max(e);
     }
+    Ok(worst)
 }

@@ -119,7 +119,7 @@ impl Kernel for SplineSample {
             let mut cps = vec![DVec3::ZERO];
             for _ in 0..3 * (1 + k % 4) {
                 let last = *cps.last().expect("one");
-                cps.push(last + rng.range(0.2, 1.0) * rng.unit() + DVec3::X);
+                cps.push(last + rng.range(0.2, 1.0) * rng.unit_vector() + DVec3::X);
             }
             if let Ok(s) = BezierSpline::from_control_points(&cps) {
                 splines.push(s);
