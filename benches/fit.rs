@@ -147,8 +147,8 @@ fn backends(c: &mut Criterion) {
 fn frenet(c: &mut Criterion) {
     use rayon::prelude::*;
     use strandfit::euler::FrenetProblem;
-    use strandfit::gpu::frenet::FrenetGpu;
     use strandfit::gpu::{GpuContext, Precision, Timings};
+    use strandfit::kernels::frenet_integrate::integrate;
     let problems: Vec<FrenetProblem> = (0..20_000)
         .map(|i| {
             let x = i as f64 / 20_000.0;
@@ -182,12 +182,12 @@ fn frenet(c: &mut Criterion) {
     match GpuContext::new() {
         Ok(ctx) => {
             for (name, p) in [("gpu_f64", Precision::F64), ("gpu_f32", Precision::F32)] {
-                match FrenetGpu::new(&ctx, p) {
+                match ctx.exec(p) {
                     Ok(k) => {
                         g.bench_function(BenchmarkId::new("integrate_64", name), |b| {
                             b.iter(|| {
                                 let mut t = Timings::default();
-                                black_box(k.integrate(&ctx, &problems, steps, &mut t).expect("gpu"))
+                                black_box(integrate(&k, &problems, steps, &mut t).expect("gpu"))
                             })
                         });
                     }
@@ -206,8 +206,8 @@ fn frenet(c: &mut Criterion) {
 /// note, when no GPU adapter exists.
 fn spline_sample(c: &mut Criterion) {
     use rayon::prelude::*;
-    use strandfit::gpu::spline_sample::SplineSampleGpu;
     use strandfit::gpu::{GpuContext, Precision, Timings};
+    use strandfit::kernels::spline_sample::sample;
     let splines = synthetic_splines(5000, 8);
     let mut g = c.benchmark_group("spline_sample");
     g.sample_size(10);
@@ -227,7 +227,7 @@ fn spline_sample(c: &mut Criterion) {
         });
         let Some(ctx) = &ctx else { continue };
         for (name, p) in [("gpu_f64", Precision::F64), ("gpu_f32", Precision::F32)] {
-            let k = match SplineSampleGpu::new(ctx, p) {
+            let k = match ctx.exec(p) {
                 Ok(k) => k,
                 Err(e) => {
                     eprintln!("spline_sample bench: {name} skipped: {e}");
@@ -237,7 +237,7 @@ fn spline_sample(c: &mut Criterion) {
             g.bench_function(BenchmarkId::new(name, n), |b| {
                 b.iter(|| {
                     let mut t = Timings::default();
-                    black_box(k.sample(ctx, &splines, n, &mut t).expect("gpu"))
+                    black_box(sample(&k, &splines, n, &mut t).expect("gpu"))
                 })
             });
         }

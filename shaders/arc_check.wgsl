@@ -2,23 +2,8 @@
 // formula and the band). One candidate arc per invocation: the codec's
 // two-sided acceptance test, answered PASS (0), FAIL (1) or UNSURE (2).
 // Prepended: the precision prelude (real, PIO2_*) and math.wgsl (sincos).
-
-struct Params {
-    count: u32,
-    // invocations per row of the 2D dispatch (num_workgroups.x * 64)
-    row: u32,
-    unused: f32,
-    _pad: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
-// start.xyz, tangent.xyz, normal.xyz, end.xyz, kappa, step, tol2_lo, tol2_hi
-@group(0) @binding(1) var<storage, read> rec_in: array<real>;
-// pieces, cover_first, cover_last, window_first, window_last, 3 unused
-@group(0) @binding(2) var<storage, read> idx_in: array<u32>;
-// xyz per input point, relative to its curve's origin
-@group(0) @binding(3) var<storage, read> points: array<real>;
-@group(0) @binding(4) var<storage, read_write> verdicts: array<u32>;
+// The parameter block `params` and the buffers are declared in
+// src/kernels/arc_check.rs and generated ahead of this body.
 
 const IN_STRIDE: u32 = 16u;
 const IDX_STRIDE: u32 = 8u;

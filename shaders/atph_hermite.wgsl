@@ -6,20 +6,8 @@
 // 2.5-2.6 above), the Bernstein columns, Gaussian elimination with partial
 // pivoting, and |det| / prod |column| for the host's singularity test.
 // Prepended: the precision prelude (real, PIO2_*) and math.wgsl (sincos).
-
-struct Params {
-    count: u32,
-    // invocations per row of the 2D dispatch (num_workgroups.x * 64)
-    row: u32,
-    unused: f32,
-    _pad: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
-// a0, a1, b0, b1, chord.xyz / |chord|, L / |chord| (0: none) per pair
-@group(0) @binding(1) var<storage, read> rec_in: array<real>;
-// rho0..rho3 (unit problem; rho3 = 0 for the quadratic), |det| / prod |col|
-@group(0) @binding(2) var<storage, read_write> rec_out: array<real>;
+// The parameter block `params` and the buffers are declared in
+// src/kernels/atph_hermite.rs and generated ahead of this body.
 
 const IN_STRIDE: u32 = 8u;
 const OUT_STRIDE: u32 = 5u;

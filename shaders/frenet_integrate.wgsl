@@ -13,23 +13,8 @@
 // Prepended: the precision prelude (real, PIO2_*), math.wgsl (sincos), and
 // from the driver `const SAMPLES: u32` (0: end mode; m >= 1: sampled mode,
 // m samples per problem) and `const OUT_STRIDE: u32` (13, or 1 + 6 m).
-
-struct Params {
-    count: u32,
-    // invocations per row of the 2D dispatch (num_workgroups.x * 64)
-    row: u32,
-    // end mode: steps N; sampled mode: steps per sample interval (an
-    // integer, exact in f32 up to 2^24)
-    steps: f32,
-    _pad: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
-// k0, g, t0, d (scaled rates), T0.xyz, N0.xyz, B0.xyz per problem
-@group(0) @binding(1) var<storage, read> rec_in: array<real>;
-// end mode: status, offset.xyz / L, T.xyz, N.xyz, B.xyz;
-// sampled mode: status, SAMPLES x (offset.xyz / L, tangent.xyz)
-@group(0) @binding(2) var<storage, read_write> rec_out: array<real>;
+// The parameter block `params` and the buffers are declared in
+// src/kernels/frenet_integrate.rs and generated ahead of this body.
 
 const IN_STRIDE: u32 = 13u;
 const STEP_ANGLE_MAX: real = real(64.0);

@@ -4,20 +4,8 @@
 // offset of phi from the nearer end of I0.
 // Prepended: the precision prelude (real, REAL_EPS, PIO2_*, BISECT_MAX) and
 // math.wgsl (sincos, atan2_pos).
-
-struct Params {
-    count: u32,
-    // invocations per row of the 2D dispatch (num_workgroups.x * 64)
-    row: u32,
-    tol: f32,
-    _pad: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
-// |d|, |t1 - t0|, |t1 + t0|, d.e1, d.e2, d.e3 per segment
-@group(0) @binding(1) var<storage, read> seg_in: array<real>;
-// status, phi, omega, tau_bar, kappa, tau, length, a1, a2, chi, residual, steps
-@group(0) @binding(2) var<storage, read_write> seg_out: array<real>;
+// The parameter block `params` and the buffers are declared in
+// src/kernels/ghosh_bisect.rs and generated ahead of this body.
 
 const IN_STRIDE: u32 = 6u;
 const OUT_STRIDE: u32 = 12u;

@@ -5,20 +5,8 @@
 //   alpha(s) - p0 = (s - k^2 s^3 g) t0 + k s^2 h n0 + k tau s^3 g b0
 //   t(s)          = (1 - k^2 s^2 h) t0 + k s sinc n0 + k tau s^2 h b0
 // Prepended: the precision prelude (real, PIO2_*) and math.wgsl (sincos).
-
-struct Params {
-    count: u32,
-    // invocations per row of the 2D dispatch (num_workgroups.x * 64)
-    row: u32,
-    unused: f32,
-    _pad: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
-// s, kappa, tau, phi, t0.xyz, n0.xyz per sample
-@group(0) @binding(1) var<storage, read> rec_in: array<real>;
-// offset.xyz, tangent.xyz per sample
-@group(0) @binding(2) var<storage, read_write> rec_out: array<real>;
+// The parameter block `params` and the buffers are declared in
+// src/kernels/helix_eval.rs and generated ahead of this body.
 
 const IN_STRIDE: u32 = 10u;
 const OUT_STRIDE: u32 = 6u;

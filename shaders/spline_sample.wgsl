@@ -12,30 +12,8 @@
 // here) and REAL_MAX. No WGSL built-ins on `real` except sqrt, abs, min,
 // max, select (length/normalize/cross are avoided: order of operations must
 // match the twin, and some are not defined for f64 on every driver).
-
-struct Params {
-    n_segs: u32,
-    n_pieces: u32,
-    n_samples: u32,
-    // invocations per row of each pass's 2D dispatch
-    row_seg: u32,
-    row_piece: u32,
-    row_sample: u32,
-    _pad0: u32,
-    _pad1: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
-// per piece: seg_first, seg_count, out_first, out_count, n, j_first
-@group(0) @binding(1) var<storage, read> pieces: array<u32>;
-// per segment: P1 - P0, P2 - P0, P3 - P0 (scaled)
-@group(0) @binding(2) var<storage, read> segs: array<real>;
-// per segment: FINE cumulative panel lengths, flag, cumulative end
-@group(0) @binding(3) var<storage, read_write> table: array<real>;
-// per piece: length, flag
-@group(0) @binding(4) var<storage, read_write> spl: array<real>;
-// per sample: flag, seg, t, point.xyz, tangent.xyz
-@group(0) @binding(5) var<storage, read_write> rec_out: array<real>;
+// The parameter block `params` and the buffers are declared in
+// src/kernels/spline_sample.rs and generated ahead of this body.
 
 const COARSE: u32 = 16u;
 const FINE: u32 = 32u;

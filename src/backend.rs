@@ -1,6 +1,6 @@
 //! The `Backend` seam: every batch operation goes through one choice of
 //! engine — the `f64` CPU reference (rayon) or the GPU (wgpu kernels with
-//! their CPU twins; [`crate::gpu`]).
+//! their CPU twins; [`crate::gpu`], [`crate::kernels`]).
 //!
 //! `auto` opens the GPU when an adapter exists and falls back to the CPU
 //! otherwise, saying which on stderr. What runs where on the GPU backend:
@@ -14,21 +14,21 @@
 //! | `integrate`   | `frenet_integrate.wgsl` (Euler spirals: end point and frame, or samples) |
 //! | `compress`    | `arc_check.wgsl`: the codec's candidate elements of all curves of a block checked together, a batch per round of the search; unsure verdicts (within rounding of the tolerance) and the entropy coding stay on the CPU, so the container is the same bytes |
 
-use std::sync::OnceLock;
-
 use rayon::prelude::*;
 
 use crate::euler::{FrenetEnd, FrenetError, FrenetProblem};
 use crate::fit::{fit_splines, relaxed_pairs, FitError, FitOptions, FitScratch};
-use crate::gpu::arc_check::{ArcCheckGpu, GpuArcChecker};
-use crate::gpu::atph::AtphGpu;
-use crate::gpu::frenet::{FrenetGpu, SpiralSamples};
-use crate::gpu::ghosh::GhoshGpu;
-use crate::gpu::helix_eval::HelixEvalGpu;
-use crate::gpu::spline_sample::SplineSampleGpu;
-use crate::gpu::{GpuContext, GpuError, Precision, Timings};
+use crate::gpu::{Gpu, GpuContext, Precision};
 use crate::helix::{HelixError, HermitePair, PiecewiseHelix, ShortHelix};
+use crate::kernels::arc_check::ArcCheckOn;
+use crate::kernels::frenet_integrate::SpiralSamples;
+use crate::kernels::{
+    atph_hermite, frenet_integrate, ghosh_bisect, helix_eval, spline_sample, Timings,
+};
 use crate::spline::BezierSpline;
+
+/// Why the GPU backend is unavailable or failed.
+pub use crate::kernels::GpuError;
 
 /// Points with their unit tangents along one curve (what `sample` and
 /// `evaluate` return per curve).
@@ -56,94 +56,27 @@ pub enum PrecisionChoice {
     F64,
 }
 
-/// An opened GPU with its kernels, compiled on first use.
+/// An opened GPU and the precision its kernels run in (each kernel is
+/// compiled on first use and kept by the context).
 pub struct GpuEngine {
     pub ctx: GpuContext,
     pub precision: Precision,
-    ghosh: OnceLock<GhoshGpu>,
-    helix_eval: OnceLock<HelixEvalGpu>,
-    frenet: OnceLock<FrenetGpu>,
-    spline_sample: OnceLock<SplineSampleGpu>,
-    atph: OnceLock<AtphGpu>,
-    arc_check: OnceLock<ArcCheckGpu>,
 }
 
 impl GpuEngine {
     pub fn new(ctx: GpuContext, precision: PrecisionChoice) -> Result<Self, GpuError> {
         let precision = match precision {
-            PrecisionChoice::Auto => Precision::best(&ctx),
+            PrecisionChoice::Auto => ctx.best_precision(),
             PrecisionChoice::F32 => Precision::F32,
-            PrecisionChoice::F64 if ctx.supports_f64() => Precision::F64,
-            PrecisionChoice::F64 => {
-                return Err(GpuError::NoF64 {
-                    adapter: ctx.adapter_info().name.clone(),
-                })
-            }
+            PrecisionChoice::F64 => Precision::F64,
         };
-        Ok(GpuEngine {
-            ctx,
-            precision,
-            ghosh: OnceLock::new(),
-            helix_eval: OnceLock::new(),
-            frenet: OnceLock::new(),
-            spline_sample: OnceLock::new(),
-            atph: OnceLock::new(),
-            arc_check: OnceLock::new(),
-        })
+        ctx.exec(precision)?;
+        Ok(GpuEngine { ctx, precision })
     }
 
-    /// The Ghosh kernel (compiled once).
-    pub fn ghosh(&self) -> Result<&GhoshGpu, GpuError> {
-        if let Some(k) = self.ghosh.get() {
-            return Ok(k);
-        }
-        let k = GhoshGpu::new(&self.ctx, self.precision)?;
-        Ok(self.ghosh.get_or_init(|| k))
-    }
-
-    /// The helix evaluation kernel (compiled once).
-    pub fn helix_eval(&self) -> Result<&HelixEvalGpu, GpuError> {
-        if let Some(k) = self.helix_eval.get() {
-            return Ok(k);
-        }
-        let k = HelixEvalGpu::new(&self.ctx, self.precision)?;
-        Ok(self.helix_eval.get_or_init(|| k))
-    }
-
-    /// The spline sampling kernel (compiled once).
-    pub fn spline_sample(&self) -> Result<&SplineSampleGpu, GpuError> {
-        if let Some(k) = self.spline_sample.get() {
-            return Ok(k);
-        }
-        let k = SplineSampleGpu::new(&self.ctx, self.precision)?;
-        Ok(self.spline_sample.get_or_init(|| k))
-    }
-
-    /// The ATPH Hermite kernel (compiled once).
-    pub fn atph(&self) -> Result<&AtphGpu, GpuError> {
-        if let Some(k) = self.atph.get() {
-            return Ok(k);
-        }
-        let k = AtphGpu::new(&self.ctx, self.precision)?;
-        Ok(self.atph.get_or_init(|| k))
-    }
-
-    /// The codec's acceptance-test kernel (compiled once).
-    pub fn arc_check(&self) -> Result<&ArcCheckGpu, GpuError> {
-        if let Some(k) = self.arc_check.get() {
-            return Ok(k);
-        }
-        let k = ArcCheckGpu::new(&self.ctx, self.precision)?;
-        Ok(self.arc_check.get_or_init(|| k))
-    }
-
-    /// The Frenet–Serret kernel (compiled once).
-    pub fn frenet(&self) -> Result<&FrenetGpu, GpuError> {
-        if let Some(k) = self.frenet.get() {
-            return Ok(k);
-        }
-        let k = FrenetGpu::new(&self.ctx, self.precision)?;
-        Ok(self.frenet.get_or_init(|| k))
+    /// The executor the kernels run on.
+    pub fn exec(&self) -> Gpu<'_> {
+        self.ctx.exec(self.precision).expect("checked when opened")
     }
 }
 
@@ -166,13 +99,10 @@ impl Backend {
     /// (each curve's search checks its own, in parallel over curves), the
     /// `arc_check` kernel on the GPU (all curves of a block together, one
     /// batch per round; [`crate::codec::batch`]). Both give the same bytes.
-    pub fn arc_checker(&self) -> Result<Option<GpuArcChecker<'_>>, GpuError> {
+    pub fn arc_checker(&self) -> Result<Option<ArcCheckOn<Gpu<'_>>>, GpuError> {
         match self {
             Backend::Cpu => Ok(None),
-            Backend::Gpu(e) => Ok(Some(GpuArcChecker {
-                kernel: e.arc_check()?,
-                ctx: &e.ctx,
-            })),
+            Backend::Gpu(e) => Ok(Some(ArcCheckOn(e.exec()))),
         }
     }
 
@@ -256,7 +186,7 @@ impl Backend {
     ) -> Result<Vec<Result<ShortHelix, HelixError>>, GpuError> {
         match self {
             Backend::Cpu => Ok(pairs.par_iter().map(|p| p.interpolate(tol)).collect()),
-            Backend::Gpu(g) => g.ghosh()?.interpolate(&g.ctx, pairs, tol, timings),
+            Backend::Gpu(g) => ghosh_bisect::interpolate(&g.exec(), pairs, tol, timings),
         }
     }
 
@@ -280,7 +210,7 @@ impl Backend {
             Backend::Cpu => return Ok(fit_splines(splines, opts)),
             Backend::Gpu(g) => g,
         };
-        let kernel = g.ghosh()?;
+        let exec = g.exec();
         let mut results = Vec::with_capacity(splines.len());
         for batch in splines.chunks(FIT_BATCH_CURVES) {
             // Steps 1–2 on the CPU, per curve in parallel.
@@ -298,7 +228,7 @@ impl Backend {
                 .flatten()
                 .copied()
                 .collect();
-            let helices = kernel.interpolate(&g.ctx, &flat, opts.cohelical_tol, timings)?;
+            let helices = ghosh_bisect::interpolate(&exec, &flat, opts.cohelical_tol, timings)?;
             let mut next = 0;
             for r in prepared {
                 results.push(r.and_then(|pairs| {
@@ -345,9 +275,7 @@ impl Backend {
                     out
                 })
                 .collect()),
-            Backend::Gpu(g) => Ok(g
-                .spline_sample()?
-                .sample(&g.ctx, splines, n, timings)?
+            Backend::Gpu(g) => Ok(spline_sample::sample(&g.exec(), splines, n, timings)?
                 .into_iter()
                 .map(|s| Samples {
                     points: s.points,
@@ -383,11 +311,11 @@ impl Backend {
             }
             Backend::Gpu(g) => g,
         };
-        let kernel = g.helix_eval()?;
+        let exec = g.exec();
         let per_batch = (EVAL_BATCH_SAMPLES / m.max(1)).max(1);
         let mut out = Vec::with_capacity(chains.len());
         for batch in chains.chunks(per_batch) {
-            out.extend(kernel.sample_chains_full(&g.ctx, batch, m, timings)?);
+            out.extend(helix_eval::sample_chains_full(&exec, batch, m, timings)?);
         }
         Ok(out)
     }
@@ -412,7 +340,7 @@ impl Backend {
     ) -> Result<Vec<Result<FrenetEnd, FrenetError>>, GpuError> {
         match self {
             Backend::Cpu => Ok(problems.par_iter().map(|p| p.integrate(steps)).collect()),
-            Backend::Gpu(g) => g.frenet()?.integrate(&g.ctx, problems, steps, timings),
+            Backend::Gpu(g) => frenet_integrate::integrate(&g.exec(), problems, steps, timings),
         }
     }
 
@@ -434,8 +362,8 @@ impl Backend {
                     })
                 })
                 .collect()),
-            Backend::Gpu(g) => g.frenet()?.sample(
-                &g.ctx,
+            Backend::Gpu(g) => frenet_integrate::sample(
+                &g.exec(),
                 problems,
                 m,
                 steps_per_interval,
@@ -447,7 +375,7 @@ impl Backend {
     /// ATPH G1 Hermite interpolation of every pair (paper 002), with the
     /// prescribed arc length where `lengths` gives one; a pair that cannot
     /// be solved gets its own error. GPU: spatial solves in one kernel run
-    /// (planar and straight cases on the host, see [`crate::gpu::atph`]).
+    /// (planar and straight cases on the host, see [`crate::kernels::atph_hermite`]).
     pub fn interpolate_atph(
         &self,
         pairs: &[crate::atph::HermitePair],
@@ -465,7 +393,7 @@ impl Backend {
     ) -> Result<Vec<Result<crate::atph::AtphCurve, crate::atph::AtphError>>, GpuError> {
         match self {
             Backend::Cpu => Ok(crate::atph::interpolate_pairs(pairs, lengths)),
-            Backend::Gpu(g) => g.atph()?.interpolate(&g.ctx, pairs, lengths, timings),
+            Backend::Gpu(g) => atph_hermite::interpolate(&g.exec(), pairs, lengths, timings),
         }
     }
 }

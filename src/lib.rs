@@ -35,6 +35,7 @@ pub mod fit;
 pub mod gpu;
 pub mod helix;
 pub mod io;
+pub mod kernels;
 pub mod metrics;
 pub mod rrmf;
 pub mod sampled;

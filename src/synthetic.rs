@@ -109,11 +109,16 @@ pub fn synthetic_streams(count: usize, len: usize) -> Vec<Vec<DVec3>> {
 }
 
 /// SplitMix64: a small deterministic generator for the synthetic inputs
-/// (the library does not depend on `rand`).
-struct SplitMix64(u64);
+/// and the kernels' parity batches (the library does not depend on `rand`).
+#[derive(Clone, Debug)]
+pub struct SplitMix64(u64);
 
 impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
+    pub fn new(seed: u64) -> Self {
+        SplitMix64(seed)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -122,14 +127,14 @@ impl SplitMix64 {
     }
 
     /// Uniform in `[a, b)`.
-    fn range(&mut self, a: f64, b: f64) -> f64 {
+    pub fn range(&mut self, a: f64, b: f64) -> f64 {
         let u = (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
         a + (b - a) * u
     }
 
     /// Uniform on the unit sphere (rejection from the shell
     /// `0.2 < |v| < 1`, so that normalising is well conditioned).
-    fn unit_vector(&mut self) -> DVec3 {
+    pub fn unit_vector(&mut self) -> DVec3 {
         loop {
             let v = DVec3::new(
                 self.range(-1.0, 1.0),

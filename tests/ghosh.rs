@@ -373,8 +373,8 @@ fn uniqueness_the_root_is_the_only_sign_change() {
 /// `ε/θ` relative; 4e-10 at θ = 1e-6).
 #[test]
 fn reference_and_twin_agree_on_short_arcs() {
-    use strandfit::gpu::ghosh::interpolate_twin;
     use strandfit::helix::HermitePair;
+    use strandfit::kernels::ghosh_bisect::interpolate_twin;
     let mut pairs = Vec::new();
     let mut k = 0u64;
     for i in 0..400 {

@@ -10,7 +10,7 @@
 //! * GPU vs twin: the same operations in the same order, so `4 ε_R` of that
 //!   (measured: 0, bit-identical on lavapipe; other drivers may fuse a·b+c);
 //! * GPU vs reference: the same results and the same errors for every pair
-//!   (the host re-solves untrusted pairs, see `gpu::atph`), and `ρ` within
+//!   (the host re-solves untrusted pairs, see `kernels::atph_hermite`), and `ρ` within
 //!   `8 ε_R Σ|ρ| / rel_det` (`f64`: different `sin`/`cos`, series lengths and
 //!   pivot tie-breaks; `f32`: the record's rounding to `f32` perturbs the
 //!   system by `ε₃₂`).
@@ -22,8 +22,10 @@ use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use strandfit::atph::{interpolate, interpolate_with_length, AtphCurve, AtphError, HermitePair};
-use strandfit::gpu::atph::{condition, interpolate_twin, trust_threshold, AtphGpu};
 use strandfit::gpu::{GpuContext, Precision, Timings};
+use strandfit::kernels::atph_hermite::{
+    condition, interpolate as interpolate_on, interpolate_twin, trust_threshold,
+};
 use strandfit::twin::Real;
 
 fn pairs() -> (Vec<HermitePair>, Vec<Option<f64>>) {
@@ -122,11 +124,9 @@ fn compare(
 
 fn check<R: Real>(ctx: &GpuContext, precision: Precision, eps: f64) {
     let (pairs, lengths) = pairs();
-    let gpu = AtphGpu::new(ctx, precision).unwrap();
+    let gpu = ctx.exec(precision).unwrap();
     let mut timings = Timings::default();
-    let got = gpu
-        .interpolate(ctx, &pairs, Some(&lengths), &mut timings)
-        .unwrap();
+    let got = interpolate_on(&gpu, &pairs, Some(&lengths), &mut timings).unwrap();
     let twin = interpolate_twin::<R>(&pairs, Some(&lengths));
     let refs = reference(&pairs, &lengths);
     let ok = refs.iter().filter(|r| r.is_ok()).count();

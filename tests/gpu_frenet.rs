@@ -18,8 +18,10 @@ use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use strandfit::euler::{FrenetEnd, FrenetError, FrenetProblem};
-use strandfit::gpu::frenet::{integrate_twin, sample_twin, FrenetGpu, SpiralSamples};
 use strandfit::gpu::{GpuContext, Precision, Timings};
+use strandfit::kernels::frenet_integrate::{
+    integrate, integrate_twin, sample, sample_twin, SpiralSamples,
+};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Family {
@@ -310,15 +312,13 @@ fn parity(ctx: &GpuContext, precision: Precision) {
         Precision::F32 => (TWIN_F32, REF_F32),
         Precision::F64 => (TWIN_F64, REF_F64),
     };
-    let k = FrenetGpu::new(ctx, precision).unwrap();
+    let k = ctx.exec(precision).unwrap();
     let name = precision.name();
     let mut identical = true;
     for batch in batches() {
         let t0 = std::time::Instant::now();
         let mut t = Timings::default();
-        let gpu = k
-            .integrate(ctx, &batch.problems, batch.steps, &mut t)
-            .unwrap();
+        let gpu = integrate(&k, &batch.problems, batch.steps, &mut t).unwrap();
         let gpu_time = t0.elapsed();
         let t0 = std::time::Instant::now();
         let twin = match precision {
@@ -391,14 +391,14 @@ fn frenet_sampled_parity() {
             Precision::F32 => (TWIN_F32, REF_F32),
             Precision::F64 => (TWIN_F64, REF_F64),
         };
-        let k = FrenetGpu::new(&ctx, precision).unwrap();
+        let k = ctx.exec(precision).unwrap();
         let mut t = Timings::default();
-        let gpu = k.sample(&ctx, &problems, m, per, &mut t).unwrap();
+        let gpu = sample(&k, &problems, m, per, &mut t).unwrap();
         let twin = match precision {
             Precision::F32 => sample_twin::<f32>(&problems, m, per),
             Precision::F64 => sample_twin::<f64>(&problems, m, per),
         };
-        let end = k.integrate(&ctx, &problems, steps, &mut t).unwrap();
+        let end = integrate(&k, &problems, steps, &mut t).unwrap();
         let name = precision.name();
         let (mut wt, mut wr) = (0.0f64, 0.0f64);
         for (i, p) in problems.iter().enumerate() {
@@ -460,9 +460,9 @@ fn frenet_edge_cases() {
         ..good
     };
     let problems = [good, nan, neg, skew, wild];
-    let k = FrenetGpu::new(&ctx, Precision::F32).unwrap();
+    let k = ctx.exec(Precision::F32).unwrap();
     let mut t = Timings::default();
-    let got = k.integrate(&ctx, &problems, 10, &mut t).unwrap();
+    let got = integrate(&k, &problems, 10, &mut t).unwrap();
     assert!(got[0].is_ok());
     assert_eq!(got[1], Err(FrenetError::NonFinite));
     assert_eq!(got[2], Err(FrenetError::NegativeLength(-2.0)));
@@ -474,23 +474,23 @@ fn frenet_edge_cases() {
     let twin = integrate_twin::<f32>(&problems, 10);
     assert_eq!(got[1..], twin[1..]);
     // Zero steps, zero and one sample.
-    let zero = k.integrate(&ctx, &problems, 0, &mut t).unwrap();
+    let zero = integrate(&k, &problems, 0, &mut t).unwrap();
     assert!(zero.iter().all(|r| *r == Err(FrenetError::ZeroSteps)));
-    let none = k.sample(&ctx, &problems, 0, 3, &mut t).unwrap();
+    let none = sample(&k, &problems, 0, 3, &mut t).unwrap();
     assert_eq!(none[0], Ok(SpiralSamples::default()));
     assert_eq!(none[1], Err(FrenetError::NonFinite));
-    let one = k.sample(&ctx, &problems, 1, 3, &mut t).unwrap();
+    let one = sample(&k, &problems, 1, 3, &mut t).unwrap();
     let s = one[0].as_ref().unwrap();
     assert_eq!(s.points, vec![good.start]);
     assert_eq!(s.tangents.len(), 1);
     assert!((s.tangents[0] - good.frame[0]).length() < 1e-7);
     // The wild one sampled: reference samples.
-    let w = k.sample(&ctx, &[wild], 3, 5, &mut t).unwrap();
+    let w = sample(&k, &[wild], 3, 5, &mut t).unwrap();
     let want = wild.sample(3, 5).unwrap();
     assert_eq!(
         w[0].as_ref().unwrap().points,
         want.iter().map(|e| e.point).collect::<Vec<_>>()
     );
     // An empty batch.
-    assert!(k.integrate(&ctx, &[], 8, &mut t).unwrap().is_empty());
+    assert!(integrate(&k, &[], 8, &mut t).unwrap().is_empty());
 }

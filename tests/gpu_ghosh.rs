@@ -11,9 +11,9 @@ use std::f64::consts::{PI, TAU};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use strandfit::gpu::ghosh::{interpolate_twin, GhoshGpu};
 use strandfit::gpu::{Precision, Timings};
 use strandfit::helix::{HelixElement, HelixError, HermitePair, ShortHelix, DEFAULT_COHELICAL_TOL};
+use strandfit::kernels::ghosh_bisect::{interpolate, interpolate_twin};
 
 fn element(rng: &mut ChaCha8Rng, kappa: f64, tau: f64, phi: f64) -> HelixElement {
     let t0 = unit_vector(rng);
@@ -294,9 +294,9 @@ fn ghosh_bisect_parity_f64() {
     let tol = DEFAULT_COHELICAL_TOL;
     let reference: Vec<_> = pairs.iter().map(|p| p.interpolate(tol)).collect();
     let twin = interpolate_twin::<f64>(&pairs, tol);
-    let k = GhoshGpu::new(&ctx, Precision::F64).unwrap();
+    let k = ctx.exec(Precision::F64).unwrap();
     let mut t = Timings::default();
-    let gpu = k.interpolate(&ctx, &pairs, tol, &mut t).unwrap();
+    let gpu = interpolate(&k, &pairs, tol, &mut t).unwrap();
     check("f64 gpu vs twin", TWIN_F64, &cases, &gpu, &twin);
     check("f64 gpu vs reference", REF_F64, &cases, &gpu, &reference);
 }
@@ -311,9 +311,9 @@ fn ghosh_bisect_parity_f32() {
     let tol = DEFAULT_COHELICAL_TOL;
     let reference: Vec<_> = pairs.iter().map(|p| p.interpolate(tol)).collect();
     let twin = interpolate_twin::<f32>(&pairs, tol);
-    let k = GhoshGpu::new(&ctx, Precision::F32).unwrap();
+    let k = ctx.exec(Precision::F32).unwrap();
     let mut t = Timings::default();
-    let gpu = k.interpolate(&ctx, &pairs, tol, &mut t).unwrap();
+    let gpu = interpolate(&k, &pairs, tol, &mut t).unwrap();
     check("f32 gpu vs twin", TWIN_F32, &cases, &gpu, &twin);
     check("f32 gpu vs reference", REF_F32, &cases, &gpu, &reference);
 }

@@ -12,11 +12,13 @@ use std::f64::consts::PI;
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use strandfit::gpu::helix_eval::{
-    sample_chains_twin, sample_chains_twin_full, ChainSamples, HelixEvalGpu,
-};
+use strandfit::gpu::Gpu;
 use strandfit::gpu::{GpuContext, Precision, Timings};
 use strandfit::helix::{ChainParams, ElementParams, HelixElement, PiecewiseHelix};
+use strandfit::kernels::helix_eval::{
+    sample_chains, sample_chains_full, sample_chains_twin, sample_chains_twin_full, ChainSamples,
+    HelixEval,
+};
 use strandfit::twin::helix_eval::PHI_MAX;
 use strandfit::twin::helix_eval::{
     IN_KAPPA, IN_N0, IN_PHI, IN_S, IN_STRIDE, IN_T0, IN_TAU, OUT_OFFSET, OUT_STRIDE, OUT_TANGENT,
@@ -273,8 +275,7 @@ const REF_F32: Tol = Tol {
 /// moved to the origin, so that the `f64` result carries no rounding of
 /// `|p₀|`: offset error / (ε L) and tangent error / ε, worst per family.
 fn raw_offsets<R: Real>(
-    ctx: &GpuContext,
-    k: &HelixEvalGpu,
+    k: &Gpu,
     chains: &[PiecewiseHelix],
     fams: &[Vec<Family>],
 ) -> Vec<(Family, f64, f64)> {
@@ -301,8 +302,15 @@ fn raw_offsets<R: Real>(
         }
     }
     let mut out = vec![R::zero(); want.len() * OUT_STRIDE];
-    k.run_raw(ctx, &input, &mut out, &mut Timings::default())
-        .unwrap();
+    strandfit::kernels::map::<HelixEval, R, _>(
+        k,
+        (),
+        0.0,
+        &input,
+        &mut out,
+        &mut Timings::default(),
+    )
+    .unwrap();
     let eps = R::EPSILON.to_f64();
     let mut worst: Vec<(Family, f64, f64)> = FAMILIES.iter().map(|&f| (f, 0.0, 0.0)).collect();
     for (o, (fam, len, p, t)) in out.chunks(OUT_STRIDE).zip(want) {
@@ -330,9 +338,9 @@ fn parity(ctx: &GpuContext, precision: Precision, twin_tol: Tol, ref_tol: Tol) {
         Precision::F32 => sample_chains_twin_full::<f32>(&chains, M),
         Precision::F64 => sample_chains_twin_full::<f64>(&chains, M),
     };
-    let k = HelixEvalGpu::new(ctx, precision).unwrap();
+    let k = ctx.exec(precision).unwrap();
     let mut t = Timings::default();
-    let gpu = k.sample_chains_full(ctx, &chains, M, &mut t).unwrap();
+    let gpu = sample_chains_full(&k, &chains, M, &mut t).unwrap();
     let name = precision.name();
     check(
         &format!("{name} gpu vs twin"),
@@ -351,8 +359,8 @@ fn parity(ctx: &GpuContext, precision: Precision, twin_tol: Tol, ref_tol: Tol) {
         &want,
     );
     let raw = match precision {
-        Precision::F32 => raw_offsets::<f32>(ctx, &k, &chains, &fams),
-        Precision::F64 => raw_offsets::<f64>(ctx, &k, &chains, &fams),
+        Precision::F32 => raw_offsets::<f32>(&k, &chains, &fams),
+        Precision::F64 => raw_offsets::<f64>(&k, &chains, &fams),
     };
     for (fam, p, t) in raw {
         assert!(
@@ -361,7 +369,7 @@ fn parity(ctx: &GpuContext, precision: Precision, twin_tol: Tol, ref_tol: Tol) {
         );
     }
     // The points-only entry points return the same points.
-    let points = k.sample_chains(ctx, &chains, M, &mut t).unwrap();
+    let points = sample_chains(&k, &chains, M, &mut t).unwrap();
     assert!(points.iter().zip(&gpu).all(|(p, g)| *p == g.points));
 }
 
@@ -399,10 +407,10 @@ fn helix_eval_edge_cases() {
         PiecewiseHelix::new(Vec::new()),
         long.clone(),
     ];
-    let k = HelixEvalGpu::new(&ctx, Precision::F32).unwrap();
+    let k = ctx.exec(Precision::F32).unwrap();
     let mut t = Timings::default();
     for m in [0, 1, 2, 7] {
-        let gpu = k.sample_chains(&ctx, &chains, m, &mut t).unwrap();
+        let gpu = sample_chains(&k, &chains, m, &mut t).unwrap();
         let twin = sample_chains_twin::<f32>(&chains, m);
         assert_eq!(gpu.len(), chains.len());
         for ((g, tw), c) in gpu.iter().zip(&twin).zip(&chains) {
@@ -422,7 +430,7 @@ fn helix_eval_edge_cases() {
     }
     // The long element's samples come from the reference unchanged.
     let m = 101;
-    let gpu = k.sample_chains(&ctx, &[long.clone()], m, &mut t).unwrap();
+    let gpu = sample_chains(&k, &[long.clone()], m, &mut t).unwrap();
     let want = long.sample(m);
     let total = long.length();
     let mut beyond = 0;

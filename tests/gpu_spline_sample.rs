@@ -10,8 +10,10 @@ use common::{E32, E64};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use strandfit::gpu::spline_sample::{sample_counts_twin, SplineSampleGpu, SplineSamples};
 use strandfit::gpu::{GpuContext, GpuError, Precision, Timings};
+use strandfit::kernels::spline_sample::{
+    sample, sample_counts, sample_counts_twin, ChunkLimits, SplineSamples,
+};
 use strandfit::spline::BezierSpline;
 use strandfit::synthetic::hermite_spline;
 use strandfit::twin::spline_sample::{FINE, QUAD_FLOOR, QUAD_TOL};
@@ -412,9 +414,9 @@ fn parity(ctx: &GpuContext, precision: Precision) {
             E64,
         ),
     };
-    let k = SplineSampleGpu::new(ctx, precision).unwrap();
+    let k = ctx.exec(precision).unwrap();
     let mut t = Timings::default();
-    let gpu = k.sample_counts(ctx, &b.splines, &b.counts, &mut t).unwrap();
+    let gpu = sample_counts(&k, &b.splines, &b.counts, ChunkLimits::default(), &mut t).unwrap();
     let name = precision.name();
     eprintln!(
         "{name}: {} splines, {total} samples; GPU {:?} ({} chunks); setup + twin + reference {:?}",
@@ -476,13 +478,13 @@ fn parity(ctx: &GpuContext, precision: Precision) {
     );
     // Chunking and splitting do not change results: tiny chunks (a spline
     // of 4,001 samples spans several) give the same answer.
-    let small = SplineSampleGpu::new(ctx, precision)
-        .unwrap()
-        .with_chunk_limits(1500, 40);
+    let small = ctx.exec(precision).unwrap();
+    let limits = ChunkLimits {
+        samples: 1500,
+        segments: 40,
+    };
     let mut t2 = Timings::default();
-    let chunked = small
-        .sample_counts(ctx, &b.splines, &b.counts, &mut t2)
-        .unwrap();
+    let chunked = sample_counts(&small, &b.splines, &b.counts, limits, &mut t2).unwrap();
     eprintln!("{name}: small chunks: {} chunks", t2.chunks);
     assert!(t2.chunks > 50);
     assert!(chunked == gpu, "{name}: chunking changed results");
@@ -512,30 +514,35 @@ fn spline_sample_edge_cases() {
     let Some(ctx) = common::gpu_or_skip("spline_sample_edge_cases") else {
         return;
     };
-    let k = SplineSampleGpu::new(&ctx, Precision::F32).unwrap();
+    let k = ctx.exec(Precision::F32).unwrap();
     let mut t = Timings::default();
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let splines: Vec<BezierSpline> = (0..5)
         .filter_map(|_| spline(&mut rng, Family::Hair))
         .collect();
     assert!(matches!(
-        k.sample(&ctx, &splines, 0, &mut t),
+        sample(&k, &splines, 0, &mut t),
         Err(GpuError::InvalidInput(_))
     ));
     assert!(matches!(
-        k.sample_counts(&ctx, &splines, &[3], &mut t),
+        sample_counts(&k, &splines, &[3], ChunkLimits::default(), &mut t),
         Err(GpuError::InvalidInput(_))
     ));
-    assert!(k.sample(&ctx, &[], 5, &mut t).unwrap().is_empty());
-    let one = k.sample(&ctx, &splines, 1, &mut t).unwrap();
+    assert!(sample(&k, &[], 5, &mut t).unwrap().is_empty());
+    let one = sample(&k, &splines, 1, &mut t).unwrap();
     for (s, o) in splines.iter().zip(&one) {
         let cps = s.control_points();
         assert_eq!(o.points, vec![cps[0], cps[cps.len() - 1]]);
     }
-    let uniform = k.sample(&ctx, &splines, 33, &mut t).unwrap();
-    let ragged = k
-        .sample_counts(&ctx, &splines, &vec![33; splines.len()], &mut t)
-        .unwrap();
+    let uniform = sample(&k, &splines, 33, &mut t).unwrap();
+    let ragged = sample_counts(
+        &k,
+        &splines,
+        &vec![33; splines.len()],
+        ChunkLimits::default(),
+        &mut t,
+    )
+    .unwrap();
     assert_eq!(uniform, ragged);
     // Far from the origin (1e6): segments travel relative to their start, so
     // f32 keeps its relative precision along the curve (|Δp| a few ε₃₂ L,
@@ -547,9 +554,7 @@ fn spline_sample_edge_cases() {
         12,
     )
     .unwrap();
-    let got = k
-        .sample(&ctx, std::slice::from_ref(&far), 500, &mut t)
-        .unwrap();
+    let got = sample(&k, std::slice::from_ref(&far), 500, &mut t).unwrap();
     assert!(!got[0].fallback);
     let want = far.sample_equal_arclen(500).unwrap();
     for (j, (p, tan)) in want.iter().enumerate() {
@@ -559,14 +564,14 @@ fn spline_sample_edge_cases() {
     }
     // A spline too large for one chunk's segment table goes to the
     // reference (exactly), the rest stay on the GPU.
-    let small = SplineSampleGpu::new(&ctx, Precision::F32)
-        .unwrap()
-        .with_chunk_limits(1000, 5);
+    let small = ctx.exec(Precision::F32).unwrap();
+    let limits = ChunkLimits {
+        samples: 1000,
+        segments: 5,
+    };
     let big = hermite_spline(|u| v(u.cos(), u.sin(), 0.1 * u), 0.0, 6.0, 9).unwrap();
     let fits = hermite_spline(|u| v(u, u.sin(), 0.0), 0.0, 3.0, 3).unwrap();
-    let res = small
-        .sample(&ctx, &[big.clone(), fits], 20, &mut t)
-        .unwrap();
+    let res = sample_counts(&small, &[big.clone(), fits], &[20, 20], limits, &mut t).unwrap();
     assert!(res[0].fallback && !res[1].fallback);
     let (points, tangents): (Vec<_>, Vec<_>) =
         big.sample_equal_arclen(20).unwrap().into_iter().unzip();

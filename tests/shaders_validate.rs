@@ -6,7 +6,7 @@
 
 use std::collections::BTreeSet;
 
-use strandfit::gpu::kernel_sources;
+use strandfit::kernels::kernel_sources;
 use strandfit::twin::Real;
 use wgpu::naga;
 
@@ -46,7 +46,7 @@ fn every_kernel_parses_and_validates_in_both_precisions() {
         .filter(|s| s != "math")
         .collect();
     let listed: BTreeSet<String> = f32_names.iter().map(|s| s.to_string()).collect();
-    assert_eq!(files, listed, "shaders/ and gpu::kernel_sources differ");
+    assert_eq!(files, listed, "shaders/ and kernels::kernel_sources differ");
     assert_eq!(files.len(), 6);
 }
 

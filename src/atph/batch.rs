@@ -1,6 +1,6 @@
 //! Many Hermite problems at once, in parallel on the CPU (rayon): the CPU
 //! backend of [`crate::backend::Backend::interpolate_atph`] (the GPU one is
-//! [`crate::gpu::atph`]).
+//! [`crate::kernels::atph_hermite`]).
 
 use glam::DVec3;
 use rayon::prelude::*;

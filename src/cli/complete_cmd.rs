@@ -7,7 +7,7 @@
 //!   `frenet_integrate` dispatch on the GPU).
 //! * `atph`: ATPH curves, a closed form and a 3×3 (4×4 with a prescribed
 //!   length) solve per pair: `atph::batch` on the CPU, one `atph_hermite`
-//!   kernel run for all spatial pairs on the GPU (`gpu::atph`).
+//!   kernel run for all spatial pairs on the GPU (`kernels::atph_hermite`).
 //!
 //! Every pair gets its own result or its own error; the batch never stops
 //! on a bad pair.

@@ -10,7 +10,7 @@ use super::io_util::map_json_lines;
 use super::IntegrateArgs;
 use crate::backend::Backend;
 use crate::euler::{FrenetEnd, FrenetProblem};
-use crate::gpu::frenet::SpiralSamples;
+use crate::kernels::frenet_integrate::SpiralSamples;
 
 #[derive(Deserialize)]
 struct Record {

@@ -302,7 +302,7 @@ pub fn search_block(
 mod tests {
     use super::*;
     use crate::codec::quantise::{Quantiser, Steps};
-    use crate::gpu::arc_check::verdicts_twin;
+    use crate::kernels::arc_check::verdicts_twin;
     use crate::twin::Real;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -490,7 +490,7 @@ mod tests {
     #[test]
     fn f32_checks_of_huge_and_tiny_curves_defer_to_the_reference() {
         use crate::codec::{encode_block, encode_block_on, CodecParams};
-        use crate::gpu::arc_check::TwinArcChecker;
+        use crate::kernels::arc_check::TwinArcChecker;
         // Squared lengths beyond f32 (overflow to infinity), and a
         // tolerance whose square is below f32's normal range.
         let huge = vec![
@@ -519,7 +519,7 @@ mod tests {
     #[test]
     fn batched_searches_write_the_bytes_of_the_cpu_path() {
         use crate::codec::{encode_block, encode_block_on, CodecParams};
-        use crate::gpu::arc_check::TwinArcChecker;
+        use crate::kernels::arc_check::TwinArcChecker;
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let mut curves: Vec<Vec<DVec3>> = (0..60)
             .map(|k| wiggle(&mut rng, 2 + k % 50, [0.0, 50.0][k % 2]))

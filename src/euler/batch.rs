@@ -28,8 +28,8 @@ use super::solve::{
     LAMBDA0, LAMBDA_DOWN, LAMBDA_UP,
 };
 use crate::backend::Backend;
+use crate::backend::GpuError;
 use crate::euler::solve_spiral;
-use crate::gpu::GpuError;
 
 /// One pair: `(x₀, T₀, x_f, T_f)`.
 pub type Pair = (DVec3, DVec3, DVec3, DVec3);

@@ -8,33 +8,13 @@
 //! 128 MiB per storage binding, 65535 workgroups per dimension), and every
 //! dispatch is chunked to respect them.
 
-use thiserror::Error;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
-/// Environment variable that picks the adapter.
-pub const ADAPTER_ENV: &str = "STRANDFIT_ADAPTER";
-
-/// Why the GPU path is unavailable or failed.
-#[derive(Debug, Error)]
-pub enum GpuError {
-    #[error(
-        "no GPU adapter found (Vulkan backend). Install a Vulkan driver — for a \
-         software one, `apt-get install mesa-vulkan-drivers libvulkan1` (lavapipe) — \
-         or use --backend cpu"
-    )]
-    NoAdapter,
-    #[error("{ADAPTER_ENV}={wanted:?} matches no adapter; available: {available}")]
-    AdapterNotFound { wanted: String, available: String },
-    #[error("cannot open GPU device on {adapter}: {reason}")]
-    Device { adapter: String, reason: String },
-    #[error("the adapter {adapter} has no SHADER_F64; use --precision f32")]
-    NoF64 { adapter: String },
-    #[error("GPU shader {name} failed to compile: {reason}")]
-    Shader { name: String, reason: String },
-    #[error("GPU execution failed: {0}")]
-    Execution(String),
-    #[error("invalid input: {0}")]
-    InvalidInput(String),
-}
+use super::dispatch::{compile, Compiled};
+pub use crate::kernels::{GpuError, ADAPTER_ENV};
+use crate::kernels::{Kernel, Precision};
+use crate::twin::Real;
 
 /// One opened GPU.
 pub struct GpuContext {
@@ -43,6 +23,9 @@ pub struct GpuContext {
     info: wgpu::AdapterInfo,
     limits: wgpu::Limits,
     f64: bool,
+    /// Every kernel compiled on this device, by name, configuration and
+    /// precision: each is compiled once.
+    pipelines: Mutex<HashMap<String, Arc<Compiled>>>,
 }
 
 impl std::fmt::Debug for GpuContext {
@@ -143,6 +126,7 @@ impl GpuContext {
             info,
             limits,
             f64,
+            pipelines: Mutex::new(HashMap::new()),
         })
     }
 
@@ -163,6 +147,35 @@ impl GpuContext {
 
     pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
         &self.info
+    }
+
+    /// `f64` where the adapter has it, else `f32`.
+    pub fn best_precision(&self) -> Precision {
+        if self.f64 {
+            Precision::F64
+        } else {
+            Precision::F32
+        }
+    }
+
+    /// `K` compiled in configuration `cfg` and precision `R`: from the
+    /// cache, or compiled now and kept.
+    pub(crate) fn compiled<K: Kernel, R: Real>(
+        &self,
+        cfg: K::Config,
+    ) -> Result<Arc<Compiled>, GpuError> {
+        let key = format!("{}/{:?}/{}", K::NAME, cfg, R::WGSL);
+        if let Some(k) = self.cache().get(&key) {
+            return Ok(k.clone());
+        }
+        // Compiled outside the lock: another thread may compile the same
+        // kernel meanwhile, and the first one kept wins.
+        let k = Arc::new(compile::<K, R>(self, cfg)?);
+        Ok(self.cache().entry(key).or_insert(k).clone())
+    }
+
+    fn cache(&self) -> std::sync::MutexGuard<'_, HashMap<String, Arc<Compiled>>> {
+        self.pipelines.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Whether kernels can be compiled in `f64` (`SHADER_F64`).

@@ -1,364 +1,430 @@
-//! Compile a kernel and run it over a flat batch of fixed-size records, in
-//! chunks, with two chunks in flight (upload and readback of one overlap the
-//! dispatch of the other).
+//! The one dispatcher: compiles a [`Kernel`] from its description (cached
+//! per context, configuration and precision) and runs it over a sequence of
+//! [`Batch`]es with two batches in flight — the upload and readback of one
+//! overlap the dispatch of the other.
 //!
-//! Every "map" kernel has the same bindings: 0 a uniform `Params { count,
-//! row, param: f32, _pad }`, 1 the input records (`array<real>`, read), 2 the
-//! output records (`array<real>`, read-write). Workgroups are 64 wide; past
-//! 65535 groups the dispatch is 2D and the kernel's index is
-//! `gid.x + gid.y * row`.
+//! Binding 0 is the parameter block, filled from the description
+//! ([`Field`]: counts and 2D-dispatch rows of each pass, the batch's
+//! scalars); bindings 1… are the description's buffers: inputs uploaded per
+//! batch, resident buffers uploaded once ([`Gpu::resident`]), scratch
+//! buffers, and the output, copied to a staging buffer and mapped.
+//! Workgroups are [`WORKGROUP`] wide; past 65535 groups a dispatch is 2D and
+//! the kernel's index is `gid.x + gid.y * row`.
 
-use std::sync::mpsc;
-use std::time::{Duration, Instant};
+use std::sync::{mpsc, Arc};
+use std::time::Instant;
 
-use bytemuck::{Pod, Zeroable};
-
-use super::{shader_source, GpuContext, GpuError};
+use super::{Gpu, GpuContext, GpuError};
+use crate::kernels::{
+    source, Access, Batch, Data, Elem, Exec, Field, Kernel, Limits, Precision, Timings, WORKGROUP,
+};
 use crate::twin::Real;
 
-pub(crate) const WORKGROUP: u32 = 64;
-/// Default records per chunk; the binding limits may lower it.
-pub(crate) const CHUNK_RECORDS: usize = 1 << 18;
-
-/// Where the time of a GPU batch went (summed over chunks). With two chunks
-/// in flight, `wait` is the part of the device's work the host could not
-/// hide behind upload and readback.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Timings {
-    /// Packing records into the kernel's precision.
-    pub prepare: Duration,
-    /// `write_buffer` + encode + submit.
-    pub upload: Duration,
-    /// Blocking until a chunk's results are mapped.
-    pub wait: Duration,
-    /// Copying mapped results out (and unpacking).
-    pub readback: Duration,
-    /// Number of chunks.
-    pub chunks: usize,
-}
-
-impl Timings {
-    pub fn total(&self) -> Duration {
-        self.prepare + self.upload + self.wait + self.readback
-    }
-    pub fn add(&mut self, o: &Timings) {
-        self.prepare += o.prepare;
-        self.upload += o.upload;
-        self.wait += o.wait;
-        self.readback += o.readback;
-        self.chunks += o.chunks;
-    }
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct Params {
-    count: u32,
-    row: u32,
-    param: f32,
-    _pad: u32,
-}
-
-/// A compiled map kernel.
-pub(crate) struct MapKernel {
+/// A compiled kernel: one pipeline per entry point, one bind group layout.
+pub(crate) struct Compiled {
     name: &'static str,
-    pipeline: wgpu::ComputePipeline,
+    pipelines: Vec<wgpu::ComputePipeline>,
     layout: wgpu::BindGroupLayout,
-    in_stride: usize,
-    out_stride: usize,
-    real_size: usize,
 }
 
-/// Compile WGSL, turning validation errors into [`GpuError::Shader`].
-pub(crate) fn compile(
+fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Compile `K` in configuration `cfg` and precision `R`, turning
+/// validation errors into [`GpuError::Shader`].
+pub(crate) fn compile<K: Kernel, R: Real>(
     ctx: &GpuContext,
-    name: &str,
-    source: &str,
-) -> Result<wgpu::ComputePipeline, GpuError> {
-    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(name),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-    let pipeline = ctx
-        .device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(name),
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+    cfg: K::Config,
+) -> Result<Compiled, GpuError> {
+    let d = &ctx.device;
+    let mut entries = vec![layout_entry(0, wgpu::BufferBindingType::Uniform)];
+    for (k, b) in K::BINDINGS.iter().enumerate() {
+        let read_only = matches!(b.access, Access::Input | Access::Resident);
+        entries.push(layout_entry(
+            k as u32 + 1,
+            wgpu::BufferBindingType::Storage { read_only },
+        ));
+    }
+    let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(K::NAME),
+        entries: &entries,
+    });
+    let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(K::NAME),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(K::NAME),
+        source: wgpu::ShaderSource::Wgsl(source::<K, R>(cfg).into()),
+    });
+    let pipelines = K::ENTRIES
+        .iter()
+        .map(|entry| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        })
+        .collect();
     if let Some(err) = pollster::block_on(scope.pop()) {
         return Err(GpuError::Shader {
-            name: name.to_string(),
+            name: K::NAME.to_string(),
             reason: err.to_string(),
         });
     }
-    Ok(pipeline)
+    Ok(Compiled {
+        name: K::NAME,
+        pipelines,
+        layout,
+    })
 }
 
 /// `(x, y, row)` for `n` invocations of [`WORKGROUP`] width.
-pub(crate) fn grid(ctx: &GpuContext, n: usize) -> (u32, u32, u32) {
+fn grid(ctx: &GpuContext, n: usize) -> (u32, u32, u32) {
     let groups = n.div_ceil(WORKGROUP as usize).max(1);
     let x = groups.min(ctx.max_groups_per_dim() as usize);
     let y = groups.div_ceil(x);
     (x as u32, y as u32, x as u32 * WORKGROUP)
 }
 
+/// The parameter block of `K` for passes of `counts` invocations.
+fn params<K: Kernel>(grids: &[(u32, u32, u32)], counts: &[usize], scalars: &[f32]) -> Vec<u32> {
+    let mut scalars = scalars.iter();
+    K::PARAMS
+        .iter()
+        .map(|(_, f)| match *f {
+            Field::Count(p) => counts[p] as u32,
+            Field::Row(p) => grids[p].2,
+            Field::Scalar => scalars.next().copied().unwrap_or(0.0).to_bits(),
+            Field::Pad => 0,
+        })
+        .collect()
+}
+
 struct Pending {
     index: wgpu::SubmissionIndex,
-    first: usize,
-    count: usize,
+    batch: usize,
+    bytes: u64,
     mapped: mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
 }
 
+/// The buffers of one batch in flight, grown to the largest batch seen.
 struct Slot {
-    input: wgpu::Buffer,
-    output: wgpu::Buffer,
-    staging: wgpu::Buffer,
     uniform: wgpu::Buffer,
-    bind: wgpu::BindGroup,
+    /// One per non-resident binding (resident ones: `None`).
+    buffers: Vec<Option<wgpu::Buffer>>,
+    sizes: Vec<u64>,
+    staging: Option<wgpu::Buffer>,
+    bind: Option<wgpu::BindGroup>,
     pending: Option<Pending>,
 }
 
-impl MapKernel {
-    pub(crate) fn new<R: Real>(
-        ctx: &GpuContext,
-        name: &'static str,
-        body: &str,
-        in_stride: usize,
-        out_stride: usize,
-    ) -> Result<Self, GpuError> {
-        let pipeline = compile(ctx, name, &shader_source::<R>(body))?;
-        let layout = pipeline.get_bind_group_layout(0);
-        Ok(MapKernel {
-            name,
-            pipeline,
-            layout,
-            in_stride,
-            out_stride,
-            real_size: std::mem::size_of::<R>(),
-        })
-    }
+fn buffer(
+    ctx: &GpuContext,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage,
+        mapped_at_creation: false,
+    })
+}
 
-    /// Compile in `precision`, refusing `f64` on adapters without
-    /// `SHADER_F64`.
-    pub(crate) fn for_precision(
-        ctx: &GpuContext,
-        precision: super::Precision,
-        name: &'static str,
-        body: &str,
-        in_stride: usize,
-        out_stride: usize,
-    ) -> Result<Self, GpuError> {
-        match precision {
-            super::Precision::F32 => Self::new::<f32>(ctx, name, body, in_stride, out_stride),
-            super::Precision::F64 if ctx.supports_f64() => {
-                Self::new::<f64>(ctx, name, body, in_stride, out_stride)
-            }
-            super::Precision::F64 => Err(GpuError::NoF64 {
-                adapter: ctx.adapter_info().name.clone(),
-            }),
-        }
-    }
-
-    /// Records per chunk: the default, lowered to fit the binding limits.
-    pub(crate) fn chunk_records(&self, ctx: &GpuContext) -> usize {
-        let per = (self.in_stride.max(self.out_stride) * self.real_size) as u64;
-        let by_binding = (ctx.max_binding_bytes() / per) as usize;
-        let by_groups = ctx.max_groups_per_dim() as usize
-            * ctx.max_groups_per_dim() as usize
-            * WORKGROUP as usize;
-        CHUNK_RECORDS.min(by_binding).min(by_groups).max(1)
-    }
-
-    fn slot(&self, ctx: &GpuContext, records: usize) -> Slot {
-        let d = &ctx.device;
-        let in_bytes = (records * self.in_stride * self.real_size).max(4) as u64;
-        let out_bytes = (records * self.out_stride * self.real_size).max(4) as u64;
-        let input = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(self.name),
-            size: in_bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let output = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(self.name),
-            size: out_bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let staging = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(self.name),
-            size: out_bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let uniform = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(self.name),
-            size: std::mem::size_of::<Params>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(self.name),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: input.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: output.as_entire_binding(),
-                },
-            ],
-        });
+impl Slot {
+    fn new<K: Kernel>(ctx: &GpuContext) -> Slot {
+        let bytes = (K::PARAMS.len() * 4) as u64;
+        let usage = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
         Slot {
-            input,
-            output,
-            staging,
-            uniform,
-            bind,
+            uniform: buffer(ctx, K::NAME, bytes, usage),
+            buffers: K::BINDINGS.iter().map(|_| None).collect(),
+            sizes: vec![0; K::BINDINGS.len()],
+            staging: None,
+            bind: None,
             pending: None,
         }
     }
 
-    /// Run over `input` (`n·in_stride` reals) into `out` (`n·out_stride`).
-    /// `param` is the kernel's scalar parameter (e.g. a tolerance).
-    pub(crate) fn run<R: Real>(
-        &self,
+    /// Makes room for `sizes` bytes per binding (re-creating the bind group
+    /// when a buffer grew).
+    fn fit<K: Kernel>(
+        &mut self,
         ctx: &GpuContext,
-        input: &[R],
-        param: f32,
-        out: &mut [R],
+        k: &Compiled,
+        sizes: &[u64],
+        resident: &[&wgpu::Buffer],
+    ) {
+        use wgpu::BufferUsages as U;
+        let mut grew = self.bind.is_none();
+        for (j, b) in K::BINDINGS.iter().enumerate() {
+            if b.access == Access::Resident || sizes[j] <= self.sizes[j] {
+                continue;
+            }
+            let usage = match b.access {
+                Access::Input => U::STORAGE | U::COPY_DST,
+                Access::Scratch => U::STORAGE,
+                _ => U::STORAGE | U::COPY_SRC,
+            };
+            self.buffers[j] = Some(buffer(ctx, k.name, sizes[j], usage));
+            if b.access == Access::Output {
+                self.staging = Some(buffer(ctx, k.name, sizes[j], U::MAP_READ | U::COPY_DST));
+            }
+            self.sizes[j] = sizes[j];
+            grew = true;
+        }
+        if !grew {
+            return;
+        }
+        let mut resident = resident.iter();
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: self.uniform.as_entire_binding(),
+        }];
+        for (j, b) in self.buffers.iter().enumerate() {
+            let buf = match b {
+                Some(b) => b,
+                None => resident
+                    .next()
+                    .expect("a resident buffer per resident binding"),
+            };
+            entries.push(wgpu::BindGroupEntry {
+                binding: j as u32 + 1,
+                resource: buf.as_entire_binding(),
+            });
+        }
+        self.bind = Some(ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(k.name),
+            layout: &k.layout,
+            entries: &entries,
+        }));
+    }
+}
+
+fn bytes_of<R: Real>(elem: Elem, n: usize) -> u64 {
+    (n * match elem {
+        Elem::Real => std::mem::size_of::<R>(),
+        Elem::U32 => 4,
+    }) as u64
+}
+
+impl Exec for Gpu<'_> {
+    type Resident<R: Real> = wgpu::Buffer;
+
+    fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    fn limits(&self) -> Limits {
+        Limits {
+            max_binding_bytes: self.ctx.max_binding_bytes(),
+            max_groups_per_dim: self.ctx.max_groups_per_dim(),
+        }
+    }
+
+    fn resident<R: Real>(&self, data: Data<'_, R>) -> Result<wgpu::Buffer, GpuError> {
+        let bytes = data.bytes();
+        if bytes.len() as u64 > self.ctx.max_binding_bytes() {
+            return Err(GpuError::Execution(format!(
+                "{} bytes do not fit one binding",
+                bytes.len()
+            )));
+        }
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let buffer = buffer(self.ctx, "resident", bytes.len() as u64, usage);
+        if !bytes.is_empty() {
+            self.ctx.queue.write_buffer(&buffer, 0, bytes);
+        }
+        Ok(buffer)
+    }
+
+    /// The compiled kernel (from the context's cache), two slots of
+    /// buffers, each batch uploaded, dispatched pass after pass in one
+    /// compute pass, read back in order.
+    fn run<'a, K: Kernel, R: Real>(
+        &self,
+        cfg: K::Config,
+        resident: &[&wgpu::Buffer],
+        batches: &mut dyn Iterator<Item = Batch<'a, R>>,
+        done: &mut dyn FnMut(usize, &Data<'_, R>),
         timings: &mut Timings,
     ) -> Result<(), GpuError> {
-        assert_eq!(std::mem::size_of::<R>(), self.real_size);
-        let n = input.len() / self.in_stride;
-        assert_eq!(input.len(), n * self.in_stride);
-        assert_eq!(out.len(), n * self.out_stride);
-        if n == 0 {
-            return Ok(());
-        }
-        let chunk = self.chunk_records(ctx);
-        let slot_records = chunk.min(n);
-        let mut slots = [self.slot(ctx, slot_records), self.slot(ctx, slot_records)];
-        let mut first = 0;
-        let mut k = 0;
-        while first < n {
-            let count = chunk.min(n - first);
-            let slot = &mut slots[k % 2];
+        assert_eq!(R::WGSL, self.precision.name(), "record precision");
+        let ctx = self.ctx;
+        let k: Arc<Compiled> = ctx.compiled::<K, R>(cfg)?;
+        let out_elem = K::BINDINGS.last().expect("an output").elem;
+        let mut slots = [Slot::new::<K>(ctx), Slot::new::<K>(ctx)];
+        let mut n = 0;
+        for batch in batches {
+            let slot = &mut slots[n % 2];
             if let Some(p) = slot.pending.take() {
-                self.finish(ctx, slot, p, out, timings)?;
+                finish::<R>(ctx, &k, slot, p, out_elem, done, timings)?;
             }
             let t = Instant::now();
-            let (x, y, row) = grid(ctx, count);
-            let params = Params {
-                count: count as u32,
-                row,
-                param,
-                _pad: 0,
-            };
+            let sizes = self.sizes::<K, R>(&batch)?;
+            slot.fit::<K>(ctx, &k, &sizes, resident);
+            let grids: Vec<_> = batch.counts.iter().map(|&c| grid(ctx, c)).collect();
+            let params = params::<K>(&grids, &batch.counts, &batch.scalars);
             ctx.queue
-                .write_buffer(&slot.uniform, 0, bytemuck::bytes_of(&params));
-            ctx.queue.write_buffer(
-                &slot.input,
-                0,
-                bytemuck::cast_slice(
-                    &input[first * self.in_stride..(first + count) * self.in_stride],
-                ),
-            );
-            let out_bytes = (count * self.out_stride * self.real_size) as u64;
+                .write_buffer(&slot.uniform, 0, bytemuck::cast_slice(&params));
+            let inputs = K::BINDINGS
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| b.access == Access::Input);
+            for ((j, _), data) in inputs.zip(&batch.inputs) {
+                if !data.is_empty() {
+                    let buf = slot.buffers[j].as_ref().expect("sized");
+                    ctx.queue.write_buffer(buf, 0, data.bytes());
+                }
+            }
+            let out_bytes = bytes_of::<R>(out_elem, batch.out_len);
             let mut enc = ctx
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some(self.name),
+                    label: Some(k.name),
                 });
             {
+                // One pass: wgpu orders the dispatches' storage accesses.
                 let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some(self.name),
+                    label: Some(k.name),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &slot.bind, &[]);
-                pass.dispatch_workgroups(x, y, 1);
+                pass.set_bind_group(0, slot.bind.as_ref(), &[]);
+                for (pipeline, g) in k.pipelines.iter().zip(&grids) {
+                    pass.set_pipeline(pipeline);
+                    pass.dispatch_workgroups(g.0, g.1, 1);
+                }
             }
-            enc.copy_buffer_to_buffer(&slot.output, 0, &slot.staging, 0, out_bytes);
+            let output = slot.buffers.last().and_then(|b| b.as_ref()).expect("sized");
+            let staging = slot.staging.as_ref().expect("sized");
+            if out_bytes > 0 {
+                enc.copy_buffer_to_buffer(output, 0, staging, 0, out_bytes);
+            }
             let index = ctx.queue.submit([enc.finish()]);
             let (tx, rx) = mpsc::channel();
-            slot.staging
-                .slice(..out_bytes)
-                .map_async(wgpu::MapMode::Read, move |r| {
-                    let _ = tx.send(r);
-                });
+            if out_bytes > 0 {
+                staging
+                    .slice(..out_bytes)
+                    .map_async(wgpu::MapMode::Read, move |r| {
+                        let _ = tx.send(r);
+                    });
+            } else {
+                let _ = tx.send(Ok(()));
+            }
             slot.pending = Some(Pending {
                 index,
-                first,
-                count,
+                batch: n,
+                bytes: out_bytes,
                 mapped: rx,
             });
             timings.upload += t.elapsed();
             timings.chunks += 1;
-            first += count;
-            k += 1;
+            n += 1;
         }
         // Drain in submission order.
         for j in 0..2 {
-            let slot = &mut slots[(k + j) % 2];
+            let slot = &mut slots[(n + j) % 2];
             if let Some(p) = slot.pending.take() {
-                self.finish(ctx, slot, p, out, timings)?;
+                finish::<R>(ctx, &k, slot, p, out_elem, done, timings)?;
             }
         }
         Ok(())
     }
+}
 
-    fn finish<R: Real>(
-        &self,
-        ctx: &GpuContext,
-        slot: &mut Slot,
-        p: Pending,
-        out: &mut [R],
-        timings: &mut Timings,
-    ) -> Result<(), GpuError> {
-        let t = Instant::now();
-        ctx.device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(p.index),
-                timeout: None,
+impl Gpu<'_> {
+    /// Bytes of each binding of `batch` (resident: 0), refusing buffers
+    /// larger than one binding may be.
+    fn sizes<K: Kernel, R: Real>(&self, batch: &Batch<'_, R>) -> Result<Vec<u64>, GpuError> {
+        let (mut inputs, mut scratch) = (batch.inputs.iter(), batch.scratch.iter());
+        let sizes: Vec<u64> = K::BINDINGS
+            .iter()
+            .map(|b| match b.access {
+                Access::Input => inputs
+                    .next()
+                    .expect("an input per input binding")
+                    .bytes()
+                    .len() as u64,
+                Access::Resident => 0,
+                Access::Scratch => bytes_of::<R>(b.elem, *scratch.next().expect("a scratch size")),
+                Access::Output => bytes_of::<R>(b.elem, batch.out_len),
             })
-            .map_err(|e| GpuError::Execution(format!("{}: {e}", self.name)))?;
-        match p.mapped.recv() {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => return Err(GpuError::Execution(format!("{}: map: {e}", self.name))),
-            Err(_) => {
-                return Err(GpuError::Execution(format!(
-                    "{}: map callback lost",
-                    self.name
-                )))
-            }
+            .collect();
+        if let Some(j) = (0..sizes.len()).find(|&j| sizes[j] > self.ctx.max_binding_bytes()) {
+            return Err(GpuError::Execution(format!(
+                "{}: {} ({} bytes) does not fit one binding",
+                K::NAME,
+                K::BINDINGS[j].name,
+                sizes[j]
+            )));
         }
-        timings.wait += t.elapsed();
-        let t = Instant::now();
-        let out_bytes = (p.count * self.out_stride * self.real_size) as u64;
-        {
-            let slice = slot.staging.slice(..out_bytes);
-            let view = slice
-                .get_mapped_range()
-                .map_err(|e| GpuError::Execution(format!("{}: {e}", self.name)))?;
-            out[p.first * self.out_stride..(p.first + p.count) * self.out_stride]
-                .copy_from_slice(bytemuck::cast_slice(&view));
-        }
-        slot.staging.unmap();
-        timings.readback += t.elapsed();
-        Ok(())
+        Ok(sizes)
     }
+}
+
+/// Waits for a batch, hands its mapped output to `done`, unmaps.
+fn finish<R: Real>(
+    ctx: &GpuContext,
+    k: &Compiled,
+    slot: &mut Slot,
+    p: Pending,
+    elem: Elem,
+    done: &mut dyn FnMut(usize, &Data<'_, R>),
+    timings: &mut Timings,
+) -> Result<(), GpuError> {
+    let name = k.name;
+    let t = Instant::now();
+    ctx.device
+        .poll(wgpu::PollType::Wait {
+            submission_index: Some(p.index),
+            timeout: None,
+        })
+        .map_err(|e| GpuError::Execution(format!("{name}: {e}")))?;
+    match p.mapped.recv() {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => return Err(GpuError::Execution(format!("{name}: map: {e}"))),
+        Err(_) => return Err(GpuError::Execution(format!("{name}: map callback lost"))),
+    }
+    timings.wait += t.elapsed();
+    let t = Instant::now();
+    if p.bytes == 0 {
+        let empty = match elem {
+            Elem::Real => Data::Real(Vec::new().into()),
+            Elem::U32 => Data::U32(Vec::new().into()),
+        };
+        done(p.batch, &empty);
+    } else {
+        let staging = slot.staging.as_ref().expect("sized");
+        {
+            let view = staging
+                .slice(..p.bytes)
+                .get_mapped_range()
+                .map_err(|e| GpuError::Execution(format!("{name}: {e}")))?;
+            let data = match elem {
+                Elem::Real => Data::Real(bytemuck::cast_slice::<u8, R>(&view).into()),
+                Elem::U32 => Data::U32(bytemuck::cast_slice::<u8, u32>(&view).into()),
+            };
+            done(p.batch, &data);
+        }
+        staging.unmap();
+    }
+    timings.readback += t.elapsed();
+    Ok(())
 }

@@ -291,8 +291,8 @@ pub fn ghosh_bisect_batch<R: Real>(input: &[R], tol: R, out: &mut [R]) {
 
 #[cfg(test)]
 mod tests {
-    use crate::gpu::ghosh::interpolate_twin;
     use crate::helix::{ghosh, HermitePair};
+    use crate::kernels::ghosh_bisect::interpolate_twin;
     use glam::DVec3;
 
     #[test]

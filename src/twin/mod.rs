@@ -34,7 +34,7 @@ use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 /// constants that the WGSL preludes (`shaders/real_f32.wgsl`,
 /// `shaders/real_f64.wgsl`) define, so both sides read them from one place
 /// (the preludes are generated from these values, see
-/// [`crate::gpu::shader_source`]).
+/// [`crate::kernels::source`]).
 pub trait Real:
     Copy
     + Debug

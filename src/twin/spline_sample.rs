@@ -710,8 +710,8 @@ mod tests {
             }
             eprintln!("{} case {c}: arc length error {worst:.2} εL", R::WGSL);
             // The runner's ends are the control points exactly.
-            let full =
-                crate::gpu::spline_sample::sample_twin::<R>(std::slice::from_ref(s), n).unwrap();
+            let full = crate::kernels::spline_sample::sample_twin::<R>(std::slice::from_ref(s), n)
+                .unwrap();
             let cps = s.control_points();
             assert_eq!(full[0].points[0], cps[0]);
             assert_eq!(full[0].points[n], cps[cps.len() - 1]);
@@ -767,8 +767,8 @@ mod tests {
         let s = cusp_at(0.3);
         assert!(run::<f64>(&s, 10).iter().all(|r| r.0 == 1.0));
         assert!(run::<f32>(&s, 10).iter().all(|r| r.0 == 1.0));
-        let full =
-            crate::gpu::spline_sample::sample_twin::<f32>(std::slice::from_ref(&s), 10).unwrap();
+        let full = crate::kernels::spline_sample::sample_twin::<f32>(std::slice::from_ref(&s), 10)
+            .unwrap();
         assert!(full[0].fallback);
         let want: (Vec<DVec3>, Vec<DVec3>) = s.sample_equal_arclen(10).unwrap().into_iter().unzip();
         assert_eq!((full[0].points.clone(), full[0].tangents.clone()), want);

@@ -1,5 +1,5 @@
-//! Driver of `shaders/ghosh_bisect.wgsl` (twin: [`crate::twin::ghosh_bisect`]):
-//! Ghosh short helices for a batch of Hermite pairs on the GPU.
+//! `shaders/ghosh_bisect.wgsl` (twin: [`crate::twin::ghosh_bisect`]):
+//! Ghosh short helices for a batch of Hermite pairs.
 //!
 //! The host does in `f64` what is cheap and precision-critical (see the
 //! twin's docs): it reduces each pair to six scalars, and turns the kernel's
@@ -8,117 +8,109 @@
 //! through the `f64` reference [`crate::helix::ghosh::interpolate`], which
 //! decides borderline cases (a co-helicity residual at the tolerance, say)
 //! and words the error.
+//!
+//! Buffers: `seg_in`, per segment `|d|, |t1 − t0|, |t1 + t0|, d·e1, d·e2,
+//! d·e3`; `seg_out`, per segment `status, φ, ω, τ̄, κ, τ, length, a1, a2, χ,
+//! residual, steps`; `params.tol` the relative co-helicity tolerance.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
-use super::dispatch::{MapKernel, Timings};
-use super::{GpuContext, GpuError, Precision};
+use super::{by_precision, map, Exec, GpuError, MapKernel, Rng, Timings, Twin};
 use crate::helix::ghosh::ghosh_basis;
 use crate::helix::{HelixElement, HelixError, HermitePair, ShortHelix};
 use crate::twin::ghosh_bisect::{self as twin, status, IN_STRIDE, OUT_STRIDE};
 use crate::twin::Real;
 
-/// `shaders/ghosh_bisect.wgsl`.
-pub const GHOSH_BISECT_WGSL: &str = include_str!("../../shaders/ghosh_bisect.wgsl");
-
-/// The compiled kernel in one precision.
-pub struct GhoshGpu {
-    kernel: MapKernel,
-    precision: Precision,
+crate::map_kernel! {
+    /// The kernel.
+    GhoshBisect {
+        name: "ghosh_bisect",
+        scalar: "tol",
+        buffers: ("seg_in", "seg_out"),
+        parity_eps: 64.0,
+    }
 }
 
-impl GhoshGpu {
-    pub fn new(ctx: &GpuContext, precision: Precision) -> Result<Self, GpuError> {
-        let kernel = MapKernel::for_precision(
-            ctx,
-            precision,
-            "ghosh_bisect",
-            GHOSH_BISECT_WGSL,
-            IN_STRIDE,
-            OUT_STRIDE,
-        )?;
-        Ok(GhoshGpu { kernel, precision })
+impl MapKernel for GhoshBisect {
+    const IN_STRIDE: usize = IN_STRIDE;
+    fn out_stride(_: ()) -> usize {
+        OUT_STRIDE
     }
-
-    pub fn precision(&self) -> Precision {
-        self.precision
+    fn twin_record<R: Real>(_: (), tol: f32, rec: &[R], out: &mut [R]) {
+        let rec: &[R; IN_STRIDE] = rec.try_into().expect("stride");
+        out.copy_from_slice(&twin::ghosh_bisect(rec, R::from_f64(tol as f64)));
     }
-
-    /// Run the kernel on raw records (layout of [`crate::twin::ghosh_bisect`]).
-    /// `R` must match the precision the kernel was compiled with.
-    pub fn run_raw<R: Real>(
-        &self,
-        ctx: &GpuContext,
-        input: &[R],
-        tol: f32,
-        out: &mut [R],
-        timings: &mut Timings,
-    ) -> Result<(), GpuError> {
-        assert_eq!(R::WGSL, self.precision.name(), "record precision");
-        self.kernel.run(ctx, input, tol, out, timings)
-    }
-
-    /// Short helices for `pairs`, with the reference's semantics (errors and
-    /// all). `tol` is the relative co-helicity tolerance.
-    pub fn interpolate(
-        &self,
-        ctx: &GpuContext,
-        pairs: &[HermitePair],
-        tol: f64,
-        timings: &mut Timings,
-    ) -> Result<Vec<Result<ShortHelix, HelixError>>, GpuError> {
-        match self.precision {
-            Precision::F32 => self.interpolate_in::<f32>(ctx, pairs, tol, timings),
-            Precision::F64 => self.interpolate_in::<f64>(ctx, pairs, tol, timings),
+    fn parity_records(_: (), rng: &mut Rng) -> (f32, Vec<f64>) {
+        let mut records = Vec::new();
+        for _ in 0..500 {
+            let e = HelixElement {
+                start: DVec3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), 0.0),
+                tangent: DVec3::X,
+                normal: DVec3::Y,
+                curvature: rng.range(0.05, 2.0),
+                torsion: rng.range(-1.0, 1.0),
+                length: rng.range(0.05, 2.0),
+            };
+            let pr = HermitePair {
+                p0: e.start,
+                t0: e.tangent,
+                p1: e.end_point(),
+                t1: e.end_frame().tangent,
+            };
+            if let Some((_, rec)) = host_side(&pr) {
+                records.extend_from_slice(&rec);
+            }
         }
-    }
-
-    fn interpolate_in<R: Real>(
-        &self,
-        ctx: &GpuContext,
-        pairs: &[HermitePair],
-        tol: f64,
-        timings: &mut Timings,
-    ) -> Result<Vec<Result<ShortHelix, HelixError>>, GpuError> {
-        use rayon::prelude::*;
-        let t = std::time::Instant::now();
-        let mut input = vec![R::zero(); pairs.len() * IN_STRIDE];
-        input
-            .par_chunks_mut(IN_STRIDE)
-            .zip(pairs.par_iter())
-            .for_each(|(rec, pr)| pack(pr, rec));
-        let mut out = vec![R::zero(); pairs.len() * OUT_STRIDE];
-        timings.prepare += t.elapsed();
-        self.kernel
-            .run(ctx, &input, tol as f32, &mut out, timings)?;
-        let t = std::time::Instant::now();
-        let result = out
-            .par_chunks(OUT_STRIDE)
-            .zip(pairs.par_iter())
-            .map(|(rec, pr)| unpack(rec, pr, tol))
-            .collect();
-        timings.readback += t.elapsed();
-        Ok(result)
+        (1e-6, records)
     }
 }
 
-/// The same computation as [`GhoshGpu::interpolate`] with the kernel replaced
-/// by its CPU twin in precision `R` — what the GPU path should return, for
-/// parity tests, and an `f32` emulation of it on machines without a GPU.
+/// Short helices for `pairs`, with the reference's semantics (errors and
+/// all). `tol` is the relative co-helicity tolerance.
+pub fn interpolate<E: Exec>(
+    exec: &E,
+    pairs: &[HermitePair],
+    tol: f64,
+    timings: &mut Timings,
+) -> Result<Vec<Result<ShortHelix, HelixError>>, GpuError> {
+    by_precision!(exec, interpolate_in(exec, pairs, tol, timings))
+}
+
+fn interpolate_in<R: Real, E: Exec>(
+    exec: &E,
+    pairs: &[HermitePair],
+    tol: f64,
+    timings: &mut Timings,
+) -> Result<Vec<Result<ShortHelix, HelixError>>, GpuError> {
+    let t = std::time::Instant::now();
+    let mut input = vec![R::zero(); pairs.len() * IN_STRIDE];
+    input
+        .par_chunks_mut(IN_STRIDE)
+        .zip(pairs.par_iter())
+        .for_each(|(rec, pr)| pack(pr, rec));
+    let mut out = vec![R::zero(); pairs.len() * OUT_STRIDE];
+    timings.prepare += t.elapsed();
+    map::<GhoshBisect, R, E>(exec, (), tol as f32, &input, &mut out, timings)?;
+    let t = std::time::Instant::now();
+    let result = out
+        .par_chunks(OUT_STRIDE)
+        .zip(pairs.par_iter())
+        .map(|(rec, pr)| unpack(rec, pr, tol))
+        .collect();
+    timings.readback += t.elapsed();
+    Ok(result)
+}
+
+/// [`interpolate`] with the kernel replaced by its CPU twin in precision
+/// `R` — what the GPU path should return, for parity tests, and an `f32`
+/// emulation of it on machines without a GPU.
 pub fn interpolate_twin<R: Real>(
     pairs: &[HermitePair],
     tol: f64,
 ) -> Vec<Result<ShortHelix, HelixError>> {
-    use rayon::prelude::*;
-    pairs
-        .par_iter()
-        .map(|pr| {
-            let mut rec = [R::zero(); IN_STRIDE];
-            pack(pr, &mut rec);
-            let out = twin::ghosh_bisect(&rec, R::from_f64(tol as f32 as f64));
-            unpack(&out, pr, tol)
-        })
-        .collect()
+    interpolate(&Twin::<R>::new(), pairs, tol, &mut Timings::default())
+        .expect("the twin cannot fail")
 }
 
 /// What the host keeps of a pair between pack and unpack: unit tangents and

@@ -1,5 +1,5 @@
-//! Driver of `shaders/helix_eval.wgsl` (twin: [`crate::twin::helix_eval`]):
-//! decompression of piecewise helices into sampled points on the GPU.
+//! `shaders/helix_eval.wgsl` (twin: [`crate::twin::helix_eval`]):
+//! decompression of piecewise helices into sampled points.
 //!
 //! A map kernel over *samples*: the host, in `f64`, places the `m` samples
 //! of each chain exactly as [`PiecewiseHelix::sample_into`] does (same
@@ -8,135 +8,124 @@
 //! its start, and adds the start point `p₀` to the kernel's offset in `f64`.
 //! Samples whose record does not fit the kernel (non-finite or out-of-range
 //! values, `|φ| > PHI_MAX`) are evaluated by the `f64` reference instead.
+//!
+//! Buffers: `rec_in`, per sample `s, κ, τ, φ, t0.xyz, n0.xyz`; `rec_out`,
+//! per sample `offset.xyz, tangent.xyz`.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
-use super::dispatch::{MapKernel, Timings};
-use super::{GpuContext, GpuError, Precision};
+use super::{by_precision, map, Exec, GpuError, MapKernel, Rng, Timings, Twin};
 use crate::helix::{HelixElement, PiecewiseHelix};
 use crate::twin::helix_eval::{self as twin, IN_STRIDE, OUT_STRIDE};
 use crate::twin::Real;
 
-/// `shaders/helix_eval.wgsl`.
-pub const HELIX_EVAL_WGSL: &str = include_str!("../../shaders/helix_eval.wgsl");
-
 /// Points and unit tangents of one sampled chain.
 pub type ChainSamples = crate::sampled::SampledCurve;
 
-/// The compiled kernel in one precision.
-pub struct HelixEvalGpu {
-    kernel: MapKernel,
-    precision: Precision,
+crate::map_kernel! {
+    /// The kernel.
+    HelixEval {
+        name: "helix_eval",
+        scalar: "unused",
+        buffers: ("rec_in", "rec_out"),
+        parity_eps: 64.0,
+    }
 }
 
-impl HelixEvalGpu {
-    pub fn new(ctx: &GpuContext, precision: Precision) -> Result<Self, GpuError> {
-        let kernel = MapKernel::for_precision(
-            ctx,
-            precision,
-            "helix_eval",
-            HELIX_EVAL_WGSL,
-            IN_STRIDE,
-            OUT_STRIDE,
-        )?;
-        Ok(HelixEvalGpu { kernel, precision })
+impl MapKernel for HelixEval {
+    const IN_STRIDE: usize = IN_STRIDE;
+    fn out_stride(_: ()) -> usize {
+        OUT_STRIDE
     }
-
-    pub fn precision(&self) -> Precision {
-        self.precision
+    fn twin_record<R: Real>(_: (), _: f32, rec: &[R], out: &mut [R]) {
+        out.copy_from_slice(&twin::helix_eval(rec));
     }
-
-    /// Run the kernel on raw records (layout of [`crate::twin::helix_eval`]).
-    /// `R` must match the precision the kernel was compiled with.
-    pub fn run_raw<R: Real>(
-        &self,
-        ctx: &GpuContext,
-        input: &[R],
-        out: &mut [R],
-        timings: &mut Timings,
-    ) -> Result<(), GpuError> {
-        assert_eq!(R::WGSL, self.precision.name(), "record precision");
-        self.kernel.run(ctx, input, 0.0, out, timings)
-    }
-
-    /// For each chain the `m` points of [`PiecewiseHelix::sample`]`(m)`.
-    pub fn sample_chains(
-        &self,
-        ctx: &GpuContext,
-        chains: &[PiecewiseHelix],
-        m: usize,
-        timings: &mut Timings,
-    ) -> Result<Vec<Vec<DVec3>>, GpuError> {
-        let full = self.sample_chains_full(ctx, chains, m, timings)?;
-        Ok(full.into_iter().map(|c| c.points).collect())
-    }
-
-    /// [`sample_chains`](Self::sample_chains) with the unit tangents.
-    pub fn sample_chains_full(
-        &self,
-        ctx: &GpuContext,
-        chains: &[PiecewiseHelix],
-        m: usize,
-        timings: &mut Timings,
-    ) -> Result<Vec<ChainSamples>, GpuError> {
-        match self.precision {
-            Precision::F32 => self.sample_in::<f32>(ctx, chains, m, timings),
-            Precision::F64 => self.sample_in::<f64>(ctx, chains, m, timings),
+    fn parity_records(_: (), rng: &mut Rng) -> (f32, Vec<f64>) {
+        let mut records = Vec::new();
+        for _ in 0..1000 {
+            let t = rng.unit_vector();
+            let n = t.any_orthonormal_vector();
+            let e = HelixElement {
+                start: DVec3::ZERO,
+                tangent: t,
+                normal: n,
+                curvature: rng.range(0.0, 3.0),
+                torsion: rng.range(-2.0, 2.0),
+                length: rng.range(0.01, 4.0),
+            };
+            let pl = Place {
+                element: &e,
+                u: rng.range(0.0, e.length),
+            };
+            if let Some(rec) = record(&pl) {
+                records.extend_from_slice(&rec);
+            }
         }
-    }
-
-    fn sample_in<R: Real>(
-        &self,
-        ctx: &GpuContext,
-        chains: &[PiecewiseHelix],
-        m: usize,
-        timings: &mut Timings,
-    ) -> Result<Vec<ChainSamples>, GpuError> {
-        use rayon::prelude::*;
-        let t = std::time::Instant::now();
-        let places = place_all(chains, m);
-        let mut input = vec![R::zero(); places.len() * IN_STRIDE];
-        input
-            .par_chunks_mut(IN_STRIDE)
-            .zip(places.par_iter())
-            .for_each(|(rec, pl)| pack(pl, rec));
-        let mut out = vec![R::zero(); places.len() * OUT_STRIDE];
-        timings.prepare += t.elapsed();
-        self.kernel.run(ctx, &input, 0.0, &mut out, timings)?;
-        let t = std::time::Instant::now();
-        let samples: Vec<(DVec3, DVec3)> = out
-            .par_chunks(OUT_STRIDE)
-            .zip(places.par_iter())
-            .map(|(rec, pl)| unpack(rec, pl))
-            .collect();
-        let result = regroup(chains, m, samples);
-        timings.readback += t.elapsed();
-        Ok(result)
+        (0.0, records)
     }
 }
 
-/// The same computation as [`HelixEvalGpu::sample_chains`] with the kernel
-/// replaced by its CPU twin in precision `R` — what the GPU path should
-/// return, for parity tests, and an emulation of it without a GPU.
+/// For each chain the `m` points of [`PiecewiseHelix::sample`]`(m)`.
+pub fn sample_chains<E: Exec>(
+    exec: &E,
+    chains: &[PiecewiseHelix],
+    m: usize,
+    timings: &mut Timings,
+) -> Result<Vec<Vec<DVec3>>, GpuError> {
+    let full = sample_chains_full(exec, chains, m, timings)?;
+    Ok(full.into_iter().map(|c| c.points).collect())
+}
+
+/// [`sample_chains`] with the unit tangents.
+pub fn sample_chains_full<E: Exec>(
+    exec: &E,
+    chains: &[PiecewiseHelix],
+    m: usize,
+    timings: &mut Timings,
+) -> Result<Vec<ChainSamples>, GpuError> {
+    by_precision!(exec, sample_in(exec, chains, m, timings))
+}
+
+fn sample_in<R: Real, E: Exec>(
+    exec: &E,
+    chains: &[PiecewiseHelix],
+    m: usize,
+    timings: &mut Timings,
+) -> Result<Vec<ChainSamples>, GpuError> {
+    let t = std::time::Instant::now();
+    let places = place_all(chains, m);
+    let mut input = vec![R::zero(); places.len() * IN_STRIDE];
+    input
+        .par_chunks_mut(IN_STRIDE)
+        .zip(places.par_iter())
+        .for_each(|(rec, pl)| pack(pl, rec));
+    let mut out = vec![R::zero(); places.len() * OUT_STRIDE];
+    timings.prepare += t.elapsed();
+    map::<HelixEval, R, E>(exec, (), 0.0, &input, &mut out, timings)?;
+    let t = std::time::Instant::now();
+    let samples: Vec<(DVec3, DVec3)> = out
+        .par_chunks(OUT_STRIDE)
+        .zip(places.par_iter())
+        .map(|(rec, pl)| unpack(rec, pl))
+        .collect();
+    let result = regroup(chains, m, samples);
+    timings.readback += t.elapsed();
+    Ok(result)
+}
+
+/// [`sample_chains`] with the kernel replaced by its CPU twin in precision
+/// `R` — what the GPU path should return, for parity tests, and an
+/// emulation of it without a GPU.
 pub fn sample_chains_twin<R: Real>(chains: &[PiecewiseHelix], m: usize) -> Vec<Vec<DVec3>> {
-    sample_chains_twin_full::<R>(chains, m)
-        .into_iter()
-        .map(|c| c.points)
-        .collect()
+    sample_chains(&Twin::<R>::new(), chains, m, &mut Timings::default())
+        .expect("the twin cannot fail")
 }
 
 /// [`sample_chains_twin`] with the unit tangents.
 pub fn sample_chains_twin_full<R: Real>(chains: &[PiecewiseHelix], m: usize) -> Vec<ChainSamples> {
-    use rayon::prelude::*;
-    let samples = place_all(chains, m)
-        .par_iter()
-        .map(|pl| {
-            let mut rec = [R::zero(); IN_STRIDE];
-            pack(pl, &mut rec);
-            unpack(&twin::helix_eval(&rec), pl)
-        })
-        .collect();
-    regroup(chains, m, samples)
+    sample_chains_full(&Twin::<R>::new(), chains, m, &mut Timings::default())
+        .expect("the twin cannot fail")
 }
 
 /// One sample: its element and the local arc length in it.
