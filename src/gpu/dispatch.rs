@@ -135,12 +135,7 @@ struct Slot {
     pending: Option<Pending>,
 }
 
-fn buffer(
-    ctx: &GpuContext,
-    label: &str,
-    size: u64,
-    usage: wgpu::BufferUsages,
-) -> wgpu::Buffer {
+fn buffer(ctx: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: size.max(16),
