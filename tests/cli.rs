@@ -179,13 +179,121 @@ fn malformed_fit_input_names_the_spline_and_leaves_no_file() {
     let outp = dir.path().join("keep.json");
     std::fs::write(&outp, "previous").unwrap();
     let out = strandfit(&["fit", "-n", "2", "-o", outp.to_str().unwrap()], "{}");
-    assert!(!out.status.success());
+    assert_eq!(out.status.code(), Some(1));
     assert_eq!(std::fs::read_to_string(&outp).unwrap(), "previous");
     // Usage errors.
-    assert!(!strandfit(&["fit", "-n", "0"], TWO_SPLINES).status.success());
-    assert!(!strandfit(&["fit"], TWO_SPLINES).status.success());
+    assert_eq!(
+        strandfit(&["fit", "-n", "0"], TWO_SPLINES).status.code(),
+        Some(2)
+    );
+    assert_eq!(strandfit(&["fit"], TWO_SPLINES).status.code(), Some(2));
     let missing = strandfit(&["fit", "-n", "2", "/nonexistent/in.json"], "");
+    assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("/nonexistent/in.json"));
+}
+
+/// Exit status 0 done, 1 a failure of the input or the run, 2 usage: clap's
+/// own errors and the range and combination checks of the commands alike.
+#[test]
+fn exit_codes_are_0_done_1_failure_2_usage() {
+    let code = |args: &[&str], stdin: &str| strandfit(args, stdin).status.code();
+    let fornix = "tests/data/fibres/dipy_fornix_tracks300.tck";
+    let dir = tempfile::tempdir().unwrap();
+    let sfh = dir.path().join("f.sfh");
+    let sfh = sfh.to_str().unwrap();
+    // 2: the command line.
+    for args in [
+        &["nonsense"][..],
+        &["fit", "--elements", "2", "--no-such-flag"],
+        &["fit", "--elements", "two"],
+        &["sample", "-n", "5"], // -n is "elements per curve"; sample takes --intervals
+        &["sample", "--intervals", "0"],
+        &["evaluate", "-m", "1"],
+        &["integrate", "-m", "1"],
+        &["integrate", "--steps", "0"],
+        &["complete", "-m", "1", "examples/gaps.json"],
+        &["complete", "--length", "2", "examples/gaps.json"], // --length is ATPH's
+        &["motion", "-m", "1", "examples/motion.json"],
+        &["helix", "--cohelical-tolerance=-1"],
+        &["helix", "--tolerance", "0.1"], // renamed: --tolerance is a distance elsewhere
+        &["compress", fornix, "-o", sfh], // no --tolerance
+        &[
+            "compress",
+            fornix,
+            "-o",
+            sfh,
+            "--tolerance",
+            "0.5",
+            "-n",
+            "3",
+        ],
+        &["compress", fornix, "-o", sfh, "--tolerance=-1"],
+        &[
+            "compress",
+            fornix,
+            "-o",
+            sfh,
+            "--tolerance",
+            "0.5",
+            "--from",
+            "xyz",
+        ],
+        &["inspect", fornix, "--from", "xyz"],
+        &["inspect", fornix, "--format", "tck"], // renamed --from, as in compress and convert
+        &["decompress", sfh, "-o", "x.tck", "-m", "1"],
+        &["sketch", "examples/spring.svg", "--emax", "2"],
+        &["bench", "--splines", "0"],
+        &["fit", "--elements", "2", "--threads", "0"],
+        // The engine options only where an engine runs.
+        &["motion", "--backend", "cpu", "examples/motion.json"],
+        &["sketch", "--precision", "f32", "examples/spring.svg"],
+        &["decompress", sfh, "-o", "x.tck", "--backend", "cpu"],
+        &["inspect", fornix, "-v"],
+        &["--backend", "cpu", "fit", "--elements", "2"], // an option of the command, after it
+    ] {
+        assert_eq!(code(args, TWO_SPLINES), Some(2), "{args:?}");
+    }
+    assert!(!Path::new(sfh).exists(), "a usage error writes nothing");
+    // 1: the input or the run.
+    assert_eq!(code(&["fit", "--elements", "2"], "not json"), Some(1));
+    assert_eq!(code(&["inspect", "/nonexistent.tck"], ""), Some(1));
+    assert_eq!(
+        code(
+            &[
+                "compress",
+                "/nonexistent.tck",
+                "--tolerance",
+                "0.5",
+                "-o",
+                sfh
+            ],
+            ""
+        ),
+        Some(1)
+    );
+    // 0: done.
+    assert_eq!(
+        code(&["fit", "--elements", "2", "--backend", "cpu"], TWO_SPLINES),
+        Some(0)
+    );
+    assert_eq!(
+        code(&["compress", fornix, "--tolerance", "0.5", "-o", sfh], ""),
+        Some(0)
+    );
+    // Documented in every command's help.
+    for args in [
+        &["--help"][..],
+        &["fit", "--help"],
+        &["merge", "--help"],
+        &["bench", "-h"],
+    ] {
+        let out = strandfit_ok(args, "");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains("Exit status: 0 done; 1 ") && text.contains("2 usage"),
+            "{args:?}: {text}"
+        );
+    }
 }
 
 #[test]
@@ -211,9 +319,9 @@ fn evaluate_decompresses_fit_output() {
     let n = 6;
     strandfit_ok(
         &[
+            "fit",
             "--backend",
             "cpu",
-            "fit",
             "-n",
             "6",
             "-o",
@@ -224,9 +332,9 @@ fn evaluate_decompresses_fit_output() {
     let m = 32 * n + 1; // fit's default --samples-per-element 32
     strandfit_ok(
         &[
+            "evaluate",
             "--backend",
             "cpu",
-            "evaluate",
             fitted.to_str().unwrap(),
             "-m",
             &m.to_string(),
@@ -281,7 +389,7 @@ fn evaluate_rejects_bad_elements_by_name() {
         let dir = tempfile::tempdir().unwrap();
         let outp = dir.path().join("out.json");
         let out = strandfit(
-            &["--backend", "cpu", "evaluate", "-o", outp.to_str().unwrap()],
+            &["evaluate", "--backend", "cpu", "-o", outp.to_str().unwrap()],
             &doc,
         );
         let err = String::from_utf8_lossy(&out.stderr);
@@ -298,7 +406,7 @@ fn evaluate_rejects_bad_elements_by_name() {
     let out = strandfit(&["evaluate", "-m", "1"], "{\"curves\":[]}");
     assert!(!out.status.success());
     let out = strandfit(
-        &["--backend", "cpu", "evaluate"],
+        &["evaluate", "--backend", "cpu"],
         r#"{"curves":[{"id":1,"elements":[]}]}"#,
     );
     assert!(String::from_utf8_lossy(&out.stderr).contains("no elements"));
@@ -309,7 +417,10 @@ fn evaluate_rejects_bad_elements_by_name() {
 #[test]
 fn sample_writes_equal_arclength_points() {
     use strandfit::spline::BezierSpline;
-    let out = strandfit_ok(&["--backend", "cpu", "sample", "-n", "5"], TWO_SPLINES);
+    let out = strandfit_ok(
+        &["sample", "--backend", "cpu", "--intervals", "5"],
+        TWO_SPLINES,
+    );
     let v = json(&out.stdout);
     let input = json(TWO_SPLINES.as_bytes());
     for (k, s) in v["splines"].as_array().unwrap().iter().enumerate() {
@@ -327,10 +438,10 @@ fn sample_writes_equal_arclength_points() {
             assert_eq!(v3(&tans[j]), *t);
         }
     }
-    let bad = strandfit(&["sample", "-n", "0"], TWO_SPLINES);
+    let bad = strandfit(&["sample", "--intervals", "0"], TWO_SPLINES);
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--intervals"));
     let bad = strandfit(
-        &["--backend", "cpu", "sample", "-n", "2"],
+        &["sample", "--backend", "cpu", "--intervals", "2"],
         r#"{"splines":[{"id":"nan","control_points":[[0,0,0],[1,0,0],[2,0,0],[3,0,null]]}]}"#,
     );
     assert!(!bad.status.success());
@@ -353,7 +464,7 @@ fn integrate_answers_every_line() {
         "\n",
     );
     let out = strandfit_ok(
-        &["--backend", "cpu", "integrate", "--steps", "512", "-m", "5"],
+        &["integrate", "--backend", "cpu", "--steps", "512", "-m", "5"],
         input,
     );
     let lines: Vec<serde_json::Value> = out
@@ -408,7 +519,7 @@ fn closed_stdout_pipe_is_not_a_panic() {
 
 #[test]
 fn complete_fills_gaps_with_euler_spirals() {
-    let out = strandfit_ok(&["complete", "--samples", "9", "examples/gaps.json"], "");
+    let out = strandfit_ok(&["complete", "--points", "9", "examples/gaps.json"], "");
     let doc = json(&out.stdout);
     let pairs = doc["pairs"].as_array().unwrap();
     assert_eq!(pairs.len(), 4);
@@ -443,7 +554,7 @@ fn complete_with_atph_curves() {
             "complete",
             "--method",
             "atph",
-            "--samples",
+            "--points",
             "9",
             "examples/gaps.json",
         ],
@@ -517,7 +628,7 @@ fn motion_through_a_point_stream() {
     let out = strandfit_ok(
         &[
             "motion",
-            "--samples",
+            "--points",
             "9",
             "examples/motion.json",
             "--vtk",

@@ -106,9 +106,9 @@ fn compress_backend_gpu_writes_the_file_the_cpu_writes() {
     let run = |backend: &str, out: &str| {
         let o = Command::new(env!("CARGO_BIN_EXE_strandfit"))
             .args([
+                "compress",
                 "--backend",
                 backend,
-                "compress",
                 input,
                 "--tolerance",
                 "0.3",

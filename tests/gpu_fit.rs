@@ -30,11 +30,11 @@ fn run_fit(backend: &str, precision: &str) -> Value {
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/curls.json");
     strandfit_json(
         &[
+            "fit",
             "--backend",
             backend,
             "--precision",
             precision,
-            "fit",
             "-n",
             "20",
         ],
@@ -108,11 +108,11 @@ fn fit_gpu_matches_cpu_on_the_bundled_example() {
 
 fn run_evaluate(fitted: &std::path::Path, backend: &str, precision: &str) -> Value {
     let args = [
+        "evaluate",
         "--backend",
         backend,
         "--precision",
         precision,
-        "evaluate",
         "-m",
         "1001",
         "--tangents",
@@ -220,11 +220,11 @@ fn integrate_gpu_matches_cpu() {
     std::fs::write(&path, &lines).unwrap();
     let run = |backend: &str, precision: &str| -> Vec<Value> {
         let args = [
+            "integrate",
             "--backend",
             backend,
             "--precision",
             precision,
-            "integrate",
             "--steps",
             "256",
             "-m",

@@ -12,11 +12,12 @@
 //! Every pair gets its own result or its own error; the batch never stops
 //! on a bad pair.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::io_util::{self, input_name, read_input, Output};
+use super::usage;
 use super::{CompleteArgs, CompleteMethod};
 use crate::atph::{AtphCurve, Sign};
 use crate::backend::Backend;
@@ -92,15 +93,15 @@ enum Outcome {
 }
 
 pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
-    if matches!(args.samples, 1) {
-        bail!("--samples must be 0 (none) or at least 2");
+    if matches!(args.points, 1) {
+        usage!("--points must be 0 (none) or at least 2");
     }
     if let Some(l) = args.length {
         if args.method != CompleteMethod::Atph {
-            bail!("--length applies to --method atph (Euler spirals take no prescribed length)");
+            usage!("--length applies to --method atph (Euler spirals take no prescribed length)");
         }
         if !(l > 0.0 && l.is_finite()) {
-            bail!("--length must be positive and finite, got {l}");
+            usage!("--length must be positive and finite, got {l}");
         }
     }
     let name = input_name(&args.input);
@@ -177,12 +178,8 @@ fn atph(
                 error,
                 regular: sign != Sign::Vanishes,
                 forward: sign == Sign::Positive,
-                points: (args.samples >= 2).then(|| {
-                    c.sample(args.samples)
-                        .iter()
-                        .map(|p| p.to_array())
-                        .collect()
-                }),
+                points: (args.points >= 2)
+                    .then(|| c.sample(args.points).iter().map(|p| p.to_array()).collect()),
             })
         })
         .collect())
@@ -197,7 +194,7 @@ fn euler(
     let pairs: Vec<_> = input.iter().map(vectors).collect();
     let opts = SolveOptions::default();
     let solved = solve_spirals(&pairs, &opts, backend)?;
-    let sampled: Vec<Option<Vec<[f64; 3]>>> = if args.samples >= 2 {
+    let sampled: Vec<Option<Vec<[f64; 3]>>> = if args.points >= 2 {
         let problems: Vec<_> = solved
             .iter()
             .filter_map(|r| r.as_ref().ok())
@@ -213,7 +210,7 @@ fn euler(
             .max()
             .unwrap_or(opts.steps);
         let mut it = backend
-            .integrate_samples(&problems, args.samples, steps.div_ceil(args.samples - 1))?
+            .integrate_samples(&problems, args.points, steps.div_ceil(args.points - 1))?
             .into_iter();
         solved
             .iter()

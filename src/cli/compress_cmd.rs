@@ -5,13 +5,14 @@
 
 use std::time::Instant;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::inspect_cmd::parse_format;
 use super::io_util::{check_losses, report_skipped, write_failed, DelayedBar};
+use super::usage;
 use super::{CompressArgs, DistanceArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
 use crate::backend::Backend;
@@ -90,7 +91,7 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
             (args.storage != StorageArg::Compact, "--storage f32|f64"),
         ];
         if let Some((_, what)) = v1_only.iter().find(|(given, _)| *given) {
-            bail!(
+            usage!(
                 "{what} writes a version-1 helix container, which measures the ordered or \
                  Fréchet distance: add --distance ordered (or frechet)"
             );
@@ -101,15 +102,15 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
         (Some(t), None, None) => ElementCount::Tolerance(t),
         (None, Some(n), None) => ElementCount::Fixed(n),
         (None, None, Some(s)) => ElementCount::ElementLength(s),
-        _ => bail!("give exactly one of --tolerance, --elements, --element-length"),
+        _ => usage!("give exactly one of --tolerance, --elements, --element-length"),
     };
     match count {
         ElementCount::Tolerance(t) | ElementCount::ElementLength(t)
             if !(t > 0.0 && t.is_finite()) =>
         {
-            bail!("--tolerance and --element-length must be positive, got {t}")
+            usage!("--tolerance and --element-length must be positive, got {t}")
         }
-        ElementCount::Fixed(0) => bail!("--elements must be at least 1"),
+        ElementCount::Fixed(0) => usage!("--elements must be at least 1"),
         _ => {}
     }
     for (name, v) in [
@@ -117,7 +118,7 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
         ("--smoothing-share", args.smoothing_share),
     ] {
         if !(v > 0.0 && v <= 1.0) {
-            bail!("{name} must be in (0, 1], got {v}");
+            usage!("{name} must be in (0, 1], got {v}");
         }
     }
     let storage = match args.storage {
@@ -319,10 +320,10 @@ fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
     use crate::codec::stream::compress_stream;
 
     let Some(tolerance) = args.tolerance else {
-        bail!("give --tolerance (or --elements / --element-length with --distance ordered)");
+        usage!("give --tolerance (or --elements / --element-length with --distance ordered)");
     };
     if !(tolerance > 0.0 && tolerance.is_finite()) {
-        bail!("--tolerance must be positive, got {tolerance}");
+        usage!("--tolerance must be positive, got {tolerance}");
     }
     let started = Instant::now();
     let (mut reader, meta, dropped) = open_input(args, true)?;

@@ -20,7 +20,7 @@ pub fn run(args: &InspectArgs) -> Result<()> {
     if crate::io::container::is_container(&args.input) {
         return inspect_container(args);
     }
-    let format = args.format.as_deref().map(parse_format).transpose()?;
+    let format = args.from.as_deref().map(parse_format).transpose()?;
     let bytes = std::fs::metadata(&args.input)
         .map_err(|e| anyhow::anyhow!("{}: cannot stat: {e}", args.input.display()))?
         .len();
@@ -78,12 +78,13 @@ pub fn run(args: &InspectArgs) -> Result<()> {
     }
 }
 
+/// A `--from`/`--to` format name; an unknown one is a usage error.
 pub fn parse_format(name: &str) -> Result<Format> {
     Format::from_name(name).ok_or_else(|| {
-        anyhow::anyhow!(
+        anyhow::Error::new(super::UsageError(format!(
             "unknown format {name:?}; one of {}",
             Format::ALL.map(|f| f.extension()).join(", ")
-        )
+        )))
     })
 }
 
@@ -316,7 +317,7 @@ fn preview(args: &InspectArgs, source: &std::path::Path, out: &std::path::Path) 
         .into_iter()
         .map(|c| c.points)
         .collect();
-    let format = args.format.as_deref().map(parse_format).transpose()?;
+    let format = args.from.as_deref().map(parse_format).transpose()?;
     // The source's bad curves are left out, as `compress --skip-bad` left
     // them out (without it, a source with bad curves could not have been
     // compressed): the curves then pair by index.

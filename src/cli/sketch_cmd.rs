@@ -14,11 +14,12 @@
 
 use std::f64::consts::PI;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use glam::DVec2;
 use serde::Serialize;
 
 use super::io_util::Output;
+use super::usage;
 use super::{ResampleArg, SketchArgs};
 use crate::io::sketch::{read_sketch, write_preview_svg};
 use crate::sketch::{lift_sketch, refit_g1, G1Refit, Resampling, SketchLift, SketchOptions};
@@ -223,10 +224,10 @@ pub fn run(args: &SketchArgs) -> Result<()> {
         ..Default::default()
     };
     if !(opts.emax > 0.0 && opts.emax < 1.0) {
-        bail!("--emax must be in (0, 1): a fraction of the drawing's length");
+        usage!("--emax must be in (0, 1): a fraction of the drawing's length");
     }
     if !(opts.alpha_t >= 0.0 && opts.alpha_t < 1.0) {
-        bail!("--alpha-t must be in [0, 1)");
+        usage!("--alpha-t must be in [0, 1)");
     }
     let points = read_sketch(&args.input)?;
     let name = args.input.display().to_string();
@@ -239,7 +240,7 @@ pub fn run(args: &SketchArgs) -> Result<()> {
     let g1 = if args.g1 {
         let t = args.g1_tolerance.unwrap_or(opts.emax * r.length);
         if !(t > 0.0 && t.is_finite()) {
-            bail!("--g1-tolerance must be positive and finite");
+            usage!("--g1-tolerance must be positive and finite");
         }
         let g = refit_g1(&r, t).with_context(|| format!("{name}: G1 re-fit failed"))?;
         Some(g1_answer(&g, r.points_2d.len()))
