@@ -72,12 +72,12 @@ fn helix_answers_every_line_in_order() {
     assert!((lines[0]["length"].as_f64().unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
     assert!((lines[0]["curvature"].as_f64().unwrap() - 1.0).abs() < 1e-12);
     assert_eq!(lines[0]["torsion"].as_f64().unwrap(), 0.0);
-    assert!(lines[1]["error"].as_str().unwrap().contains("line 2"));
-    assert!(lines[2]["error"].as_str().unwrap().contains("coincide"));
+    assert!(lines[1]["failure"].as_str().unwrap().contains("line 2"));
+    assert!(lines[2]["failure"].as_str().unwrap().contains("coincide"));
     // Non-unit tangents are normalised; this one is right-handed.
     assert!(lines[3]["torsion"].as_f64().unwrap() > 0.0);
     assert_eq!(lines[3]["axis"].as_array().unwrap().len(), 3);
-    assert!(lines[4]["error"]
+    assert!(lines[4]["failure"]
         .as_str()
         .unwrap()
         .contains("not co-helical"));
@@ -486,9 +486,12 @@ fn integrate_answers_every_line() {
     assert_eq!(pts[0], strandfit::DVec3::ZERO);
     assert_eq!(pts[4], end);
     assert!((pts[2] - strandfit::DVec3::new(1.0, 1.0, 0.0)).length() < 1e-9);
-    assert!(lines[1]["error"].as_str().unwrap().contains("line 2"));
-    assert!(lines[2]["error"].as_str().unwrap().contains("orthonormal"));
-    assert!(lines[3]["error"].as_str().unwrap().contains("line 4"));
+    assert!(lines[1]["failure"].as_str().unwrap().contains("line 2"));
+    assert!(lines[2]["failure"]
+        .as_str()
+        .unwrap()
+        .contains("orthonormal"));
+    assert!(lines[3]["failure"].as_str().unwrap().contains("line 4"));
     assert_eq!(
         v3(&lines[4]["points"][0]),
         strandfit::DVec3::new(1.0, 2.0, 3.0)
@@ -543,7 +546,7 @@ fn complete_fills_gaps_with_euler_spirals() {
     // A non-planar pair is met too.
     assert_eq!(pairs[2]["regular"], true, "{}", pairs[2]);
     // A bad pair gets its own error; the batch goes on.
-    let e = pairs[3]["error"].as_str().unwrap();
+    let e = pairs[3]["failure"].as_str().unwrap();
     assert!(e.contains("coincident") && e.contains("pairs[3]"), "{e}");
 }
 
@@ -583,14 +586,14 @@ fn complete_with_atph_curves() {
     assert!(pts[8].distance(strandfit::DVec3::Y) < 1e-15);
     // An S curve needs an inflection, which a linear azimuth cannot make in
     // the plane: its own error, naming the pair.
-    let e = pairs[1]["error"].as_str().unwrap();
+    let e = pairs[1]["failure"].as_str().unwrap();
     assert!(e.contains("\"s-curve\"") && e.contains("singular"), "{e}");
     // The twisted pair is met (error ~ 0) and its regularity reported.
     let t = &pairs[2];
-    assert!(t["error"].as_f64().unwrap() < 1e-24, "{t}");
+    assert!(t["residual"].as_f64().unwrap() < 1e-24, "{t}");
     assert_eq!(t["rho"].as_array().unwrap().len(), 3);
     assert!(t["regular"].is_boolean());
-    assert!(pairs[3]["error"].as_str().unwrap().contains("coincide"));
+    assert!(pairs[3]["failure"].as_str().unwrap().contains("coincide"));
 }
 
 #[test]
@@ -618,7 +621,10 @@ fn complete_atph_with_prescribed_lengths() {
     // A per-pair length with the Euler method is that pair's error.
     let out = strandfit(&["complete"], input);
     let doc = json(&out.stdout);
-    assert!(doc["pairs"][1]["error"].as_str().unwrap().contains("atph"));
+    assert!(doc["pairs"][1]["failure"]
+        .as_str()
+        .unwrap()
+        .contains("atph"));
 }
 
 #[test]
@@ -699,7 +705,7 @@ fn motion_batches_json_lines_and_names_bad_streams() {
     );
     // A given frame is kept: the first segment starts along its u.
     assert_eq!(lines[2]["id"], "example-5.7");
-    let e = lines[3]["error"].as_str().unwrap();
+    let e = lines[3]["failure"].as_str().unwrap();
     assert!(
         e.contains("line 4") && e.contains("points 1 and 2 coincide"),
         "{e}"
@@ -747,7 +753,7 @@ fn sketch_lifts_the_bundled_spring_drawing() {
         (h["c"].as_f64().unwrap().abs() - 30f64.to_radians()).abs() < 1e-3,
         "{h}"
     );
-    assert!(doc["projection_error"]["max_relative"].as_f64().unwrap() < 1e-4);
+    assert!(doc["projection"]["max_relative_distance"].as_f64().unwrap() < 1e-4);
     let n = doc["points_3d"].as_array().unwrap().len();
     assert_eq!(h["last_vertex"].as_u64().unwrap() as usize, n - 1);
     let svg = std::fs::read_to_string(&preview).unwrap();
@@ -806,7 +812,12 @@ fn sketch_evens_out_an_uneven_drawing_keeping_its_vertices() {
         "a drawn vertex was moved"
     );
     assert_eq!(dense["helices"].as_array().unwrap().len(), 2, "{dense}");
-    assert!(dense["projection_error"]["max_relative"].as_f64().unwrap() < 1e-5);
+    assert!(
+        dense["projection"]["max_relative_distance"]
+            .as_f64()
+            .unwrap()
+            < 1e-5
+    );
     let uniform = run(&["--resample", "uniform"]);
     assert_eq!(uniform["resampling"], "uniform");
     assert_eq!(uniform["points_3d"].as_array().unwrap().len(), 200);
@@ -840,7 +851,7 @@ fn sketch_g1_refits_a_two_helix_drawing() {
     let g = &doc["g1"];
     let t = g["tolerance"].as_f64().unwrap();
     assert!(
-        (t - doc["emax"].as_f64().unwrap()).abs() <= 1e-12 * t,
+        (t - doc["emax_distance"].as_f64().unwrap()).abs() <= 1e-12 * t,
         "{g}"
     );
     assert_eq!(g["within_tolerance"], true, "{g}");
@@ -848,7 +859,7 @@ fn sketch_g1_refits_a_two_helix_drawing() {
     let d3 = g["distance_3d"].as_f64().unwrap();
     let dp = g["projection_distance"].as_f64().unwrap();
     assert!(d3 <= t && dp <= d3 * (1.0 + 1e-6) + t / 64.0, "{g}");
-    let n = g["elements"].as_u64().unwrap() as usize;
+    let n = g["element_count"].as_u64().unwrap() as usize;
     assert_eq!(g["chain"]["elements"].as_array().unwrap().len(), n);
     // Without --g1 there is no such section; the tolerance needs --g1.
     let out = strandfit(&["sketch", "examples/spring.svg"], "");

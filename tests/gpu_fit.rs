@@ -260,7 +260,7 @@ fn integrate_gpu_matches_cpu() {
         assert_eq!(gpu.len(), cpu.len());
         let mut worst = 0.0f64;
         for (g, c) in gpu.iter().zip(&cpu) {
-            assert!(c["error"].is_null() && g["error"].is_null());
+            assert!(c["failure"].is_null() && g["failure"].is_null());
             // Absolute, in units of ε: 2(√256 + 12)·L ≤ 224 (L ≤ 4) for the
             // scheme's rounding plus 4(|x₀| + L) ≤ 60 for the host's f64
             // addition (f64 only; f32 has no such term but a larger ε): 300.

@@ -57,11 +57,11 @@ enum Outcome {
         length: f64,
         /// Start Frenet normal (the frame's rotation about `t0`).
         normal: [f64; 3],
-        /// Eq. 9 of paper 004: squared end-point plus squared end-tangent
-        /// error.
-        error: f64,
+        /// The solver's residual, Eq. 9 of paper 004: squared end-point
+        /// plus squared end-tangent error.
+        residual: f64,
         iterations: usize,
-        /// `true` when the end conditions are met (error < 1e-12).
+        /// `true` when the end conditions are met (residual < 1e-12).
         regular: bool,
         #[serde(skip_serializing_if = "Option::is_none")]
         points: Option<Vec<[f64; 3]>>,
@@ -79,7 +79,7 @@ enum Outcome {
         /// Arc length ∫|ρ|.
         length: f64,
         /// |r(1) − p1|² + |T(1) − t1|², as Eq. 9 of paper 004.
-        error: f64,
+        residual: f64,
         /// ρ ≠ 0 on [0, 1] (Proposition 1): no singular point.
         regular: bool,
         /// ρ > 0: the curve runs along t0 and t1, not against them.
@@ -88,7 +88,7 @@ enum Outcome {
         points: Option<Vec<[f64; 3]>>,
     },
     Failed {
-        error: String,
+        failure: String,
     },
 }
 
@@ -122,7 +122,7 @@ pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
         .map(|(i, (p, r))| PairOut {
             id: p.id.clone().unwrap_or(serde_json::Value::from(i)),
             result: r.unwrap_or_else(|e| Outcome::Failed {
-                error: format!(
+                failure: format!(
                     "{}: {e}",
                     io_util::label(
                         "pair",
@@ -139,7 +139,7 @@ pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
         pairs: Vec<PairOut>,
     }
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &Doc { pairs: out_pairs })
+    serde_json::to_writer(out.writer(), &super::versioned(&Doc { pairs: out_pairs }))
         .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
@@ -165,7 +165,7 @@ fn atph(
         .map(|(r, &(_, _, p1, t1))| {
             let c: AtphCurve = r.map_err(|e| e.to_string())?;
             let t1 = t1.normalize();
-            let error =
+            let residual =
                 c.position(1.0).distance_squared(p1) + c.tangent.at(1.0).distance_squared(t1);
             let sign = c.speed_sign();
             Ok(Outcome::Atph {
@@ -175,7 +175,7 @@ fn atph(
                 b1: c.tangent.b1,
                 rho: c.rho.coefficients().to_vec(),
                 length: c.length(),
-                error,
+                residual,
                 regular: sign != Sign::Vanishes,
                 forward: sign == Sign::Positive,
                 points: (args.points >= 2)
@@ -241,7 +241,7 @@ fn euler(
                 delta: s.problem.delta,
                 length: s.problem.length,
                 normal: s.problem.frame[1].to_array(),
-                error: s.error,
+                residual: s.error,
                 iterations: s.iterations,
                 regular: s.error < 1e-12,
                 points: pts,

@@ -150,7 +150,8 @@ pub fn run(args: &EvaluateArgs, backend: &Backend) -> Result<()> {
         .collect();
 
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &OutputDoc { curves }).context("cannot write output")?;
+    serde_json::to_writer(out.writer(), &super::versioned(&OutputDoc { curves }))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
 }

@@ -119,7 +119,8 @@ pub fn run(args: &FitArgs, backend: &Backend) -> Result<()> {
         .collect::<Result<_>>()?;
 
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &OutputDoc { curves }).context("cannot write output")?;
+    serde_json::to_writer(out.writer(), &super::versioned(&OutputDoc { curves }))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
 }

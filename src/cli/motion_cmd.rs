@@ -252,7 +252,8 @@ pub fn run(args: &MotionArgs) -> Result<()> {
     let motion = solve(&stream).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     let out_doc = answer(stream.id.clone(), &motion, args.points);
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &out_doc).context("cannot write output")?;
+    serde_json::to_writer(out.writer(), &super::versioned(&out_doc))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     if let Some(v) = &args.vtk {
         write_vtk(v, &[framed(&motion, args.points)])?;

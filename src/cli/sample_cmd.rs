@@ -39,7 +39,8 @@ pub fn run(args: &SampleArgs, backend: &Backend) -> Result<()> {
         })
         .collect();
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &OutputDoc { splines }).context("cannot write output")?;
+    serde_json::to_writer(out.writer(), &super::versioned(&OutputDoc { splines }))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
 }

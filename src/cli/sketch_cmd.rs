@@ -40,7 +40,8 @@ struct HelixOut {
     t_end: f64,
     first_vertex: usize,
     last_vertex: usize,
-    max_error: f64,
+    /// The largest distance of its vertices from the projected helix.
+    max_distance: f64,
 }
 
 #[derive(Serialize)]
@@ -57,12 +58,14 @@ struct SketchOut {
     resampled: bool,
     /// `densify` or `uniform`; applied only where `resampled`.
     resampling: &'static str,
-    emax: f64,
+    /// E_max as a distance (`--emax` times the drawing's length).
+    emax_distance: f64,
     alpha_t: f64,
     helices: Vec<HelixOut>,
     junctions: Vec<JunctionOut>,
     max_tangent_angle_deg: f64,
-    projection_error: ErrorOut,
+    /// How far the drawing is from the projected helices.
+    projection: ProjectionOut,
     fine_fit: FineOut,
     points_3d: Vec<[f64; 3]>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -73,7 +76,7 @@ struct SketchOut {
 struct G1Out {
     tolerance: f64,
     within_tolerance: bool,
-    elements: usize,
+    element_count: usize,
     /// The chain's distance from the lifted polyline (3D).
     distance_3d: f64,
     /// How far the chain's projection is from the drawing (in order).
@@ -99,7 +102,7 @@ fn g1_answer(g: &G1Refit, vertices: usize) -> G1Out {
     G1Out {
         tolerance: g.tolerance,
         within_tolerance: g.within_tolerance,
-        elements: g.chain.len(),
+        element_count: g.chain.len(),
         distance_3d: g.distance_3d,
         projection_distance: g.projection_distance,
         continuity_gap: g.continuity.0,
@@ -125,10 +128,11 @@ fn g1_answer(g: &G1Refit, vertices: usize) -> G1Out {
 }
 
 #[derive(Serialize)]
-struct ErrorOut {
-    max: f64,
-    rms: f64,
-    max_relative: f64,
+struct ProjectionOut {
+    max_distance: f64,
+    rms_distance: f64,
+    /// `max_distance` over the drawing's length.
+    max_relative_distance: f64,
 }
 
 #[derive(Serialize)]
@@ -157,7 +161,7 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
             t_end: h.t_end,
             first_vertex: h.first,
             last_vertex: h.last,
-            max_error: h.max_error,
+            max_distance: h.max_error,
         })
         .collect();
     let junctions: Vec<JunctionOut> = r
@@ -177,7 +181,7 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
             Resampling::Densify => "densify",
             Resampling::Uniform => "uniform",
         },
-        emax: opts.emax * r.length,
+        emax_distance: opts.emax * r.length,
         alpha_t: opts.alpha_t,
         helices,
         max_tangent_angle_deg: junctions
@@ -185,10 +189,10 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
             .map(|j| j.tangent_angle_deg)
             .fold(0.0, f64::max),
         junctions,
-        projection_error: ErrorOut {
-            max: r.max_error,
-            rms: r.rms_error,
-            max_relative: r.max_error / r.length,
+        projection: ProjectionOut {
+            max_distance: r.max_error,
+            rms_distance: r.rms_error,
+            max_relative_distance: r.max_error / r.length,
         },
         fine_fit: FineOut {
             iterations: r.fine_fit.iterations,
@@ -250,7 +254,8 @@ pub fn run(args: &SketchArgs) -> Result<()> {
     let mut doc = answer(name.clone(), &r, &opts);
     doc.g1 = g1;
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer_pretty(out.writer(), &doc).context("cannot write output")?;
+    serde_json::to_writer_pretty(out.writer(), &super::versioned(&doc))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
 }
