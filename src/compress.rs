@@ -103,7 +103,7 @@ pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome 
         },
         frechet: rounding,
         elements: 0,
-        within: tol.map_or(true, |t| rounding <= t),
+        within: tol.is_none_or(|t| rounding <= t),
         points_cheaper: verbatim.is_none(),
         verbatim,
     };
@@ -136,7 +136,7 @@ pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome 
                 // f32 rounding: measure what will be decoded.
                 let decoded = PiecewiseHelix::from_params(&round_f32(&params));
                 let f = chain_frechet(&decoded, points, fit.frechet, opts.distance);
-                let within = tol.map_or(true, |t| chain_within(&decoded, points, t, opts.distance));
+                let within = tol.is_none_or(|t| chain_within(&decoded, points, t, opts.distance));
                 (f, within)
             } else {
                 (fit.frechet, fit.within_tolerance)

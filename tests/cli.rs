@@ -72,12 +72,12 @@ fn helix_answers_every_line_in_order() {
     assert!((lines[0]["length"].as_f64().unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
     assert!((lines[0]["curvature"].as_f64().unwrap() - 1.0).abs() < 1e-12);
     assert_eq!(lines[0]["torsion"].as_f64().unwrap(), 0.0);
-    assert!(lines[1]["error"].as_str().unwrap().contains("line 2"));
-    assert!(lines[2]["error"].as_str().unwrap().contains("coincide"));
+    assert!(lines[1]["failure"].as_str().unwrap().contains("line 2"));
+    assert!(lines[2]["failure"].as_str().unwrap().contains("coincide"));
     // Non-unit tangents are normalised; this one is right-handed.
     assert!(lines[3]["torsion"].as_f64().unwrap() > 0.0);
     assert_eq!(lines[3]["axis"].as_array().unwrap().len(), 3);
-    assert!(lines[4]["error"]
+    assert!(lines[4]["failure"]
         .as_str()
         .unwrap()
         .contains("not co-helical"));
@@ -179,13 +179,121 @@ fn malformed_fit_input_names_the_spline_and_leaves_no_file() {
     let outp = dir.path().join("keep.json");
     std::fs::write(&outp, "previous").unwrap();
     let out = strandfit(&["fit", "-n", "2", "-o", outp.to_str().unwrap()], "{}");
-    assert!(!out.status.success());
+    assert_eq!(out.status.code(), Some(1));
     assert_eq!(std::fs::read_to_string(&outp).unwrap(), "previous");
     // Usage errors.
-    assert!(!strandfit(&["fit", "-n", "0"], TWO_SPLINES).status.success());
-    assert!(!strandfit(&["fit"], TWO_SPLINES).status.success());
+    assert_eq!(
+        strandfit(&["fit", "-n", "0"], TWO_SPLINES).status.code(),
+        Some(2)
+    );
+    assert_eq!(strandfit(&["fit"], TWO_SPLINES).status.code(), Some(2));
     let missing = strandfit(&["fit", "-n", "2", "/nonexistent/in.json"], "");
+    assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("/nonexistent/in.json"));
+}
+
+/// Exit status 0 done, 1 a failure of the input or the run, 2 usage: clap's
+/// own errors and the range and combination checks of the commands alike.
+#[test]
+fn exit_codes_are_0_done_1_failure_2_usage() {
+    let code = |args: &[&str], stdin: &str| strandfit(args, stdin).status.code();
+    let fornix = "tests/data/fibres/dipy_fornix_tracks300.tck";
+    let dir = tempfile::tempdir().unwrap();
+    let sfh = dir.path().join("f.sfh");
+    let sfh = sfh.to_str().unwrap();
+    // 2: the command line.
+    for args in [
+        &["nonsense"][..],
+        &["fit", "--elements", "2", "--no-such-flag"],
+        &["fit", "--elements", "two"],
+        &["sample", "-n", "5"], // -n is "elements per curve"; sample takes --intervals
+        &["sample", "--intervals", "0"],
+        &["evaluate", "-m", "1"],
+        &["integrate", "-m", "1"],
+        &["integrate", "--steps", "0"],
+        &["complete", "-m", "1", "examples/gaps.json"],
+        &["complete", "--length", "2", "examples/gaps.json"], // --length is ATPH's
+        &["motion", "-m", "1", "examples/motion.json"],
+        &["helix", "--cohelical-tolerance=-1"],
+        &["helix", "--tolerance", "0.1"], // renamed: --tolerance is a distance elsewhere
+        &["compress", fornix, "-o", sfh], // no --tolerance
+        &[
+            "compress",
+            fornix,
+            "-o",
+            sfh,
+            "--tolerance",
+            "0.5",
+            "-n",
+            "3",
+        ],
+        &["compress", fornix, "-o", sfh, "--tolerance=-1"],
+        &[
+            "compress",
+            fornix,
+            "-o",
+            sfh,
+            "--tolerance",
+            "0.5",
+            "--from",
+            "xyz",
+        ],
+        &["inspect", fornix, "--from", "xyz"],
+        &["inspect", fornix, "--format", "tck"], // renamed --from, as in compress and convert
+        &["decompress", sfh, "-o", "x.tck", "-m", "1"],
+        &["sketch", "examples/spring.svg", "--emax", "2"],
+        &["bench", "--splines", "0"],
+        &["fit", "--elements", "2", "--threads", "0"],
+        // The engine options only where an engine runs.
+        &["motion", "--backend", "cpu", "examples/motion.json"],
+        &["sketch", "--precision", "f32", "examples/spring.svg"],
+        &["decompress", sfh, "-o", "x.tck", "--backend", "cpu"],
+        &["inspect", fornix, "-v"],
+        &["--backend", "cpu", "fit", "--elements", "2"], // an option of the command, after it
+    ] {
+        assert_eq!(code(args, TWO_SPLINES), Some(2), "{args:?}");
+    }
+    assert!(!Path::new(sfh).exists(), "a usage error writes nothing");
+    // 1: the input or the run.
+    assert_eq!(code(&["fit", "--elements", "2"], "not json"), Some(1));
+    assert_eq!(code(&["inspect", "/nonexistent.tck"], ""), Some(1));
+    assert_eq!(
+        code(
+            &[
+                "compress",
+                "/nonexistent.tck",
+                "--tolerance",
+                "0.5",
+                "-o",
+                sfh
+            ],
+            ""
+        ),
+        Some(1)
+    );
+    // 0: done.
+    assert_eq!(
+        code(&["fit", "--elements", "2", "--backend", "cpu"], TWO_SPLINES),
+        Some(0)
+    );
+    assert_eq!(
+        code(&["compress", fornix, "--tolerance", "0.5", "-o", sfh], ""),
+        Some(0)
+    );
+    // Documented in every command's help.
+    for args in [
+        &["--help"][..],
+        &["fit", "--help"],
+        &["merge", "--help"],
+        &["bench", "-h"],
+    ] {
+        let out = strandfit_ok(args, "");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains("Exit status: 0 done; 1 ") && text.contains("2 usage"),
+            "{args:?}: {text}"
+        );
+    }
 }
 
 #[test]
@@ -211,9 +319,9 @@ fn evaluate_decompresses_fit_output() {
     let n = 6;
     strandfit_ok(
         &[
+            "fit",
             "--backend",
             "cpu",
-            "fit",
             "-n",
             "6",
             "-o",
@@ -224,9 +332,9 @@ fn evaluate_decompresses_fit_output() {
     let m = 32 * n + 1; // fit's default --samples-per-element 32
     strandfit_ok(
         &[
+            "evaluate",
             "--backend",
             "cpu",
-            "evaluate",
             fitted.to_str().unwrap(),
             "-m",
             &m.to_string(),
@@ -281,7 +389,7 @@ fn evaluate_rejects_bad_elements_by_name() {
         let dir = tempfile::tempdir().unwrap();
         let outp = dir.path().join("out.json");
         let out = strandfit(
-            &["--backend", "cpu", "evaluate", "-o", outp.to_str().unwrap()],
+            &["evaluate", "--backend", "cpu", "-o", outp.to_str().unwrap()],
             &doc,
         );
         let err = String::from_utf8_lossy(&out.stderr);
@@ -298,7 +406,7 @@ fn evaluate_rejects_bad_elements_by_name() {
     let out = strandfit(&["evaluate", "-m", "1"], "{\"curves\":[]}");
     assert!(!out.status.success());
     let out = strandfit(
-        &["--backend", "cpu", "evaluate"],
+        &["evaluate", "--backend", "cpu"],
         r#"{"curves":[{"id":1,"elements":[]}]}"#,
     );
     assert!(String::from_utf8_lossy(&out.stderr).contains("no elements"));
@@ -309,7 +417,10 @@ fn evaluate_rejects_bad_elements_by_name() {
 #[test]
 fn sample_writes_equal_arclength_points() {
     use strandfit::spline::BezierSpline;
-    let out = strandfit_ok(&["--backend", "cpu", "sample", "-n", "5"], TWO_SPLINES);
+    let out = strandfit_ok(
+        &["sample", "--backend", "cpu", "--intervals", "5"],
+        TWO_SPLINES,
+    );
     let v = json(&out.stdout);
     let input = json(TWO_SPLINES.as_bytes());
     for (k, s) in v["splines"].as_array().unwrap().iter().enumerate() {
@@ -327,10 +438,10 @@ fn sample_writes_equal_arclength_points() {
             assert_eq!(v3(&tans[j]), *t);
         }
     }
-    let bad = strandfit(&["sample", "-n", "0"], TWO_SPLINES);
+    let bad = strandfit(&["sample", "--intervals", "0"], TWO_SPLINES);
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--intervals"));
     let bad = strandfit(
-        &["--backend", "cpu", "sample", "-n", "2"],
+        &["sample", "--backend", "cpu", "--intervals", "2"],
         r#"{"splines":[{"id":"nan","control_points":[[0,0,0],[1,0,0],[2,0,0],[3,0,null]]}]}"#,
     );
     assert!(!bad.status.success());
@@ -353,7 +464,7 @@ fn integrate_answers_every_line() {
         "\n",
     );
     let out = strandfit_ok(
-        &["--backend", "cpu", "integrate", "--steps", "512", "-m", "5"],
+        &["integrate", "--backend", "cpu", "--steps", "512", "-m", "5"],
         input,
     );
     let lines: Vec<serde_json::Value> = out
@@ -375,9 +486,12 @@ fn integrate_answers_every_line() {
     assert_eq!(pts[0], strandfit::DVec3::ZERO);
     assert_eq!(pts[4], end);
     assert!((pts[2] - strandfit::DVec3::new(1.0, 1.0, 0.0)).length() < 1e-9);
-    assert!(lines[1]["error"].as_str().unwrap().contains("line 2"));
-    assert!(lines[2]["error"].as_str().unwrap().contains("orthonormal"));
-    assert!(lines[3]["error"].as_str().unwrap().contains("line 4"));
+    assert!(lines[1]["failure"].as_str().unwrap().contains("line 2"));
+    assert!(lines[2]["failure"]
+        .as_str()
+        .unwrap()
+        .contains("orthonormal"));
+    assert!(lines[3]["failure"].as_str().unwrap().contains("line 4"));
     assert_eq!(
         v3(&lines[4]["points"][0]),
         strandfit::DVec3::new(1.0, 2.0, 3.0)
@@ -408,7 +522,7 @@ fn closed_stdout_pipe_is_not_a_panic() {
 
 #[test]
 fn complete_fills_gaps_with_euler_spirals() {
-    let out = strandfit_ok(&["complete", "--samples", "9", "examples/gaps.json"], "");
+    let out = strandfit_ok(&["complete", "--points", "9", "examples/gaps.json"], "");
     let doc = json(&out.stdout);
     let pairs = doc["pairs"].as_array().unwrap();
     assert_eq!(pairs.len(), 4);
@@ -432,7 +546,7 @@ fn complete_fills_gaps_with_euler_spirals() {
     // A non-planar pair is met too.
     assert_eq!(pairs[2]["regular"], true, "{}", pairs[2]);
     // A bad pair gets its own error; the batch goes on.
-    let e = pairs[3]["error"].as_str().unwrap();
+    let e = pairs[3]["failure"].as_str().unwrap();
     assert!(e.contains("coincident") && e.contains("pairs[3]"), "{e}");
 }
 
@@ -443,7 +557,7 @@ fn complete_with_atph_curves() {
             "complete",
             "--method",
             "atph",
-            "--samples",
+            "--points",
             "9",
             "examples/gaps.json",
         ],
@@ -472,14 +586,14 @@ fn complete_with_atph_curves() {
     assert!(pts[8].distance(strandfit::DVec3::Y) < 1e-15);
     // An S curve needs an inflection, which a linear azimuth cannot make in
     // the plane: its own error, naming the pair.
-    let e = pairs[1]["error"].as_str().unwrap();
+    let e = pairs[1]["failure"].as_str().unwrap();
     assert!(e.contains("\"s-curve\"") && e.contains("singular"), "{e}");
     // The twisted pair is met (error ~ 0) and its regularity reported.
     let t = &pairs[2];
-    assert!(t["error"].as_f64().unwrap() < 1e-24, "{t}");
+    assert!(t["residual"].as_f64().unwrap() < 1e-24, "{t}");
     assert_eq!(t["rho"].as_array().unwrap().len(), 3);
     assert!(t["regular"].is_boolean());
-    assert!(pairs[3]["error"].as_str().unwrap().contains("coincide"));
+    assert!(pairs[3]["failure"].as_str().unwrap().contains("coincide"));
 }
 
 #[test]
@@ -507,7 +621,10 @@ fn complete_atph_with_prescribed_lengths() {
     // A per-pair length with the Euler method is that pair's error.
     let out = strandfit(&["complete"], input);
     let doc = json(&out.stdout);
-    assert!(doc["pairs"][1]["error"].as_str().unwrap().contains("atph"));
+    assert!(doc["pairs"][1]["failure"]
+        .as_str()
+        .unwrap()
+        .contains("atph"));
 }
 
 #[test]
@@ -517,7 +634,7 @@ fn motion_through_a_point_stream() {
     let out = strandfit_ok(
         &[
             "motion",
-            "--samples",
+            "--points",
             "9",
             "examples/motion.json",
             "--vtk",
@@ -588,7 +705,7 @@ fn motion_batches_json_lines_and_names_bad_streams() {
     );
     // A given frame is kept: the first segment starts along its u.
     assert_eq!(lines[2]["id"], "example-5.7");
-    let e = lines[3]["error"].as_str().unwrap();
+    let e = lines[3]["failure"].as_str().unwrap();
     assert!(
         e.contains("line 4") && e.contains("points 1 and 2 coincide"),
         "{e}"
@@ -636,7 +753,7 @@ fn sketch_lifts_the_bundled_spring_drawing() {
         (h["c"].as_f64().unwrap().abs() - 30f64.to_radians()).abs() < 1e-3,
         "{h}"
     );
-    assert!(doc["projection_error"]["max_relative"].as_f64().unwrap() < 1e-4);
+    assert!(doc["projection"]["max_relative_distance"].as_f64().unwrap() < 1e-4);
     let n = doc["points_3d"].as_array().unwrap().len();
     assert_eq!(h["last_vertex"].as_u64().unwrap() as usize, n - 1);
     let svg = std::fs::read_to_string(&preview).unwrap();
@@ -695,7 +812,12 @@ fn sketch_evens_out_an_uneven_drawing_keeping_its_vertices() {
         "a drawn vertex was moved"
     );
     assert_eq!(dense["helices"].as_array().unwrap().len(), 2, "{dense}");
-    assert!(dense["projection_error"]["max_relative"].as_f64().unwrap() < 1e-5);
+    assert!(
+        dense["projection"]["max_relative_distance"]
+            .as_f64()
+            .unwrap()
+            < 1e-5
+    );
     let uniform = run(&["--resample", "uniform"]);
     assert_eq!(uniform["resampling"], "uniform");
     assert_eq!(uniform["points_3d"].as_array().unwrap().len(), 200);
@@ -729,7 +851,7 @@ fn sketch_g1_refits_a_two_helix_drawing() {
     let g = &doc["g1"];
     let t = g["tolerance"].as_f64().unwrap();
     assert!(
-        (t - doc["emax"].as_f64().unwrap()).abs() <= 1e-12 * t,
+        (t - doc["emax_distance"].as_f64().unwrap()).abs() <= 1e-12 * t,
         "{g}"
     );
     assert_eq!(g["within_tolerance"], true, "{g}");
@@ -737,7 +859,7 @@ fn sketch_g1_refits_a_two_helix_drawing() {
     let d3 = g["distance_3d"].as_f64().unwrap();
     let dp = g["projection_distance"].as_f64().unwrap();
     assert!(d3 <= t && dp <= d3 * (1.0 + 1e-6) + t / 64.0, "{g}");
-    let n = g["elements"].as_u64().unwrap() as usize;
+    let n = g["element_count"].as_u64().unwrap() as usize;
     assert_eq!(g["chain"]["elements"].as_array().unwrap().len(), n);
     // Without --g1 there is no such section; the tolerance needs --g1.
     let out = strandfit(&["sketch", "examples/spring.svg"], "");

@@ -89,8 +89,8 @@ fn round_trip(input: &Path, tol: f64, ext: &str) -> (u64, f64) {
         worst <= reported * (1.0 + 1e-3) + 1e-9,
         "measured {worst} > reported {reported}"
     );
-    assert_eq!(report["curves"].as_u64().unwrap(), a.len() as u64);
-    assert_eq!(report["over_tolerance"].as_u64().unwrap(), 0);
+    assert_eq!(report["curve_count"].as_u64().unwrap(), a.len() as u64);
+    assert_eq!(report["over_tolerance_count"].as_u64().unwrap(), 0);
     let bytes = std::fs::metadata(&sfh).unwrap().len();
     assert_eq!(report["bytes_out"].as_u64().unwrap(), bytes);
     eprintln!(
@@ -195,7 +195,7 @@ fn one_point_and_empty_curves_are_kept() {
         "--json",
     ]);
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(report["curves"].as_u64(), Some(4));
+    assert_eq!(report["curve_count"].as_u64(), Some(4));
     let back = dir.path().join("back.json");
     ok(&[
         "decompress",
@@ -303,11 +303,11 @@ fn inspect_reports_containers_and_curve_files() {
     ]);
     let out = ok(&["inspect", sfh.to_str().unwrap(), "--json"]);
     let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(r["curves"].as_u64(), Some(60));
+    assert_eq!(r["curve_count"].as_u64(), Some(60));
     assert_eq!(r["header"]["source"]["format"], "trk");
     let out = ok(&["inspect", src.to_str().unwrap(), "--json"]);
     let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(r["stats"]["curves"].as_u64(), Some(60));
+    assert_eq!(r["stats"]["curve_count"].as_u64(), Some(60));
     assert_eq!(r["format"], "trk");
 }
 
@@ -337,7 +337,7 @@ fn version_1_containers_still_decode() {
     }
     let out = ok(&["inspect", v1.to_str().unwrap(), "--json"]);
     let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(r["curves"].as_u64(), Some(300));
+    assert_eq!(r["curve_count"].as_u64(), Some(300));
 }
 
 #[test]

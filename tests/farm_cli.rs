@@ -158,7 +158,7 @@ fn skip_bad_leaves_out_the_bad_curves_and_gives_every_other_back() {
     ]);
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(report["skipped"], serde_json::json!([1, 4]));
-    assert_eq!(report["curves"], 4);
+    assert_eq!(report["curve_count"], 4);
     let e = stderr(&o);
     assert!(
         e.contains("left out 2 curve(s)") && e.contains("curve 4: point 14"),
@@ -549,7 +549,7 @@ fn the_reported_worst_distance_never_exceeds_a_met_tolerance() {
         ]);
         let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         let tol: f64 = t.parse().unwrap();
-        if r["over_tolerance"] == 0 {
+        if r["over_tolerance_count"] == 0 {
             assert!(r["max_distance"].as_f64().unwrap() <= tol, "{r}");
         }
     }

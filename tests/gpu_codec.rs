@@ -106,9 +106,9 @@ fn compress_backend_gpu_writes_the_file_the_cpu_writes() {
     let run = |backend: &str, out: &str| {
         let o = Command::new(env!("CARGO_BIN_EXE_strandfit"))
             .args([
+                "compress",
                 "--backend",
                 backend,
-                "compress",
                 input,
                 "--tolerance",
                 "0.3",
@@ -126,6 +126,9 @@ fn compress_backend_gpu_writes_the_file_the_cpu_writes() {
     assert_eq!(cpu, gpu);
     assert!(cpu_report.get("gpu_checks").is_none());
     let checks = &gpu_report["gpu_checks"];
-    assert!(checks["candidates"].as_u64().unwrap() > 1000, "{checks}");
-    assert_eq!(checks["blocks_on_cpu"].as_u64(), Some(0), "{checks}");
+    assert!(
+        checks["candidate_count"].as_u64().unwrap() > 1000,
+        "{checks}"
+    );
+    assert_eq!(checks["cpu_block_count"].as_u64(), Some(0), "{checks}");
 }

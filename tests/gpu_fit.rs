@@ -30,11 +30,11 @@ fn run_fit(backend: &str, precision: &str) -> Value {
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/curls.json");
     strandfit_json(
         &[
+            "fit",
             "--backend",
             backend,
             "--precision",
             precision,
-            "fit",
             "-n",
             "20",
         ],
@@ -108,11 +108,11 @@ fn fit_gpu_matches_cpu_on_the_bundled_example() {
 
 fn run_evaluate(fitted: &std::path::Path, backend: &str, precision: &str) -> Value {
     let args = [
+        "evaluate",
         "--backend",
         backend,
         "--precision",
         precision,
-        "evaluate",
         "-m",
         "1001",
         "--tangents",
@@ -220,11 +220,11 @@ fn integrate_gpu_matches_cpu() {
     std::fs::write(&path, &lines).unwrap();
     let run = |backend: &str, precision: &str| -> Vec<Value> {
         let args = [
+            "integrate",
             "--backend",
             backend,
             "--precision",
             precision,
-            "integrate",
             "--steps",
             "256",
             "-m",
@@ -260,7 +260,7 @@ fn integrate_gpu_matches_cpu() {
         assert_eq!(gpu.len(), cpu.len());
         let mut worst = 0.0f64;
         for (g, c) in gpu.iter().zip(&cpu) {
-            assert!(c["error"].is_null() && g["error"].is_null());
+            assert!(c["failure"].is_null() && g["failure"].is_null());
             // Absolute, in units of ε: 2(√256 + 12)·L ≤ 224 (L ≤ 4) for the
             // scheme's rounding plus 4(|x₀| + L) ≤ 60 for the host's f64
             // addition (f64 only; f32 has no such term but a larger ε): 300.

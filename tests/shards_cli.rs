@@ -86,7 +86,7 @@ fn split_then_merge_gives_back_the_container_byte_for_byte() {
         .as_array()
         .unwrap()
         .iter()
-        .map(|s| s["curves"].as_u64().unwrap())
+        .map(|s| s["curve_count"].as_u64().unwrap())
         .collect();
     assert_eq!(counts, [4096, 4096, 808]);
     let names = sorted_files(&shards);

@@ -268,13 +268,15 @@ fn compress_file<'py>(
         .map_err(py_err)?;
     let bytes_in = std::fs::metadata(&src).map(|m| m.len()).unwrap_or(0);
     let seconds = started.elapsed().as_secs_f64();
-    // The keys of the command line's `--json` report, in its order.
+    // The keys of the command line's `--json` report, in its order
+    // (docs/schemas/compress.schema.json).
     let d = PyDict::new(py);
+    d.set_item("version", strandfit::cli::JSON_VERSION)?;
     d.set_item("input", src.display().to_string())?;
     d.set_item("output", dst.display().to_string())?;
-    d.set_item("curves", summary.curves)?;
-    d.set_item("points", summary.points)?;
-    d.set_item("elements", 0)?;
+    d.set_item("curve_count", summary.curves)?;
+    d.set_item("point_count", summary.points)?;
+    d.set_item("element_count", 0)?;
     d.set_item("bytes_in", bytes_in)?;
     d.set_item("bytes_out", summary.bytes)?;
     d.set_item("ratio", bytes_in as f64 / summary.bytes.max(1) as f64)?;
@@ -283,11 +285,11 @@ fn compress_file<'py>(
     d.set_item("container_version", 3)?;
     d.set_item("mean_distance", py.None())?;
     d.set_item("max_distance", tolerance)?;
-    d.set_item("output_points", summary.output_points)?;
-    d.set_item("over_tolerance", 0)?;
-    d.set_item("verbatim", summary.kinds[3])?;
-    d.set_item("points_cheaper", summary.kinds[1])?;
-    d.set_item("arcs", summary.kinds[2])?;
+    d.set_item("output_point_count", summary.output_points)?;
+    d.set_item("over_tolerance_count", 0)?;
+    d.set_item("verbatim_count", summary.kinds[3])?;
+    d.set_item("points_cheaper_count", summary.kinds[1])?;
+    d.set_item("arc_count", summary.kinds[2])?;
     d.set_item("skipped", skipped)?;
     d.set_item("dropped", dropped)?;
     d.set_item("seconds", seconds)?;
@@ -371,10 +373,10 @@ fn compress_file_range<'py>(
     d.set_item("input", src.display().to_string())?;
     d.set_item("output", dst.display().to_string())?;
     d.set_item("first", first)?;
-    d.set_item("curves", summary.curves)?;
-    d.set_item("points", summary.points)?;
+    d.set_item("curve_count", summary.curves)?;
+    d.set_item("point_count", summary.points)?;
     d.set_item("bytes_out", summary.bytes)?;
-    d.set_item("output_points", summary.output_points)?;
+    d.set_item("output_point_count", summary.output_points)?;
     d.set_item("tolerance", tolerance)?;
     Ok(d)
 }
@@ -431,7 +433,7 @@ fn decompress_file<'py>(
     let d = PyDict::new(py);
     d.set_item("input", src.display().to_string())?;
     d.set_item("output", dst.display().to_string())?;
-    d.set_item("curves", n)?;
+    d.set_item("curve_count", n)?;
     d.set_item("guaranteed", points.is_none() && step.is_none())?;
     d.set_item("dropped", dropped)?;
     d.set_item("seconds", started.elapsed().as_secs_f64())?;

@@ -155,10 +155,11 @@ def compress_file(src: PathLike, dst: PathLike, tolerance: float = 0.5, strict: 
     """Compress a curve file (.tck .trk .trx .vtk .hair .json .csv) to a container.
 
     The same as ``strandfit compress SRC --tolerance T -o DST --json``: the
-    same bytes, written atomically, and the same report (``curves``,
-    ``points``, ``bytes_in``, ``bytes_out``, ``ratio``, ``output_points``,
-    ``arcs``, ``points_cheaper``, ``verbatim``, ``skipped``, ``dropped``,
-    ``seconds``, ...). What the container cannot hold is listed in
+    same bytes, written atomically, and the same report, keys as in
+    ``docs/schemas/compress.schema.json`` (``version``, ``curve_count``,
+    ``point_count``, ``bytes_in``, ``bytes_out``, ``ratio``,
+    ``output_point_count``, ``arc_count``, ``points_cheaper_count``,
+    ``verbatim_count``, ``skipped``, ``dropped``, ``seconds``, ...). What the container cannot hold is listed in
     ``dropped`` and warned about (``strict=True``: an error); ``skip_bad=True``
     leaves out curves with unusable points (listed in ``skipped``) instead of
     failing. ``OSError`` when a file cannot be read or written, ``ValueError``
@@ -173,7 +174,7 @@ def decompress_file(src: PathLike, dst: PathLike, points: Optional[int] = None, 
 
     The same as ``strandfit decompress SRC -o DST`` (``--points``/``--step``
     with ``points``/``step``, ``--strict`` with ``strict``). Returns
-    ``{"input", "output", "curves", "guaranteed", "dropped", "seconds"}``.
+    ``{"input", "output", "curve_count", "guaranteed", "dropped", "seconds"}``.
     """
     points, step = _resampling(points, step)
     report = _strandfit.decompress_file(os.fspath(src), os.fspath(dst), points, step, bool(strict))

@@ -100,7 +100,7 @@ def compress_sharded(
     the file up to its last curve and compresses its own. The shards are
     byte for byte those of ``strandfit compress SRC`` then ``strandfit split
     --curves-per-shard N``, and ``strandfit merge`` joins them into that
-    container. Returns one report per shard (``first``, ``curves``,
+    container. Returns one report per shard (``first``, ``curve_count``,
     ``bytes_out``, ...), in order.
     """
     src = os.fspath(src)

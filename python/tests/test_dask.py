@@ -70,7 +70,7 @@ def test_compress_sharded_writes_the_shards_of_compress_then_split(tmp_path, cli
     write_tck(src, curves)
     reports = strandfit.dask.compress_sharded(src, tmp_path / "dask", 5000, tolerance=0.25, client=client)
     # Rounded down to whole blocks: 4096, 4096, 808.
-    assert [(r["first"], r["curves"]) for r in reports] == [(0, 4096), (4096, 4096), (8192, 808)]
+    assert [(r["first"], r["curve_count"]) for r in reports] == [(0, 4096), (4096, 4096), (8192, 808)]
     whole = tmp_path / "whole.sfh"
     cli("compress", src, "--tolerance", "0.25", "-o", whole)
     cli("split", whole, "--curves-per-shard", "4096", "-o", tmp_path / "split")
@@ -92,7 +92,7 @@ def test_sharding_rounds_to_whole_blocks_like_split_and_clears_old_shards(tmp_pa
     out = tmp_path / "dask"
     strandfit.dask.compress_sharded(src, out, 9000, tolerance=0.3)  # one shard
     reports = strandfit.dask.compress_sharded(src, out, 5000, tolerance=0.3)
-    assert [r["curves"] for r in reports] == [4096, 904]
+    assert [r["curve_count"] for r in reports] == [4096, 904]
     whole = tmp_path / "whole.sfh"
     cli("compress", src, "--tolerance", "0.3", "-o", whole)
     cli("split", whole, "--curves-per-shard", "5000", "-o", tmp_path / "split")

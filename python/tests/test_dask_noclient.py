@@ -18,7 +18,7 @@ def test_without_a_client_the_tasks_run_here(tmp_path):
         distributed.get_client()
     src = FIBRES / "dipy_fornix_tracks300.tck"
     (r,) = strandfit.dask.compress_files([src], tmp_path, 0.5)
-    assert r["curves"] == 300 and Path(r["output"]).exists()
+    assert r["curve_count"] == 300 and Path(r["output"]).exists()
     with pytest.raises(ValueError, match="collide"):
         strandfit.dask.compress_files([src, src], tmp_path, 0.5)
     with pytest.raises(OSError):

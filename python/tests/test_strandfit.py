@@ -102,10 +102,10 @@ def test_compress_file_writes_the_bytes_of_the_command_line(tmp_path):
     )
     py = (tmp_path / "py.sfh").read_bytes()
     assert py == (tmp_path / "cli.sfh").read_bytes()
-    assert report["curves"] == 300 and report["points"] == 14576
+    assert report["curve_count"] == 300 and report["point_count"] == 14576
     assert report["bytes_out"] == len(py) and report["ratio"] > 20
     out = strandfit.decompress_file(tmp_path / "py.sfh", tmp_path / "back.tck")
-    assert out["curves"] == 300
+    assert out["curve_count"] == 300
     subprocess.run(
         [BIN, "decompress", str(tmp_path / "cli.sfh"), "-o", str(tmp_path / "cli.tck")],
         check=True,
@@ -114,7 +114,7 @@ def test_compress_file_writes_the_bytes_of_the_command_line(tmp_path):
     assert (tmp_path / "back.tck").read_bytes() == (tmp_path / "cli.tck").read_bytes()
     # The file's curves, through the arrays, are the decompressed file's.
     positions, offsets = strandfit.decompress_arrays(py)
-    assert len(offsets) == 301 and offsets[-1] == report["output_points"]
+    assert len(offsets) == 301 and offsets[-1] == report["output_point_count"]
 
 
 def test_lazy_slices_equal_the_full_decode(tmp_path):
@@ -224,7 +224,7 @@ def test_resampling_warns_and_matches_the_command_line(tmp_path):
     strandfit.compress_file(FORNIX, sfh, 0.5)
     with pytest.warns(UserWarning):
         r = strandfit.decompress_file(sfh, tmp_path / "py.tck", points=12)
-    assert r["curves"] == 300 and r["guaranteed"] is False
+    assert r["curve_count"] == 300 and r["guaranteed"] is False
     subprocess.run(
         [BIN, "decompress", str(sfh), "--points", "12", "-o", str(tmp_path / "cli.tck")],
         check=True,

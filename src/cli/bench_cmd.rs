@@ -100,10 +100,10 @@ fn time_runs<T>(
 }
 
 pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
-    if args.curves == 0 || args.elements == 0 || args.segments == 0 || args.repeat == 0 {
-        anyhow::bail!("--curves, --elements, --segments and --repeat must be at least 1");
+    if args.splines == 0 || args.elements == 0 || args.segments == 0 || args.repeat == 0 {
+        super::usage!("--splines, --elements, --segments and --repeat must be at least 1");
     }
-    let splines = synthetic_splines(args.curves, args.segments);
+    let splines = synthetic_splines(args.splines, args.segments);
     let opts = FitOptions::new(args.elements);
     let elements = (splines.len() * args.elements) as f64;
     println!(
@@ -174,7 +174,7 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
 
     // Frenet–Serret integration of Euler spirals (one per curve), as the
     // Euler-spiral descent uses it: end point and frame after 64 steps.
-    let problems = synthetic_spirals(args.curves);
+    let problems = synthetic_spirals(args.splines);
     let _ = backend.integrate(&problems[..problems.len().min(16)], FRENET_STEPS)?;
     let (mut times, _) = time_runs(args.repeat, |t| {
         Ok(backend.integrate_timed(&problems, FRENET_STEPS, t)?)
@@ -190,7 +190,7 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     // curve, from random spirals within one revolution): the default solver
     // on the chosen backend, and the paper's Algorithm 1 on a few of the
     // pairs on the CPU (all cores, rayon over pairs), for comparison.
-    let pairs = spiral_end_pairs(&random_spirals(args.curves, 1));
+    let pairs = spiral_end_pairs(&random_spirals(args.splines, 1));
     let opts = SolveOptions::default();
     let _ = solve_spirals(&pairs[..pairs.len().min(16)], &opts, backend)?; // warm-up, compile
     let (mut times, solved) =
@@ -229,7 +229,7 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
 
     // ATPH Hermite interpolation (paper 002) on the backend: one pair per
     // element, the ends of arcs of wandering helices.
-    let atph_pairs = synthetic_hermite_pairs(args.curves * args.elements);
+    let atph_pairs = synthetic_hermite_pairs(args.splines * args.elements);
     let _ = backend.interpolate_atph(&atph_pairs[..atph_pairs.len().min(1024)], None)?; // warm-up, compile
     let (mut times, solved) = time_runs(args.repeat, |t| {
         Ok(backend.interpolate_atph_timed(&atph_pairs, None, t)?)
@@ -251,7 +251,7 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     // local G1 Hermite interpolations with a one-sided frame (the rational
     // RMF included), and whole splines through 30-point streams sampled at
     // MOTION_SAMPLES points.
-    let local = synthetic_local_motions(args.curves);
+    let local = synthetic_local_motions(args.splines);
     let (mut times, _) = time_runs(args.repeat, |_| {
         Ok(local
             .par_iter()
@@ -264,7 +264,7 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         "interpolations",
         &mut times,
     );
-    let streams = synthetic_streams(args.curves.div_ceil(100), MOTION_STREAM_POINTS);
+    let streams = synthetic_streams(args.splines.div_ceil(100), MOTION_STREAM_POINTS);
     let (mut times, _) = time_runs(args.repeat, |_| {
         streams
             .par_iter()

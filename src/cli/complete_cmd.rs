@@ -12,11 +12,12 @@
 //! Every pair gets its own result or its own error; the batch never stops
 //! on a bad pair.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::io_util::{self, input_name, read_input, Output};
+use super::usage;
 use super::{CompleteArgs, CompleteMethod};
 use crate::atph::{AtphCurve, Sign};
 use crate::backend::Backend;
@@ -56,11 +57,11 @@ enum Outcome {
         length: f64,
         /// Start Frenet normal (the frame's rotation about `t0`).
         normal: [f64; 3],
-        /// Eq. 9 of paper 004: squared end-point plus squared end-tangent
-        /// error.
-        error: f64,
+        /// The solver's residual, Eq. 9 of paper 004: squared end-point
+        /// plus squared end-tangent error.
+        residual: f64,
         iterations: usize,
-        /// `true` when the end conditions are met (error < 1e-12).
+        /// `true` when the end conditions are met (residual < 1e-12).
         regular: bool,
         #[serde(skip_serializing_if = "Option::is_none")]
         points: Option<Vec<[f64; 3]>>,
@@ -78,7 +79,7 @@ enum Outcome {
         /// Arc length ∫|ρ|.
         length: f64,
         /// |r(1) − p1|² + |T(1) − t1|², as Eq. 9 of paper 004.
-        error: f64,
+        residual: f64,
         /// ρ ≠ 0 on [0, 1] (Proposition 1): no singular point.
         regular: bool,
         /// ρ > 0: the curve runs along t0 and t1, not against them.
@@ -87,20 +88,20 @@ enum Outcome {
         points: Option<Vec<[f64; 3]>>,
     },
     Failed {
-        error: String,
+        failure: String,
     },
 }
 
 pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
-    if matches!(args.samples, 1) {
-        bail!("--samples must be 0 (none) or at least 2");
+    if matches!(args.points, 1) {
+        usage!("--points must be 0 (none) or at least 2");
     }
     if let Some(l) = args.length {
         if args.method != CompleteMethod::Atph {
-            bail!("--length applies to --method atph (Euler spirals take no prescribed length)");
+            usage!("--length applies to --method atph (Euler spirals take no prescribed length)");
         }
         if !(l > 0.0 && l.is_finite()) {
-            bail!("--length must be positive and finite, got {l}");
+            usage!("--length must be positive and finite, got {l}");
         }
     }
     let name = input_name(&args.input);
@@ -121,7 +122,7 @@ pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
         .map(|(i, (p, r))| PairOut {
             id: p.id.clone().unwrap_or(serde_json::Value::from(i)),
             result: r.unwrap_or_else(|e| Outcome::Failed {
-                error: format!(
+                failure: format!(
                     "{}: {e}",
                     io_util::label(
                         "pair",
@@ -138,7 +139,7 @@ pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
         pairs: Vec<PairOut>,
     }
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &Doc { pairs: out_pairs })
+    serde_json::to_writer(out.writer(), &super::versioned(&Doc { pairs: out_pairs }))
         .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
@@ -164,7 +165,7 @@ fn atph(
         .map(|(r, &(_, _, p1, t1))| {
             let c: AtphCurve = r.map_err(|e| e.to_string())?;
             let t1 = t1.normalize();
-            let error =
+            let residual =
                 c.position(1.0).distance_squared(p1) + c.tangent.at(1.0).distance_squared(t1);
             let sign = c.speed_sign();
             Ok(Outcome::Atph {
@@ -174,15 +175,11 @@ fn atph(
                 b1: c.tangent.b1,
                 rho: c.rho.coefficients().to_vec(),
                 length: c.length(),
-                error,
+                residual,
                 regular: sign != Sign::Vanishes,
                 forward: sign == Sign::Positive,
-                points: (args.samples >= 2).then(|| {
-                    c.sample(args.samples)
-                        .iter()
-                        .map(|p| p.to_array())
-                        .collect()
-                }),
+                points: (args.points >= 2)
+                    .then(|| c.sample(args.points).iter().map(|p| p.to_array()).collect()),
             })
         })
         .collect())
@@ -197,7 +194,7 @@ fn euler(
     let pairs: Vec<_> = input.iter().map(vectors).collect();
     let opts = SolveOptions::default();
     let solved = solve_spirals(&pairs, &opts, backend)?;
-    let sampled: Vec<Option<Vec<[f64; 3]>>> = if args.samples >= 2 {
+    let sampled: Vec<Option<Vec<[f64; 3]>>> = if args.points >= 2 {
         let problems: Vec<_> = solved
             .iter()
             .filter_map(|r| r.as_ref().ok())
@@ -213,7 +210,7 @@ fn euler(
             .max()
             .unwrap_or(opts.steps);
         let mut it = backend
-            .integrate_samples(&problems, args.samples, steps.div_ceil(args.samples - 1))?
+            .integrate_samples(&problems, args.points, steps.div_ceil(args.points - 1))?
             .into_iter();
         solved
             .iter()
@@ -244,7 +241,7 @@ fn euler(
                 delta: s.problem.delta,
                 length: s.problem.length,
                 normal: s.problem.frame[1].to_array(),
-                error: s.error,
+                residual: s.error,
                 iterations: s.iterations,
                 regular: s.error < 1e-12,
                 points: pts,

@@ -5,13 +5,14 @@
 
 use std::time::Instant;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::inspect_cmd::parse_format;
 use super::io_util::{check_losses, report_skipped, write_failed, DelayedBar};
+use super::usage;
 use super::{CompressArgs, DistanceArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
 use crate::backend::Backend;
@@ -25,14 +26,18 @@ use crate::io::{
 /// Curves fitted per parallel batch (bounds memory; keeps order).
 const BATCH: usize = 4096;
 
-/// The `--json` report (also printed as text).
-#[derive(Debug, Default, Serialize)]
+/// The `--json` report (also printed as text); `docs/schemas/compress.schema.json`.
+#[derive(Debug, Serialize)]
 pub struct CompressReport {
+    /// The JSON schema version ([`super::JSON_VERSION`]).
+    pub version: u32,
     pub input: String,
     pub output: String,
-    pub curves: u64,
-    pub points: u64,
-    pub elements: u64,
+    pub curve_count: u64,
+    /// Points read from the input.
+    pub point_count: u64,
+    /// Helix elements written (version 1).
+    pub element_count: u64,
     pub bytes_in: u64,
     pub bytes_out: u64,
     /// bytes in / bytes out.
@@ -48,16 +53,16 @@ pub struct CompressReport {
     /// guaranteed to meet at default decompression).
     pub max_distance: f64,
     /// Points the default decompression writes (version 3).
-    pub output_points: u64,
+    pub output_point_count: u64,
     /// Curves whose decoded chain is not within the tolerance (the search
     /// hit `--max-elements`).
-    pub over_tolerance: u64,
+    pub over_tolerance_count: u64,
     /// Curves stored verbatim (empty, one point, unfittable).
-    pub verbatim: u64,
+    pub verbatim_count: u64,
     /// Curves stored as their points because that is smaller.
-    pub points_cheaper: u64,
+    pub points_cheaper_count: u64,
     /// Curves stored as arcs (version 3).
-    pub arcs: u64,
+    pub arc_count: u64,
     /// Indices (in the input) of the curves `--skip-bad` left out.
     pub skipped: Vec<u64>,
     /// What the container does not hold (warned about on stderr).
@@ -69,17 +74,48 @@ pub struct CompressReport {
     pub gpu_checks: Option<GpuChecks>,
 }
 
+impl Default for CompressReport {
+    fn default() -> Self {
+        CompressReport {
+            version: super::JSON_VERSION,
+            input: String::new(),
+            output: String::new(),
+            curve_count: 0,
+            point_count: 0,
+            element_count: 0,
+            bytes_in: 0,
+            bytes_out: 0,
+            ratio: 0.0,
+            distance: "",
+            tolerance: None,
+            container_version: 0,
+            mean_distance: None,
+            max_distance: 0.0,
+            output_point_count: 0,
+            over_tolerance_count: 0,
+            verbatim_count: 0,
+            points_cheaper_count: 0,
+            arc_count: 0,
+            skipped: Vec::new(),
+            dropped: Vec::new(),
+            seconds: 0.0,
+            curves_per_second: 0.0,
+            gpu_checks: None,
+        }
+    }
+}
+
 /// What `compress --backend gpu` did on the GPU.
 #[derive(Debug, Default, Serialize)]
 pub struct GpuChecks {
     /// Candidate elements checked on the GPU.
-    pub candidates: u64,
+    pub candidate_count: u64,
     /// Batches (rounds of the search), summed over blocks.
-    pub rounds: u64,
+    pub round_count: u64,
     /// Verdicts within rounding of the tolerance, decided by the CPU.
-    pub unsure: u64,
+    pub unsure_count: u64,
     /// Blocks the GPU could not take (finished on the CPU).
-    pub blocks_on_cpu: u64,
+    pub cpu_block_count: u64,
 }
 
 pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
@@ -90,7 +126,7 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
             (args.storage != StorageArg::Compact, "--storage f32|f64"),
         ];
         if let Some((_, what)) = v1_only.iter().find(|(given, _)| *given) {
-            bail!(
+            usage!(
                 "{what} writes a version-1 helix container, which measures the ordered or \
                  Fréchet distance: add --distance ordered (or frechet)"
             );
@@ -101,15 +137,15 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
         (Some(t), None, None) => ElementCount::Tolerance(t),
         (None, Some(n), None) => ElementCount::Fixed(n),
         (None, None, Some(s)) => ElementCount::ElementLength(s),
-        _ => bail!("give exactly one of --tolerance, --elements, --element-length"),
+        _ => usage!("give exactly one of --tolerance, --elements, --element-length"),
     };
     match count {
         ElementCount::Tolerance(t) | ElementCount::ElementLength(t)
             if !(t > 0.0 && t.is_finite()) =>
         {
-            bail!("--tolerance and --element-length must be positive, got {t}")
+            usage!("--tolerance and --element-length must be positive, got {t}")
         }
-        ElementCount::Fixed(0) => bail!("--elements must be at least 1"),
+        ElementCount::Fixed(0) => usage!("--elements must be at least 1"),
         _ => {}
     }
     for (name, v) in [
@@ -117,7 +153,7 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
         ("--smoothing-share", args.smoothing_share),
     ] {
         if !(v > 0.0 && v <= 1.0) {
-            bail!("{name} must be in (0, 1], got {v}");
+            usage!("{name} must be in (0, 1], got {v}");
         }
     }
     let storage = match args.storage {
@@ -193,12 +229,12 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
             .map(|c| compress_curve(&c.points, &opts))
             .collect();
         for (c, o) in batch.iter().zip(outcomes) {
-            let index = report.curves;
-            report.curves += 1;
-            report.points += c.points.len() as u64;
-            report.elements += o.elements as u64;
+            let index = report.curve_count;
+            report.curve_count += 1;
+            report.point_count += c.points.len() as u64;
+            report.element_count += o.elements as u64;
             if let Some(why) = &o.verbatim {
-                report.verbatim += 1;
+                report.verbatim_count += 1;
                 if notes < 10 {
                     eprintln!("note: {}, curve {index}: {why}", args.input.display());
                     notes += 1;
@@ -211,10 +247,10 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
             // sources): the maximum is over every curve.
             report.max_distance = report.max_distance.max(o.frechet);
             if o.points_cheaper {
-                report.points_cheaper += 1;
+                report.points_cheaper_count += 1;
             }
             if !o.within {
-                report.over_tolerance += 1;
+                report.over_tolerance_count += 1;
             }
             let mut record = StoredCurve {
                 id: c.id.clone(),
@@ -233,7 +269,7 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
                 writer
                     .write(&record)
                     .map_err(|e| write_failed(&args.input, index, reader.skipped(), e))?;
-                report.verbatim += 1;
+                report.verbatim_count += 1;
                 if notes < 10 {
                     eprintln!(
                         "note: {}, curve {index}: stored verbatim: {}",
@@ -258,7 +294,7 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
         0.0
     });
     report.seconds = started.elapsed().as_secs_f64();
-    report.curves_per_second = report.curves as f64 / report.seconds.max(1e-9);
+    report.curves_per_second = report.curve_count as f64 / report.seconds.max(1e-9);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
@@ -268,9 +304,9 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
              {:.0} curves/s",
             report.input,
             report.output,
-            report.curves,
-            report.points,
-            report.elements,
+            report.curve_count,
+            report.point_count,
+            report.element_count,
             report.bytes_in,
             report.bytes_out,
             report.ratio,
@@ -280,9 +316,9 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
             args.tolerance
                 .map(|t| format!(" (tolerance {t})"))
                 .unwrap_or_default(),
-            report.verbatim,
-            report.points_cheaper,
-            report.over_tolerance,
+            report.verbatim_count,
+            report.points_cheaper_count,
+            report.over_tolerance_count,
             report.curves_per_second
         );
     }
@@ -319,10 +355,10 @@ fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
     use crate::codec::stream::compress_stream;
 
     let Some(tolerance) = args.tolerance else {
-        bail!("give --tolerance (or --elements / --element-length with --distance ordered)");
+        usage!("give --tolerance (or --elements / --element-length with --distance ordered)");
     };
     if !(tolerance > 0.0 && tolerance.is_finite()) {
-        bail!("--tolerance must be positive, got {tolerance}");
+        usage!("--tolerance must be positive, got {tolerance}");
     }
     let started = Instant::now();
     let (mut reader, meta, dropped) = open_input(args, true)?;
@@ -366,9 +402,9 @@ fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
     let report = CompressReport {
         input: args.input.display().to_string(),
         output: args.output.display().to_string(),
-        curves: summary.curves,
-        points: summary.points,
-        elements: 0,
+        curve_count: summary.curves,
+        point_count: summary.points,
+        element_count: 0,
         bytes_in,
         bytes_out: summary.bytes,
         ratio: bytes_in as f64 / summary.bytes.max(1) as f64,
@@ -377,21 +413,22 @@ fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
         container_version: 3,
         mean_distance: None,
         max_distance: tolerance,
-        output_points: summary.output_points,
-        over_tolerance: 0,
-        verbatim: summary.kinds[3],
-        points_cheaper: summary.kinds[1],
-        arcs: summary.kinds[2],
+        output_point_count: summary.output_points,
+        over_tolerance_count: 0,
+        verbatim_count: summary.kinds[3],
+        points_cheaper_count: summary.kinds[1],
+        arc_count: summary.kinds[2],
         skipped: reader.skipped().iter().map(|s| s.index).collect(),
         dropped,
         seconds,
         curves_per_second: summary.curves as f64 / seconds.max(1e-9),
         gpu_checks: matches!(backend, Backend::Gpu(_)).then_some(GpuChecks {
-            candidates: summary.batch_checked,
-            rounds: summary.batch_rounds,
-            unsure: summary.batch_unsure,
-            blocks_on_cpu: summary.batch_fallbacks,
+            candidate_count: summary.batch_checked,
+            round_count: summary.batch_rounds,
+            unsure_count: summary.batch_unsure,
+            cpu_block_count: summary.batch_fallbacks,
         }),
+        ..Default::default()
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -402,22 +439,22 @@ fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
              {} as points, {} verbatim; {:.0} curves/s",
             report.input,
             report.output,
-            report.curves,
-            report.points,
+            report.curve_count,
+            report.point_count,
             report.bytes_in,
             report.bytes_out,
             report.ratio,
-            report.output_points,
-            report.arcs,
-            report.points_cheaper,
-            report.verbatim,
+            report.output_point_count,
+            report.arc_count,
+            report.points_cheaper_count,
+            report.verbatim_count,
             report.curves_per_second
         );
         if let Some(g) = &report.gpu_checks {
             eprintln!(
                 "GPU: {} candidate elements checked in {} rounds, {} too near the tolerance \
                  (decided on the CPU), {} blocks on the CPU",
-                g.candidates, g.rounds, g.unsure, g.blocks_on_cpu
+                g.candidate_count, g.round_count, g.unsure_count, g.cpu_block_count
             );
         }
     }

@@ -6,6 +6,7 @@ use anyhow::{bail, Result};
 
 use super::inspect_cmd::parse_format;
 use super::io_util::{check_losses, write_failed};
+use super::usage;
 use super::DecompressArgs;
 use crate::io::container::{ContainerReader, Shape};
 use crate::io::{create_writer, Curve, Format};
@@ -13,11 +14,11 @@ use crate::io::{create_writer, Curve, Format};
 pub fn run(args: &DecompressArgs) -> Result<()> {
     if let Some(s) = args.step {
         if !(s > 0.0 && s.is_finite()) {
-            bail!("--step must be positive, got {s}");
+            usage!("--step must be positive, got {s}");
         }
     }
     if matches!(args.points, Some(m) if m < 2) {
-        bail!("--points must be at least 2");
+        usage!("--points must be at least 2");
     }
     let to = args.to.as_deref().map(parse_format).transpose()?;
     if crate::codec::container::container_version(&args.input).is_some_and(|v| v >= 2) {

@@ -7,6 +7,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::io_util::{self, input_name, read_input, Output};
+use super::usage;
 use super::EvaluateArgs;
 use crate::backend::Backend;
 use crate::helix::{HelixElement, PiecewiseHelix};
@@ -98,7 +99,7 @@ fn element(e: &ElementIn) -> Result<HelixElement, String> {
 
 pub fn run(args: &EvaluateArgs, backend: &Backend) -> Result<()> {
     if args.points < 2 {
-        bail!("--points must be at least 2 (both ends are included)");
+        usage!("--points must be at least 2 (both ends are included)");
     }
     let name = input_name(&args.input);
     let text = read_input(&args.input)?;
@@ -149,7 +150,8 @@ pub fn run(args: &EvaluateArgs, backend: &Backend) -> Result<()> {
         .collect();
 
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &OutputDoc { curves }).context("cannot write output")?;
+    serde_json::to_writer(out.writer(), &super::versioned(&OutputDoc { curves }))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
 }

@@ -1,11 +1,12 @@
 //! `strandfit fit`: Bézier splines in, G1 piecewise helices out.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::io_util::{self, input_name, read_input, Output};
+use super::usage;
 use super::FitArgs;
 use crate::backend::Backend;
 use crate::fit::FitOptions;
@@ -86,10 +87,10 @@ pub(super) fn read_splines(
 
 pub fn run(args: &FitArgs, backend: &Backend) -> Result<()> {
     if args.elements == 0 {
-        bail!("--elements must be at least 1");
+        usage!("--elements must be at least 1");
     }
     if args.samples_per_element == 0 {
-        bail!("--samples-per-element must be at least 1");
+        usage!("--samples-per-element must be at least 1");
     }
     let (ids, splines) = read_splines(&args.input)?;
     let opts = FitOptions {
@@ -118,7 +119,8 @@ pub fn run(args: &FitArgs, backend: &Backend) -> Result<()> {
         .collect::<Result<_>>()?;
 
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &OutputDoc { curves }).context("cannot write output")?;
+    serde_json::to_writer(out.writer(), &super::versioned(&OutputDoc { curves }))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
 }

@@ -27,15 +27,15 @@ struct Answer {
 }
 
 pub fn run(args: &HelixArgs, backend: &Backend) -> Result<()> {
-    if !(args.tolerance >= 0.0) {
-        anyhow::bail!(
-            "--tolerance must be a non-negative number, got {}",
-            args.tolerance
+    if !(args.cohelical_tolerance >= 0.0) {
+        super::usage!(
+            "--cohelical-tolerance must be a non-negative number, got {}",
+            args.cohelical_tolerance
         );
     }
     map_json_lines(&args.input, &args.output, parse_line, |pairs| {
         Ok(backend
-            .interpolate(pairs, args.tolerance)?
+            .interpolate(pairs, args.cohelical_tolerance)?
             .into_iter()
             .map(|h| h.map(|h| answer(&h)).map_err(|e| e.to_string()))
             .collect())

@@ -20,7 +20,7 @@ pub fn run(args: &InspectArgs) -> Result<()> {
     if crate::io::container::is_container(&args.input) {
         return inspect_container(args);
     }
-    let format = args.format.as_deref().map(parse_format).transpose()?;
+    let format = args.from.as_deref().map(parse_format).transpose()?;
     let bytes = std::fs::metadata(&args.input)
         .map_err(|e| anyhow::anyhow!("{}: cannot stat: {e}", args.input.display()))?
         .len();
@@ -43,21 +43,22 @@ pub fn run(args: &InspectArgs) -> Result<()> {
         _ => None,
     };
     if args.json {
-        let report = json!({
-            "file": args.input.display().to_string(),
+        let mut report = json!({
+            "version": super::JSON_VERSION,
+            "input": args.input.display().to_string(),
             "format": meta.format.extension(),
             "bytes": bytes,
             "bytes_per_point": if stats.points > 0 { bytes as f64 / stats.points as f64 } else { 0.0 },
-            "header_count": meta.count,
+            "header_curve_count": meta.count,
             "units": meta.units,
             "vox_to_world": meta.vox_to_world.transpose().to_cols_array_2d(),
             "voxel_size": meta.voxel_size,
             "dimensions": meta.dimensions,
-            "point_data": meta.point_data_names,
-            "curve_data": meta.curve_data_names,
+            "point_data_names": meta.point_data_names,
+            "curve_data_names": meta.curve_data_names,
             "stats": stats,
-            "error": error.as_ref().map(|e| e.to_string()),
         });
+        with_failure(&mut report, error.as_ref());
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print_text(&args.input, bytes, &meta, &stats);
@@ -78,12 +79,20 @@ pub fn run(args: &InspectArgs) -> Result<()> {
     }
 }
 
+/// The report's `"failure"`: why reading stopped (absent when it did not).
+fn with_failure(report: &mut serde_json::Value, error: Option<&impl std::fmt::Display>) {
+    if let Some(e) = error {
+        report["failure"] = e.to_string().into();
+    }
+}
+
+/// A `--from`/`--to` format name; an unknown one is a usage error.
 pub fn parse_format(name: &str) -> Result<Format> {
     Format::from_name(name).ok_or_else(|| {
-        anyhow::anyhow!(
+        anyhow::Error::new(super::UsageError(format!(
             "unknown format {name:?}; one of {}",
             Format::ALL.map(|f| f.extension()).join(", ")
-        )
+        )))
     })
 }
 
@@ -161,20 +170,22 @@ fn inspect_container(args: &InspectArgs) -> Result<()> {
         }
     }
     if args.json {
-        let report = json!({
-            "file": args.input.display().to_string(),
+        let mut report = json!({
+            "version": super::JSON_VERSION,
+            "input": args.input.display().to_string(),
             "format": "sfh",
+            "container_version": 1,
             "bytes": bytes,
             "header": header,
-            "curves": curves,
-            "elements": elements,
-            "verbatim_curves": verbatim,
-            "empty_curves": empty,
-            "source_points": source_points,
+            "curve_count": curves,
+            "element_count": elements,
+            "verbatim_count": verbatim,
+            "empty_curve_count": empty,
+            "source_point_count": source_points,
             "helix_length": length,
             "bytes_per_curve": if curves > 0 { bytes as f64 / curves as f64 } else { 0.0 },
-            "error": error.as_ref().map(|e| e.to_string()),
         });
+        with_failure(&mut report, error.as_ref());
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         println!(
@@ -239,19 +250,20 @@ fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
         }
     }
     if args.json {
-        let report = json!({
-            "file": args.input.display().to_string(),
+        let mut report = json!({
+            "version": super::JSON_VERSION,
+            "input": args.input.display().to_string(),
             "format": "sfh",
             "container_version": crate::codec::container::VERSION,
             "bytes": bytes,
             "header": header,
-            "curves": curves,
-            "blocks": reader.block_count(),
-            "empty_curves": empty,
-            "decoded_points": points,
+            "curve_count": curves,
+            "block_count": reader.block_count(),
+            "empty_curve_count": empty,
+            "decoded_point_count": points,
             "bytes_per_curve": if curves > 0 { bytes as f64 / curves as f64 } else { 0.0 },
-            "error": error.as_ref().map(|e| e.to_string()),
         });
+        with_failure(&mut report, error.as_ref());
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         println!(
@@ -316,7 +328,7 @@ fn preview(args: &InspectArgs, source: &std::path::Path, out: &std::path::Path) 
         .into_iter()
         .map(|c| c.points)
         .collect();
-    let format = args.format.as_deref().map(parse_format).transpose()?;
+    let format = args.from.as_deref().map(parse_format).transpose()?;
     // The source's bad curves are left out, as `compress --skip-bad` left
     // them out (without it, a source with bad curves could not have been
     // compressed): the curves then pair by index.

@@ -2,11 +2,12 @@
 //! curvature and torsion are linear in arc length (3D Euler spirals), one
 //! JSON Lines record per curve, on the chosen backend.
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::io_util::map_json_lines;
+use super::usage;
 use super::IntegrateArgs;
 use crate::backend::Backend;
 use crate::euler::{FrenetEnd, FrenetProblem};
@@ -41,16 +42,16 @@ struct EndOut {
 
 pub fn run(args: &IntegrateArgs, backend: &Backend) -> Result<()> {
     if args.steps == 0 {
-        bail!("--steps must be at least 1");
+        usage!("--steps must be at least 1");
     }
-    if args.samples == 1 {
-        bail!("--samples must be 0 (none) or at least 2 (both ends are included)");
+    if args.points == 1 {
+        usage!("--points must be 0 (none) or at least 2 (both ends are included)");
     }
     map_json_lines(&args.input, &args.output, parse_line, |problems| {
         let ends = backend.integrate(problems, args.steps)?;
-        let mut samples = if args.samples >= 2 {
-            let per = args.steps.div_ceil(args.samples - 1);
-            let s = backend.integrate_samples(problems, args.samples, per)?;
+        let mut samples = if args.points >= 2 {
+            let per = args.steps.div_ceil(args.points - 1);
+            let s = backend.integrate_samples(problems, args.points, per)?;
             Some(s.into_iter())
         } else {
             None

@@ -89,13 +89,13 @@ const JSONL_CHUNK: usize = 1 << 16;
 
 #[derive(Serialize)]
 struct Failure {
-    error: String,
+    failure: String,
 }
 
 /// One answer per input line, in order, for a JSON Lines input: each batch
 /// of lines is parsed in parallel, the records that parsed go to `solve`
 /// together (which returns one result per record, in order), and every
-/// line gets its answer or an `{"error":"line K: …"}` object. A bad line
+/// line gets its answer or a `{"version":1,"failure":"line K: …"}` object. A bad line
 /// never stops the others; the output is committed only at the end.
 pub fn map_json_lines<P, A>(
     input: &Option<PathBuf>,
@@ -172,12 +172,17 @@ where
 
 fn to_json<A: Serialize>(result: Result<A, String>, line_no: usize) -> String {
     let json = match result {
-        Ok(a) => serde_json::to_string(&a),
-        Err(reason) => serde_json::to_string(&Failure {
-            error: format!("line {line_no}: {reason}"),
-        }),
+        Ok(a) => serde_json::to_string(&super::versioned(&a)),
+        Err(reason) => serde_json::to_string(&super::versioned(&Failure {
+            failure: format!("line {line_no}: {reason}"),
+        })),
     };
-    json.unwrap_or_else(|e| format!("{{\"error\":\"line {line_no}: cannot serialise: {e}\"}}"))
+    json.unwrap_or_else(|e| {
+        format!(
+            "{{\"version\":{},\"failure\":\"line {line_no}: cannot serialise: {e}\"}}",
+            super::JSON_VERSION
+        )
+    })
 }
 
 /// Report what a run drops (see `io::Format::losses`, `io::source_losses`)

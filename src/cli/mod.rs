@@ -26,6 +26,16 @@ use clap::{Parser, Subcommand, ValueEnum};
 use crate::backend::{Backend, BackendChoice, PrecisionChoice};
 use crate::helix::Relaxation;
 
+/// What the exit status means, for every command (also in --help).
+pub const EXIT_CODES: &str = "Exit status: 0 done; 1 the input or the run failed (an \
+unreadable or bad file, a curve that cannot be fitted, a write that failed); 2 usage (an \
+unknown or malformed option, a value out of range, options that do not go together).";
+
+/// The version of every JSON document the commands write (the `"version"`
+/// key; `docs/json.md`): raised when a key is renamed, removed or changes
+/// its meaning.
+pub const JSON_VERSION: u32 = 1;
+
 #[derive(Parser, Debug)]
 #[command(
     name = "strandfit",
@@ -36,21 +46,72 @@ pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
     /// Worker threads (default: all cores).
-    #[arg(long, global = true)]
-    pub threads: Option<usize>,
+    #[arg(long, global = true, value_parser = clap::value_parser!(u64).range(1..))]
+    pub threads: Option<u64>,
+}
+
+/// The engine options, offered by the commands that run on one.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct BackendArgs {
     /// Engine for batch work: the f64 CPU reference, the GPU (wgpu/Vulkan),
     /// or auto (a hardware GPU if one exists, else the CPU; software
     /// adapters such as lavapipe only when asked for with --backend gpu or
     /// STRANDFIT_ADAPTER). The choice is reported on stderr.
-    #[arg(long, global = true, value_enum, default_value_t = BackendArg::Auto)]
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
     pub backend: BackendArg,
     /// GPU kernel precision (auto: f64 where the adapter has SHADER_F64).
-    #[arg(long, global = true, value_enum, default_value_t = PrecisionArg::Auto)]
+    #[arg(long, value_enum, default_value_t = PrecisionArg::Auto)]
     pub precision: PrecisionArg,
     /// Also show what the GPU driver stack prints while the backend is
     /// chosen (Vulkan loader and driver messages; hidden otherwise).
-    #[arg(long, short = 'v', global = true)]
+    #[arg(long, short = 'v')]
     pub verbose: bool,
+}
+
+/// A command line that asks for something impossible: a value out of
+/// range, options that do not go together. Exits with status 2, as clap's
+/// own usage errors do.
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// `return Err(UsageError(format!(…)))`: a usage error (exit status 2).
+macro_rules! usage {
+    ($($t:tt)*) => {
+        return Err(anyhow::Error::new($crate::cli::UsageError(format!($($t)*))))
+    };
+}
+pub(crate) use usage;
+
+/// Wrap a JSON answer with the schema version: `{"version":1, …}`.
+#[derive(serde::Serialize)]
+pub(crate) struct Versioned<'a, A: serde::Serialize> {
+    version: u32,
+    #[serde(flatten)]
+    body: &'a A,
+}
+
+pub(crate) fn versioned<A: serde::Serialize>(body: &A) -> Versioned<'_, A> {
+    Versioned {
+        version: JSON_VERSION,
+        body,
+    }
+}
+
+/// The command line's definition, with the exit codes after every
+/// command's help.
+pub fn command() -> clap::Command {
+    use clap::CommandFactory;
+    Cli::command()
+        .after_help(EXIT_CODES)
+        .mut_subcommands(|c| c.after_help(EXIT_CODES))
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
@@ -67,9 +128,9 @@ pub enum PrecisionArg {
     F64,
 }
 
-impl Cli {
+impl BackendArgs {
     /// Open the chosen backend.
-    pub fn backend(&self) -> anyhow::Result<Backend> {
+    pub fn open(&self) -> anyhow::Result<Backend> {
         let choice = match self.backend {
             BackendArg::Cpu => BackendChoice::Cpu,
             BackendArg::Gpu => BackendChoice::Gpu,
@@ -151,9 +212,12 @@ pub struct HelixArgs {
     /// Output file (absent: standard output). Written atomically.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Relative co-helicity tolerance |<p1-p0, t1-t0>|/(|p1-p0||t1-t0|).
+    /// Relative co-helicity tolerance |<p1-p0, t1-t0>|/(|p1-p0||t1-t0|)
+    /// (dimensionless; --tolerance elsewhere is a distance).
     #[arg(long, default_value_t = crate::helix::DEFAULT_COHELICAL_TOL)]
-    pub tolerance: f64,
+    pub cohelical_tolerance: f64,
+    #[command(flatten)]
+    pub engine: BackendArgs,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
@@ -191,6 +255,8 @@ pub struct FitArgs {
     /// its own arc length).
     #[arg(long, default_value_t = 32)]
     pub samples_per_element: usize,
+    #[command(flatten)]
+    pub engine: BackendArgs,
 }
 
 #[derive(clap::Args, Debug)]
@@ -198,11 +264,13 @@ pub struct SampleArgs {
     /// Input JSON file, as for `fit` ("-" or absent: standard input).
     pub input: Option<PathBuf>,
     /// Number of equal arc-length intervals N (N + 1 points per spline).
-    #[arg(short = 'n', long)]
+    #[arg(long)]
     pub intervals: usize,
     /// Output JSON file (absent: standard output). Written atomically.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub engine: BackendArgs,
 }
 
 #[derive(clap::Args, Debug)]
@@ -218,6 +286,8 @@ pub struct EvaluateArgs {
     /// Output JSON file (absent: standard output). Written atomically.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub engine: BackendArgs,
 }
 
 #[derive(clap::Args, Debug)]
@@ -228,14 +298,16 @@ pub struct IntegrateArgs {
     /// Simpson; error ≈ C (Θ/steps)⁴, Θ the total turning).
     #[arg(long, default_value_t = 64)]
     pub steps: usize,
-    /// Also write this many points and unit tangents per curve, equally
-    /// spaced in arc length, ends included (0: none). Steps per interval are
-    /// ⌈steps/(samples − 1)⌉.
+    /// Also write M points and unit tangents per curve, equally spaced in
+    /// arc length, ends included (0: none). Steps per interval are
+    /// ⌈steps/(M − 1)⌉.
     #[arg(short = 'm', long, default_value_t = 0)]
-    pub samples: usize,
+    pub points: usize,
     /// Output file (absent: standard output). Written atomically.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub engine: BackendArgs,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
@@ -306,6 +378,10 @@ pub struct CompressArgs {
     pub json: bool,
     #[command(flatten)]
     pub care: CareArgs,
+    /// The codec's candidate checks run on the GPU only with --backend gpu
+    /// (auto keeps compress on the CPU: docs/reference.md, "Backends").
+    #[command(flatten)]
+    pub engine: BackendArgs,
 }
 
 /// What to do with bad curves and with data the output cannot hold.
@@ -401,8 +477,10 @@ pub struct CompleteArgs {
     #[arg(long)]
     pub length: Option<f64>,
     /// Also write M points per curve, ends included (0: none).
-    #[arg(long, default_value_t = 0)]
-    pub samples: usize,
+    #[arg(short = 'm', long, default_value_t = 0)]
+    pub points: usize,
+    #[command(flatten)]
+    pub engine: BackendArgs,
 }
 
 #[derive(clap::Args, Debug)]
@@ -416,13 +494,13 @@ pub struct MotionArgs {
     pub output: Option<PathBuf>,
     /// Also write M samples (position, f1, f2, f3) per stream, equally
     /// spaced in the chord-length parameter, ends included (0: none).
-    #[arg(long, default_value_t = 0)]
-    pub samples: usize,
+    #[arg(short = 'm', long, default_value_t = 0)]
+    pub points: usize,
     /// Read and write JSON Lines, one stream per line.
     #[arg(long)]
     pub lines: bool,
     /// Also write the paths with their frames as a legacy VTK POLYDATA file
-    /// (for ParaView): --samples points per stream, or 20 per segment.
+    /// (for ParaView): --points points per stream, or 20 per segment.
     #[arg(long)]
     pub vtk: Option<PathBuf>,
 }
@@ -512,9 +590,9 @@ pub struct InspectArgs {
     /// Curves drawn by --preview at most (the first ones).
     #[arg(long, default_value_t = 2000)]
     pub preview_curves: u64,
-    /// Its format (default: from the extension): tck, trk, trx, vtk, hair, json, csv.
+    /// Input format (default: from the extension): tck, trk, trx, vtk, hair, json, csv.
     #[arg(long)]
-    pub format: Option<String>,
+    pub from: Option<String>,
     /// Machine-readable report on standard output.
     #[arg(long)]
     pub json: bool,
@@ -541,7 +619,7 @@ pub struct ConvertArgs {
 pub struct BenchArgs {
     /// Number of synthetic splines.
     #[arg(long, default_value_t = 20_000)]
-    pub curves: usize,
+    pub splines: usize,
     /// Helix elements per curve.
     #[arg(short = 'n', long, default_value_t = 20)]
     pub elements: usize,
@@ -551,6 +629,8 @@ pub struct BenchArgs {
     /// Timed repetitions (the best is reported with the median).
     #[arg(long, default_value_t = 5)]
     pub repeat: usize,
+    #[command(flatten)]
+    pub engine: BackendArgs,
 }
 
 /// Run the command line; returns the process exit code.
@@ -592,30 +672,34 @@ pub fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     clean_up_on_signals_and_panics();
-    let cli = Cli::parse();
+    let cli = {
+        use clap::FromArgMatches;
+        let matches = command().get_matches();
+        Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+    };
     if let Some(n) = cli.threads {
         if let Err(e) = rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
+            .num_threads(n as usize)
             .build_global()
         {
-            eprintln!("error: cannot set {n} threads: {e}");
-            return ExitCode::from(2);
+            eprintln!("error: cannot start {n} threads: {e}");
+            return ExitCode::FAILURE;
         }
     }
     let result = match &cli.command {
-        Command::Helix(a) => cli.backend().and_then(|b| helix_cmd::run(a, &b)),
-        Command::Fit(a) => cli.backend().and_then(|b| fit_cmd::run(a, &b)),
-        Command::Sample(a) => cli.backend().and_then(|b| sample_cmd::run(a, &b)),
-        Command::Evaluate(a) => cli.backend().and_then(|b| evaluate_cmd::run(a, &b)),
-        Command::Integrate(a) => cli.backend().and_then(|b| integrate_cmd::run(a, &b)),
-        Command::Complete(a) => cli.backend().and_then(|b| complete_cmd::run(a, &b)),
+        Command::Helix(a) => a.engine.open().and_then(|b| helix_cmd::run(a, &b)),
+        Command::Fit(a) => a.engine.open().and_then(|b| fit_cmd::run(a, &b)),
+        Command::Sample(a) => a.engine.open().and_then(|b| sample_cmd::run(a, &b)),
+        Command::Evaluate(a) => a.engine.open().and_then(|b| evaluate_cmd::run(a, &b)),
+        Command::Integrate(a) => a.engine.open().and_then(|b| integrate_cmd::run(a, &b)),
+        Command::Complete(a) => a.engine.open().and_then(|b| complete_cmd::run(a, &b)),
         Command::Motion(a) => motion_cmd::run(a),
         Command::Sketch(a) => sketch_cmd::run(a),
         // The codec's checks run on the GPU only when asked for: its GPU
         // path gives the same bytes but is not yet measured faster than the
         // CPU's (docs/reference.md, "Backends"), so auto keeps compress on the CPU.
-        Command::Compress(a) if cli.backend == BackendArg::Gpu => {
-            cli.backend().and_then(|b| compress_cmd::run(a, &b))
+        Command::Compress(a) if a.engine.backend == BackendArg::Gpu => {
+            a.engine.open().and_then(|b| compress_cmd::run(a, &b))
         }
         Command::Compress(a) => compress_cmd::run(a, &Backend::Cpu),
         Command::Decompress(a) => decompress_cmd::run(a),
@@ -623,10 +707,14 @@ pub fn main() -> ExitCode {
         Command::Convert(a) => convert_cmd::run(a),
         Command::Split(a) => shards_cmd::split(a),
         Command::Merge(a) => shards_cmd::merge(a),
-        Command::Bench(a) => cli.backend().and_then(|b| bench_cmd::run(a, &b)),
+        Command::Bench(a) => a.engine.open().and_then(|b| bench_cmd::run(a, &b)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<UsageError>().is_some() => {
+            eprintln!("error: {e:#}\n\nFor more information, try '--help'.");
+            ExitCode::from(2)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

@@ -12,12 +12,13 @@
 
 use std::path::Path;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::io_util::{input_name, map_json_lines, read_input, Output};
+use super::usage;
 use super::MotionArgs;
 use crate::io::vtk_frames::{write_framed_paths, FramedPath};
 use crate::rrmf::{default_frame, minaj2_references, validate_points, RrmfSpline};
@@ -209,8 +210,8 @@ fn write_vtk(path: &Path, paths: &[FramedPath]) -> Result<()> {
 }
 
 pub fn run(args: &MotionArgs) -> Result<()> {
-    if args.samples == 1 {
-        bail!("--samples must be 0 (none) or at least 2");
+    if args.points == 1 {
+        usage!("--points must be 0 (none) or at least 2");
     }
     let lines = args.lines
         || args.input.as_ref().is_some_and(|p| {
@@ -230,12 +231,12 @@ pub fn run(args: &MotionArgs) -> Result<()> {
                 let built: Vec<Result<RrmfSpline, String>> =
                     streams.par_iter().map(solve).collect();
                 if args.vtk.is_some() {
-                    paths.extend(built.iter().flatten().map(|m| framed(m, args.samples)));
+                    paths.extend(built.iter().flatten().map(|m| framed(m, args.points)));
                 }
                 Ok(built
                     .into_iter()
                     .zip(streams)
-                    .map(|(r, s)| r.map(|m| answer(s.id.clone(), &m, args.samples)))
+                    .map(|(r, s)| r.map(|m| answer(s.id.clone(), &m, args.points)))
                     .collect())
             },
         )?;
@@ -249,12 +250,13 @@ pub fn run(args: &MotionArgs) -> Result<()> {
         format!("{name}: expected {{\"points\":[[x,y,z],…], \"frame\"?, \"c\"?, \"tangents\"?}} (use --lines for JSON Lines)")
     })?;
     let motion = solve(&stream).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    let out_doc = answer(stream.id.clone(), &motion, args.samples);
+    let out_doc = answer(stream.id.clone(), &motion, args.points);
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &out_doc).context("cannot write output")?;
+    serde_json::to_writer(out.writer(), &super::versioned(&out_doc))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     if let Some(v) = &args.vtk {
-        write_vtk(v, &[framed(&motion, args.samples)])?;
+        write_vtk(v, &[framed(&motion, args.points)])?;
     }
     out.commit()
 }

@@ -1,12 +1,13 @@
 //! `strandfit sample`: N + 1 points with unit tangents equally spaced in arc
 //! length on each Bézier spline (step 1 of the fit), on the chosen backend.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::fit_cmd::read_splines;
 use super::io_util::Output;
+use super::usage;
 use super::SampleArgs;
 use crate::backend::Backend;
 
@@ -24,7 +25,7 @@ struct SplineOut {
 
 pub fn run(args: &SampleArgs, backend: &Backend) -> Result<()> {
     if args.intervals == 0 {
-        bail!("--intervals must be at least 1");
+        usage!("--intervals must be at least 1");
     }
     let (ids, splines) = read_splines(&args.input)?;
     let samples = backend.sample(&splines, args.intervals)?;
@@ -38,7 +39,8 @@ pub fn run(args: &SampleArgs, backend: &Backend) -> Result<()> {
         })
         .collect();
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer(out.writer(), &OutputDoc { splines }).context("cannot write output")?;
+    serde_json::to_writer(out.writer(), &super::versioned(&OutputDoc { splines }))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
 }

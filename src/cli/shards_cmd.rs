@@ -9,9 +9,10 @@ use crate::codec::shards::{self, Shard};
 
 #[derive(Serialize)]
 struct Report<'a> {
-    input: Vec<String>,
+    version: u32,
+    inputs: Vec<String>,
     output: String,
-    curves: u64,
+    curve_count: u64,
     shards: &'a [Shard],
 }
 
@@ -20,9 +21,10 @@ pub fn split(args: &SplitArgs) -> Result<()> {
     let curves = out.iter().map(|s| s.curves).sum();
     if args.json {
         let r = Report {
-            input: vec![args.input.display().to_string()],
+            version: super::JSON_VERSION,
+            inputs: vec![args.input.display().to_string()],
             output: args.output.display().to_string(),
-            curves,
+            curve_count: curves,
             shards: &out,
         };
         println!("{}", serde_json::to_string_pretty(&r)?);
@@ -48,13 +50,14 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     let curves = parts.iter().map(|s| s.curves).sum();
     if args.json {
         let r = Report {
-            input: args
+            version: super::JSON_VERSION,
+            inputs: args
                 .inputs
                 .iter()
                 .map(|p| p.display().to_string())
                 .collect(),
             output: args.output.display().to_string(),
-            curves,
+            curve_count: curves,
             shards: &parts,
         };
         println!("{}", serde_json::to_string_pretty(&r)?);

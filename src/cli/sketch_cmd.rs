@@ -14,11 +14,12 @@
 
 use std::f64::consts::PI;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use glam::DVec2;
 use serde::Serialize;
 
 use super::io_util::Output;
+use super::usage;
 use super::{ResampleArg, SketchArgs};
 use crate::io::sketch::{read_sketch, write_preview_svg};
 use crate::sketch::{lift_sketch, refit_g1, G1Refit, Resampling, SketchLift, SketchOptions};
@@ -39,7 +40,8 @@ struct HelixOut {
     t_end: f64,
     first_vertex: usize,
     last_vertex: usize,
-    max_error: f64,
+    /// The largest distance of its vertices from the projected helix.
+    max_distance: f64,
 }
 
 #[derive(Serialize)]
@@ -56,15 +58,18 @@ struct SketchOut {
     resampled: bool,
     /// `densify` or `uniform`; applied only where `resampled`.
     resampling: &'static str,
-    /// The coverage threshold used, in the drawing's units.
-    emax: f64,
-    /// The drawing's noise as estimated (per coordinate, drawing units).
-    noise: f64,
+    /// E_max as a distance: `--emax` times the drawing's length, or (by
+    /// default) the larger of 0.1 % of it and 5 times the noise.
+    emax_distance: f64,
+    /// The drawing's noise as estimated (standard deviation per
+    /// coordinate, in the drawing's units).
+    noise_distance: f64,
     alpha_t: f64,
     helices: Vec<HelixOut>,
     junctions: Vec<JunctionOut>,
     max_tangent_angle_deg: f64,
-    projection_error: ErrorOut,
+    /// How far the drawing is from the projected helices.
+    projection: ProjectionOut,
     fine_fit: FineOut,
     points_3d: Vec<[f64; 3]>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -75,7 +80,7 @@ struct SketchOut {
 struct G1Out {
     tolerance: f64,
     within_tolerance: bool,
-    elements: usize,
+    element_count: usize,
     /// The chain's distance from the lifted polyline (3D).
     distance_3d: f64,
     /// How far the chain's projection is from the drawing (in order).
@@ -101,7 +106,7 @@ fn g1_answer(g: &G1Refit, vertices: usize) -> G1Out {
     G1Out {
         tolerance: g.tolerance,
         within_tolerance: g.within_tolerance,
-        elements: g.chain.len(),
+        element_count: g.chain.len(),
         distance_3d: g.distance_3d,
         projection_distance: g.projection_distance,
         continuity_gap: g.continuity.0,
@@ -127,10 +132,11 @@ fn g1_answer(g: &G1Refit, vertices: usize) -> G1Out {
 }
 
 #[derive(Serialize)]
-struct ErrorOut {
-    max: f64,
-    rms: f64,
-    max_relative: f64,
+struct ProjectionOut {
+    max_distance: f64,
+    rms_distance: f64,
+    /// `max_distance` over the drawing's length.
+    max_relative_distance: f64,
 }
 
 #[derive(Serialize)]
@@ -159,7 +165,7 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
             t_end: h.t_end,
             first_vertex: h.first,
             last_vertex: h.last,
-            max_error: h.max_error,
+            max_distance: h.max_error,
         })
         .collect();
     let junctions: Vec<JunctionOut> = r
@@ -179,8 +185,8 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
             Resampling::Densify => "densify",
             Resampling::Uniform => "uniform",
         },
-        emax: r.emax,
-        noise: r.noise,
+        emax_distance: r.emax,
+        noise_distance: r.noise,
         alpha_t: opts.alpha_t,
         helices,
         max_tangent_angle_deg: junctions
@@ -188,10 +194,10 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
             .map(|j| j.tangent_angle_deg)
             .fold(0.0, f64::max),
         junctions,
-        projection_error: ErrorOut {
-            max: r.max_error,
-            rms: r.rms_error,
-            max_relative: r.max_error / r.length,
+        projection: ProjectionOut {
+            max_distance: r.max_error,
+            rms_distance: r.rms_error,
+            max_relative_distance: r.max_error / r.length,
         },
         fine_fit: FineOut {
             iterations: r.fine_fit.iterations,
@@ -227,10 +233,10 @@ pub fn run(args: &SketchArgs) -> Result<()> {
         ..Default::default()
     };
     if opts.emax.is_some_and(|e| !(e > 0.0 && e < 1.0)) {
-        bail!("--emax must be in (0, 1): a fraction of the drawing's length");
+        usage!("--emax must be in (0, 1): a fraction of the drawing's length");
     }
     if !(opts.alpha_t >= 0.0 && opts.alpha_t < 1.0) {
-        bail!("--alpha-t must be in [0, 1)");
+        usage!("--alpha-t must be in [0, 1)");
     }
     let points = read_sketch(&args.input)?;
     let name = args.input.display().to_string();
@@ -243,7 +249,7 @@ pub fn run(args: &SketchArgs) -> Result<()> {
     let g1 = if args.g1 {
         let t = args.g1_tolerance.unwrap_or(r.emax);
         if !(t > 0.0 && t.is_finite()) {
-            bail!("--g1-tolerance must be positive and finite");
+            usage!("--g1-tolerance must be positive and finite");
         }
         let g = refit_g1(&r, t).with_context(|| format!("{name}: G1 re-fit failed"))?;
         Some(g1_answer(&g, r.points_2d.len()))
@@ -253,7 +259,8 @@ pub fn run(args: &SketchArgs) -> Result<()> {
     let mut doc = answer(name.clone(), &r, &opts);
     doc.g1 = g1;
     let mut out = Output::create(&args.output)?;
-    serde_json::to_writer_pretty(out.writer(), &doc).context("cannot write output")?;
+    serde_json::to_writer_pretty(out.writer(), &super::versioned(&doc))
+        .context("cannot write output")?;
     out.writer().write_all(b"\n")?;
     out.commit()
 }

@@ -22,7 +22,10 @@ pub struct Shard {
     /// Index of its first curve in the input (for [`split`]), or in the
     /// output (for the inputs of [`merge`]).
     pub first: u64,
+    /// (`curve_count` and `block_count` in `split`/`merge --json`.)
+    #[serde(rename = "curve_count")]
     pub curves: u64,
+    #[serde(rename = "block_count")]
     pub blocks: usize,
     pub bytes: u64,
 }

@@ -293,7 +293,7 @@ fn coarse_curls_are_coded_by_screw_prediction_and_smaller() {
             DVec3::new(3.0 * a.cos(), 3.0 * a.sin(), 0.6 * a)
         })
         .collect();
-    let block = check_block(&[curl.clone()], tol);
+    let block = check_block(std::slice::from_ref(&curl), tol);
     assert_eq!(block.kinds, vec![1], "coded as points");
     // The same grid coded with second order instead costs far more.
     let half = quantise::lattice_half(tol, 64.0).unwrap();

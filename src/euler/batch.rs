@@ -103,7 +103,7 @@ impl State {
     /// keep a forward run if best, then the next start or done.
     fn end_start(&mut self, opts: &SolveOptions) {
         let done = !self.reversed && converged(self.run.err, opts);
-        if !self.reversed && self.best.as_ref().map_or(true, |b| self.run.err < b.1.err) {
+        if !self.reversed && self.best.as_ref().is_none_or(|b| self.run.err < b.1.err) {
             self.best = Some((self.sc.take(), self.run));
         }
         let next = self.run.start + 1;

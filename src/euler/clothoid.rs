@@ -113,8 +113,8 @@ pub fn fresnel_cs(x: f64) -> (f64, f64) {
         loop {
             term *= f / k as f64;
             let t = term / (2 * k + 1) as f64;
-            let sign = if (k / 2) % 2 == 0 { 1.0 } else { -1.0 };
-            if k % 2 == 0 {
+            let sign = if (k / 2).is_multiple_of(2) { 1.0 } else { -1.0 };
+            if k.is_multiple_of(2) {
                 c += sign * t;
             } else {
                 s += sign * t;

@@ -98,7 +98,7 @@ pub fn paper_spiral(
                     continue;
                 }
                 let e = epsilon(&q, &sc, integ);
-                if e < err && best.map_or(true, |(_, b)| e < b) {
+                if e < err && best.is_none_or(|(_, b)| e < b) {
                     best = Some((sign, e));
                 }
             }
@@ -109,7 +109,7 @@ pub fn paper_spiral(
         // Compare each single move with all of them together.
         let mut choice: Option<([f64; 5], f64)> = None;
         for &(k, sign, e) in &moves {
-            if choice.as_ref().map_or(true, |c| e < c.1) {
+            if choice.as_ref().is_none_or(|c| e < c.1) {
                 let mut q = p;
                 q[k] += sign * delta;
                 choice = Some((q, e));
@@ -122,7 +122,7 @@ pub fn paper_spiral(
             }
             if admissible(&q) {
                 let e = epsilon(&q, &sc, integ);
-                if choice.as_ref().map_or(true, |c| e < c.1) {
+                if choice.as_ref().is_none_or(|c| e < c.1) {
                     choice = Some((q, e));
                 }
             }

@@ -604,7 +604,7 @@ pub fn solve_spiral(
         run.start = i;
         iterations += run.iterations;
         let done = converged(run.err, opts);
-        if best.as_ref().map_or(true, |b| run.err < b.1.err) {
+        if best.as_ref().is_none_or(|b| run.err < b.1.err) {
             best = Some((sc, run));
         }
         if done {

@@ -10,11 +10,16 @@ use super::Curve;
 /// Running statistics over the curves of one file.
 #[derive(Clone, Debug, Serialize)]
 pub struct CurveStats {
+    #[serde(rename = "curve_count")]
     pub curves: u64,
+    #[serde(rename = "point_count")]
     pub points: u64,
     /// Points per curve: min, median, max (0 for an empty file).
+    #[serde(rename = "point_count_min")]
     pub points_min: u64,
+    #[serde(rename = "point_count_median")]
     pub points_median: u64,
+    #[serde(rename = "point_count_max")]
     pub points_max: u64,
     /// Sum, min and max of the polyline arc lengths.
     pub length_total: f64,
@@ -26,9 +31,12 @@ pub struct CurveStats {
     pub bbox: Option<[[f64; 3]; 2]>,
     /// Curves without points, and with a single point (or only repeats of
     /// one point).
+    #[serde(rename = "empty_curve_count")]
     pub empty_curves: u64,
+    #[serde(rename = "single_point_curve_count")]
     pub single_point_curves: u64,
     /// Consecutive points that coincide exactly, over all curves.
+    #[serde(rename = "repeated_point_count")]
     pub repeated_points: u64,
     #[serde(skip)]
     counts: Vec<u32>,

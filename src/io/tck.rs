@@ -283,7 +283,7 @@ impl TckReader {
         if let Some(n) = count {
             let tb = dtype.triplet_bytes() as u64;
             let have = src.remaining();
-            if n.checked_mul(tb).map_or(true, |need| need > have) {
+            if n.checked_mul(tb).is_none_or(|need| need > have) {
                 return Err(IoError::new(
                     path,
                     format!(

@@ -430,7 +430,7 @@ impl Source {
                 }
             };
             let (start, csize, size) = (f.data_start(), f.compressed_size(), f.size());
-            if start.checked_add(csize).map_or(true, |end| end > file_len) {
+            if start.checked_add(csize).is_none_or(|end| end > file_len) {
                 return Err(bad(format!(
                     "its {csize} bytes at byte {start} run past the end of the archive ({file_len} bytes; truncated?)"
                 )));
@@ -957,7 +957,7 @@ fn read_group(
         ));
     }
     let w = an.dtype.size() as u64;
-    if e.size % w != 0 || e.size / w > nb_streamlines {
+    if !e.size.is_multiple_of(w) || e.size / w > nb_streamlines {
         return Err(bad(format!(
             "{} bytes are not whole {} indices, or list more members than the {nb_streamlines} streamlines",
             e.size,

@@ -544,7 +544,7 @@ impl Src {
     fn check_room(&self, n: u64, size: usize, what: &str) -> Result<(), IoError> {
         if self.binary {
             let need = n.checked_mul(size as u64);
-            if need.map_or(true, |b| b > self.remaining()) {
+            if need.is_none_or(|b| b > self.remaining()) {
                 return Err(self.err(format!(
                     "{what}: {n} values of {size} bytes do not fit in the {} bytes left in the file",
                     self.remaining()

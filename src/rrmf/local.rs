@@ -108,7 +108,7 @@ fn configure(u_hat2: Quat, s0: DVec3, s4: DVec3, phi2: f64) -> Option<Config> {
         let u1 = u_hat1 * Quat::exp(I, theta1);
         let sm = (sum * Quat::pure(I) * u1.conj()).v / sum_len;
         let score = want.map_or(0.0, |w| sm.dot(w));
-        if best.as_ref().map_or(true, |(s, _, _)| score > *s) {
+        if best.as_ref().is_none_or(|(s, _, _)| score > *s) {
             best = Some((score, theta1, u1));
         }
     }

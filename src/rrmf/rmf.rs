@@ -391,7 +391,7 @@ impl RrmfQuintic {
                     let want = target(t);
                     res = res.max((dw.div(w).im - want).abs() / (1.0 + want.abs()));
                 }
-                if res.is_finite() && best.map_or(true, |(r, _)| res < r) {
+                if res.is_finite() && best.is_none_or(|(r, _)| res < r) {
                     best = Some((res, m));
                 }
             }

@@ -125,7 +125,7 @@ impl BezierSpline {
         accuracy: f64,
     ) -> Result<Self, SplineError> {
         let n = points.len();
-        if n < 4 || (n - 1) % 3 != 0 {
+        if n < 4 || !(n - 1).is_multiple_of(3) {
             return Err(SplineError::BadControlPointCount(n));
         }
         if let Some(i) = points.iter().position(|p| !p.is_finite()) {

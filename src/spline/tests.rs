@@ -15,7 +15,7 @@ fn v(x: f64, y: f64, z: f64) -> DVec3 {
 /// compensated summation; error `O(n⁻⁴)` for a smooth integrand, and
 /// independent of the code under test (Bernstein `deriv`, no Gauss rule).
 fn simpson_len(c: &CubicBez, a: f64, b: f64, n: usize) -> f64 {
-    assert!(n % 2 == 0);
+    assert!(n.is_multiple_of(2));
     let h = (b - a) / n as f64;
     let f = |i: usize| c.deriv(a + h * i as f64).length();
     let (mut sum, mut comp) = (0.0f64, 0.0f64);
