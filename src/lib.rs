@@ -30,6 +30,7 @@ pub mod backend;
 pub mod cli;
 pub mod codec;
 pub mod compress;
+mod curve;
 pub mod euler;
 pub mod fit;
 pub mod gpu;
@@ -44,4 +45,10 @@ pub mod spline;
 pub mod synthetic;
 pub mod twin;
 
+pub use atph::AtphCurve;
+pub use curve::ParamCurve3;
+pub use euler::FrenetProblem;
 pub use glam::DVec3;
+pub use helix::{HelixElement, PiecewiseHelix};
+pub use rrmf::RrmfSpline;
+pub use spline::BezierSpline;
