@@ -281,7 +281,7 @@ fn completion(c: &mut Criterion) {
         b.iter(|| {
             let out: Vec<_> = few
                 .par_iter()
-                .map(|&(x0, t0, xf, tf)| paper_spiral(x0, t0, xf, tf, &paper))
+                .map(|p| paper_spiral(p.p0, p.t0, p.p1, p.t1, &paper))
                 .collect();
             black_box(out)
         })

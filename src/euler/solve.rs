@@ -466,11 +466,11 @@ pub(crate) fn starts(opts: &SolveOptions) -> usize {
 /// The problem a restart solves first: the forward problem with the turned
 /// normal, or the reversed problem ([`Restart::Reversed`]).
 pub(crate) fn restart_problem(
-    pair: &(DVec3, DVec3, DVec3, DVec3),
+    pair: &crate::pair::HermitePair,
     base: &Scaled,
     restart: Restart,
 ) -> Result<Scaled, SolveError> {
-    let &(x0, t0, xf, tf) = pair;
+    let (x0, t0, xf, tf) = (*pair).into();
     match restart {
         Restart::Reversed => Scaled::new(xf, -tf, x0, -t0, None),
         Restart::Turned(a) => {
@@ -486,12 +486,12 @@ pub(crate) fn restart_problem(
 /// Both problems share the scale `D` (`x_f − x₀` only changes sign), so the
 /// scaled parameters convert as the unscaled ones.
 pub(crate) fn forward_from_reversed(
-    pair: &(DVec3, DVec3, DVec3, DVec3),
+    pair: &crate::pair::HermitePair,
     rev: &Scaled,
     p: &[f64; 5],
     steps: usize,
 ) -> Result<(Scaled, [f64; 5]), SolveError> {
-    let &(x0, t0, xf, tf) = pair;
+    let (x0, t0, xf, tf) = (*pair).into();
     let end = rev.problem(p).integrate_unchecked(steps);
     let sc = Scaled::new(x0, t0, xf, tf, Some(end.frame[1]))?;
     let l = p[4];
@@ -575,7 +575,7 @@ pub fn solve_spiral(
     tf: DVec3,
     opts: &SolveOptions,
 ) -> Result<SpiralSolution, SolveError> {
-    let pair = (x0, t0, xf, tf);
+    let pair = crate::pair::HermitePair::new(x0, t0, xf, tf);
     let base = Scaled::new(x0, t0, xf, tf, opts.start_normal)?;
     // The best forward run so far, with its problem (`None`: `base`).
     let mut best: Option<(Option<Scaled>, Run)> = None;

@@ -47,18 +47,10 @@ pub const PARALLEL_EPS: f64 = 1e-12;
 /// miss `p₁`.
 pub const DEFAULT_COHELICAL_TOL: f64 = 1e-6;
 
-/// Two points with tangents: the data of one interpolation (tangents need
-/// not be unit).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HermitePair {
-    pub p0: DVec3,
-    pub t0: DVec3,
-    pub p1: DVec3,
-    pub t1: DVec3,
-}
+pub use crate::pair::HermitePair;
 
 impl HermitePair {
-    /// [`interpolate`] on this pair.
+    /// Ghosh's short helix [`interpolate`] on this pair.
     pub fn interpolate(&self, tol: f64) -> Result<ShortHelix, HelixError> {
         interpolate(self.p0, self.t0, self.p1, self.t1, tol)
     }
