@@ -27,6 +27,7 @@
 pub mod adaptive;
 pub mod atph;
 pub mod backend;
+mod batch;
 pub mod cli;
 pub mod codec;
 pub mod compress;
@@ -46,7 +47,10 @@ pub mod spline;
 pub mod synthetic;
 pub mod twin;
 
+pub use adaptive::{AdaptiveOptions, ChainFit, ElementCount};
 pub use atph::AtphCurve;
+pub use backend::{Backend, BackendChoice, PrecisionChoice};
+pub use batch::{compress_polylines, decompress_polylines, fit_polylines, BatchError, Polylines};
 pub use curve::ParamCurve3;
 pub use euler::FrenetProblem;
 pub use glam::DVec3;
