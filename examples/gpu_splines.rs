@@ -9,7 +9,7 @@
 
 use std::error::Error;
 
-use strandfit::fit::FitOptions;
+use strandfit::FitOptions;
 use strandfit::synthetic::synthetic_splines;
 use strandfit::{Backend, BackendChoice, ParamCurve3, PrecisionChoice};
 

@@ -3,7 +3,7 @@
 use std::f64::consts::TAU;
 
 use glam::DVec3;
-use strandfit::fit::{fit_spline, fit_splines, FitError, FitOptions};
+use strandfit::{fit_spline, fit_splines, FitError, FitOptions};
 use strandfit::helix::Relaxation;
 use strandfit::metrics::discrete_frechet;
 use strandfit::spline::BezierSpline;

@@ -12,7 +12,7 @@
 
 mod common;
 
-use strandfit::backend::{Backend, BackendChoice, PrecisionChoice};
+use strandfit::{Backend, BackendChoice, PrecisionChoice};
 use strandfit::euler::{solve_spirals, solve_spirals_lockstep, SolveOptions};
 use strandfit::synthetic::{random_spirals, spiral_end_pairs};
 
