@@ -9,8 +9,8 @@
 
 use std::error::Error;
 
-use strandfit::FitOptions;
 use strandfit::synthetic::synthetic_splines;
+use strandfit::FitOptions;
 use strandfit::{Backend, BackendChoice, ParamCurve3, PrecisionChoice};
 
 fn main() -> Result<(), Box<dyn Error>> {

@@ -73,6 +73,7 @@ pub enum Distance {
 /// Options of [`fit_polyline_chain`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdaptiveOptions {
+    /// How the element count is chosen.
     pub count: ElementCount,
     /// Schneider tolerance for the smoothing spline. Default: `T/2` with a
     /// tolerance (half the budget to smoothing, half to the helices),
@@ -87,6 +88,7 @@ pub struct AdaptiveOptions {
 }
 
 impl AdaptiveOptions {
+    /// Options for `count`, with the defaults of the fields.
     pub fn new(count: ElementCount) -> Self {
         AdaptiveOptions {
             count,
@@ -101,6 +103,7 @@ impl AdaptiveOptions {
 /// One fitted curve.
 #[derive(Clone, Debug)]
 pub struct ChainFit {
+    /// The fitted chain.
     pub chain: PiecewiseHelix,
     /// Upper bound on the continuous Fréchet distance between the chain and
     /// the input polyline (relative accuracy 1e-6 plus the sampling
@@ -118,12 +121,16 @@ pub struct ChainFit {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum AdaptiveError {
     #[error("{0}")]
+    /// The smoothing spline could not be fitted.
     Smoothing(#[from] PolylineFitError),
     #[error("smoothing spline: {0}")]
+    /// The smoothing spline is invalid.
     Spline(#[from] SplineError),
     #[error("{0}")]
+    /// The floating tangents fit failed.
     Fit(#[from] FitError),
     #[error("invalid option: {0}")]
+    /// An option is out of range.
     Options(&'static str),
 }
 

@@ -52,18 +52,23 @@ pub enum PrecisionChoice {
     /// `f64` where the adapter offers `SHADER_F64`, else `f32`.
     #[default]
     Auto,
+    /// `f32` kernels.
     F32,
+    /// `f64` kernels (needs `SHADER_F64`).
     F64,
 }
 
 /// An opened GPU and the precision its kernels run in (each kernel is
 /// compiled on first use and kept by the context).
 pub struct GpuEngine {
+    /// The GPU context (device, queue, pipeline cache).
     pub ctx: GpuContext,
+    /// The precision the kernels run in.
     pub precision: Precision,
 }
 
 impl GpuEngine {
+    /// Open the engine on `ctx` with the chosen precision (an error if `F64` is asked for and the adapter lacks it).
     pub fn new(ctx: GpuContext, precision: PrecisionChoice) -> Result<Self, GpuError> {
         let precision = match precision {
             PrecisionChoice::Auto => ctx.best_precision(),
@@ -82,7 +87,9 @@ impl GpuEngine {
 
 /// A resolved backend.
 pub enum Backend {
+    /// The `f64` CPU reference, on all cores (rayon).
     Cpu,
+    /// The GPU.
     Gpu(Box<GpuEngine>),
 }
 

@@ -90,9 +90,7 @@ impl<'a> Polylines<'a> {
 
     /// The curves in order.
     pub fn iter(&self) -> impl ExactSizeIterator<Item = &'a [DVec3]> + '_ {
-        self.offsets
-            .windows(2)
-            .map(|w| &self.positions[w[0]..w[1]])
+        self.offsets.windows(2).map(|w| &self.positions[w[0]..w[1]])
     }
 }
 
@@ -124,7 +122,11 @@ pub fn compress_polylines(
     backend: &Backend,
 ) -> Result<Vec<u8>, BatchError> {
     let meta = Metadata::new(Format::Json);
-    let header = CodecHeader::new(tolerance, SourceMeta::from_metadata(&meta, None), Vec::new());
+    let header = CodecHeader::new(
+        tolerance,
+        SourceMeta::from_metadata(&meta, None),
+        Vec::new(),
+    );
     let mut writer = CodecWriter::in_memory(&header);
     let mut reader = VecReader::new(
         meta,

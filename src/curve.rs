@@ -1,28 +1,6 @@
 //! [`ParamCurve3`]: the small interface every curve primitive of the crate
 //! implements — evaluation, unit tangent, arc length and sampling — so that
 //! code written once (error metrics, exporters, plots) works on all of them.
-//!
-//! **Parameter domain.** Every implementation takes `t ∈ [0, 1]` (values
-//! outside are clamped), the primitive's own parameter rescaled to that
-//! interval:
-//!
-//! | primitive                      | `t` is                                         |
-//! |--------------------------------|------------------------------------------------|
-//! | [`HelixElement`] (Ghosh helix) | arc length `s/L`                               |
-//! | [`PiecewiseHelix`]             | arc length `s/L` over the whole chain          |
-//! | [`FrenetProblem`] (Euler spiral) | arc length `s/L`                             |
-//! | [`AtphCurve`]                  | the curve's own `ξ ∈ [0, 1]`                   |
-//! | [`RrmfSpline`]                 | the global chord-length parameter `u/u_N`      |
-//! | [`BezierSpline`]               | `(i + tᵢ)/k` on segment `i` of `k`, local `tᵢ` |
-//!
-//! so `t` is proportional to arc length for the first three and not, in
-//! general, for the others. [`ParamCurve3::sample`] is always equally spaced
-//! in *arc length*, whatever the parameter.
-//!
-//! Some primitives have inherent methods of the same names with other
-//! conventions (e.g. [`PiecewiseHelix::tangent`] takes an arc length and
-//! returns an `Option`); inherent methods win method resolution, so call the
-//! trait's as `ParamCurve3::tangent(&c, t)` or through a generic `C: ParamCurve3`.
 
 use glam::DVec3;
 
@@ -32,8 +10,32 @@ use crate::helix::{HelixElement, PiecewiseHelix};
 use crate::rrmf::RrmfSpline;
 use crate::spline::BezierSpline;
 
-/// A parametric curve in 3D on `t ∈ [0, 1]` (see the [module docs](self)
-/// for what `t` is on each primitive).
+/// A parametric curve in 3D on `t ∈ [0, 1]`: the small interface every
+/// curve primitive of the crate implements — evaluation, unit tangent, arc
+/// length and sampling — so that code written once (error metrics,
+/// exporters, plots) works on all of them.
+///
+/// **Parameter domain.** Every implementation takes `t ∈ [0, 1]` (values
+/// outside are clamped), the primitive's own parameter rescaled to that
+/// interval:
+///
+/// | primitive                      | `t` is                                         |
+/// |--------------------------------|------------------------------------------------|
+/// | [`HelixElement`] (Ghosh helix) | arc length `s/L`                               |
+/// | [`PiecewiseHelix`]             | arc length `s/L` over the whole chain          |
+/// | [`FrenetProblem`] (Euler spiral) | arc length `s/L`                             |
+/// | [`AtphCurve`]                  | the curve's own `ξ ∈ [0, 1]`                   |
+/// | [`RrmfSpline`]                 | the global chord-length parameter `u/u_N`      |
+/// | [`BezierSpline`]               | `(i + tᵢ)/k` on segment `i` of `k`, local `tᵢ` |
+///
+/// so `t` is proportional to arc length for the first three and not, in
+/// general, for the others. [`ParamCurve3::sample`] is always equally spaced
+/// in *arc length*, whatever the parameter.
+///
+/// Some primitives have inherent methods of the same names with other
+/// conventions (e.g. [`PiecewiseHelix::tangent`] takes an arc length and
+/// returns an `Option`); inherent methods win method resolution, so call the
+/// trait's as `ParamCurve3::tangent(&c, t)` or through a generic `C: ParamCurve3`.
 ///
 /// ```
 /// use strandfit::{DVec3, HelixElement, ParamCurve3};

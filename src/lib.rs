@@ -58,7 +58,6 @@
 //! ```
 
 #![warn(missing_docs)]
-
 // Deliberate numerics idioms: constants written with all the digits their
 // source publishes; `!(x > 0.0)` comparisons that also reject NaN; index
 // loops over several arrays in lockstep, as the equations are written.
@@ -93,6 +92,7 @@ mod sampled;
 // engine and its kernels' CPU twins, and the synthetic data of the tests
 // and benchmarks. Public only for the binary, tests and benches.
 #[doc(hidden)]
+#[allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 pub mod cli;
 #[doc(hidden)]
 pub mod gpu;
@@ -104,8 +104,8 @@ pub mod synthetic;
 pub mod twin;
 
 pub use adaptive::{
-    chain_frechet, chain_samples, chain_within, fit_polyline_chain, AdaptiveError,
-    AdaptiveOptions, ChainFit, Distance, ElementCount,
+    chain_frechet, chain_samples, chain_within, fit_polyline_chain, AdaptiveError, AdaptiveOptions,
+    ChainFit, Distance, ElementCount,
 };
 pub use atph::AtphCurve;
 pub use backend::{Backend, BackendChoice, GpuEngine, GpuError, PrecisionChoice, Samples};

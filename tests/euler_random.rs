@@ -25,9 +25,9 @@
 //! 978 of the 1,000 pairs of the test below converged, worst 6.0e-7; of
 //! seeds 1–2, 97.6% and 98.0%, worst 8.6e-7.
 
-use strandfit::Backend;
 use strandfit::euler::{solve_spiral, solve_spirals, SolveOptions, SpiralSolution};
 use strandfit::synthetic::{random_spirals, spiral_end_pairs};
+use strandfit::Backend;
 use strandfit::HermitePair as Pair;
 
 /// `max(|x(L) − x_f| / |x_f − x₀|, |T(L) − T_f|)` of a solution, its end

@@ -12,9 +12,9 @@
 
 mod common;
 
-use strandfit::{Backend, BackendChoice, PrecisionChoice};
 use strandfit::euler::{solve_spirals, solve_spirals_lockstep, SolveOptions};
 use strandfit::synthetic::{random_spirals, spiral_end_pairs};
+use strandfit::{Backend, BackendChoice, PrecisionChoice};
 
 #[test]
 fn batched_spiral_solve_gpu_matches_cpu() {

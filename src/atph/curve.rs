@@ -20,9 +20,11 @@ use super::bernstein::{Bernstein, Sign};
 use super::tangent::SphericalTangent;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// A spatial ATPH curve on `ξ ∈ [0, 1]` (module docs): start point, unit tangent field and signed speed.
 pub struct AtphCurve {
     /// `r₀ = r(0)`.
     pub start: DVec3,
+    /// The unit tangent field `T(ξ)` (latitude and azimuth linear in `ξ`).
     pub tangent: SphericalTangent,
     /// `ρ`, the signed speed `r′ = ρT`.
     pub rho: Bernstein,

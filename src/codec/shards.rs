@@ -18,12 +18,16 @@ use crate::io::IoError;
 /// One output of [`split`] or [`merge`].
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct Shard {
+    /// The shard's file.
     pub path: PathBuf,
     /// Index of its first curve in the input (for [`split`]), or in the
     /// output (for the inputs of [`merge`]).
     pub first: u64,
+    /// Number of curves in it.
     pub curves: u64,
+    /// Number of blocks in it.
     pub blocks: usize,
+    /// Its size in bytes.
     pub bytes: u64,
 }
 

@@ -20,12 +20,15 @@ use crate::io::{Curve, CurveReader, CurveWriter, IoError};
 /// What [`compress_stream`] did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CompressSummary {
+    /// Curves compressed.
     pub curves: u64,
+    /// Input points.
     pub points: u64,
     /// Points the default decompression writes.
     pub output_points: u64,
     /// Curves by how they are coded: empty, points, arcs, raw.
     pub kinds: [u64; 4],
+    /// Bytes written.
     pub bytes: u64,
     /// Candidate elements checked in batches by the backend (0 on the
     /// CPU, where each curve checks its own).

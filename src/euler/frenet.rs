@@ -75,16 +75,24 @@ pub const FRAME_TOL: f64 = 1e-9;
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
 pub enum FrenetError {
     #[error("non-finite start point, frame, parameter or scaled rate")]
+    /// A start value is not finite.
     NonFinite,
     #[error("negative length {0}")]
+    /// The length is negative.
     NegativeLength(f64),
     #[error(
         "start frame is not orthonormal: max |FᵀF − I| = {deviation:.3e} exceeds {FRAME_TOL:e}"
     )]
-    FrameNotOrthonormal { deviation: f64 },
+    /// The start frame is not orthonormal.
+    FrameNotOrthonormal {
+        /// `max |FᵀF − I|`.
+        deviation: f64,
+    },
     #[error("start frame is left-handed: B = −T × N")]
+    /// The start frame is left-handed (`B = −T × N`).
     LeftHanded,
     #[error("the step count must be at least 1")]
+    /// The step count is zero.
     ZeroSteps,
 }
 
@@ -110,7 +118,9 @@ pub struct FrenetProblem {
 /// Point and frame `[T, N, B]` at one arc length.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrenetEnd {
+    /// `x(s)`.
     pub point: DVec3,
+    /// `[T, N, B](s)`.
     pub frame: [DVec3; 3],
 }
 

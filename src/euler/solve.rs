@@ -144,8 +144,11 @@ impl Default for SolveOptions {
 /// `steps` used), the iterations used (all runs) and how it was found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpiralSolution {
+    /// The spiral found.
     pub problem: FrenetProblem,
+    /// The residual of the end conditions (relative to the chord) at the solution.
     pub error: f64,
+    /// Levenberg–Marquardt iterations, over all starts.
     pub iterations: usize,
     /// Integration steps of the final run (after the truncation check).
     pub steps: usize,
@@ -162,10 +165,13 @@ pub struct SpiralSolution {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SolveError {
     #[error("the end points coincide")]
+    /// The end points coincide.
     Coincident,
     #[error("an input is not finite, or a tangent is zero")]
+    /// An input is not finite, or a tangent is zero.
     BadInput,
     #[error("integration: {0}")]
+    /// The Frenet integration refused a problem.
     Frenet(#[from] FrenetError),
 }
 

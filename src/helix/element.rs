@@ -74,8 +74,11 @@ pub fn sinc_defect3(x: f64) -> f64 {
 /// An orthonormal Frenet-type frame `(t, n, b)`, `b = t × n`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
+    /// Unit tangent `t`.
     pub tangent: DVec3,
+    /// Unit principal normal `n`.
     pub normal: DVec3,
+    /// Unit binormal `b = t × n`.
     pub binormal: DVec3,
 }
 

@@ -10,15 +10,21 @@ use super::Curve;
 /// Running statistics over the curves of one file.
 #[derive(Clone, Debug, Serialize)]
 pub struct CurveStats {
+    /// Number of curves.
     pub curves: u64,
+    /// Number of points.
     pub points: u64,
     /// Points per curve: min, median, max (0 for an empty file).
     pub points_min: u64,
+    /// Median points per curve.
     pub points_median: u64,
+    /// Most points in a curve.
     pub points_max: u64,
     /// Sum, min and max of the polyline arc lengths.
     pub length_total: f64,
+    /// Shortest polyline.
     pub length_min: f64,
+    /// Longest polyline.
     pub length_max: f64,
     /// Mean distance between consecutive distinct points.
     pub step_mean: f64,
@@ -27,6 +33,7 @@ pub struct CurveStats {
     /// Curves without points, and with a single point (or only repeats of
     /// one point).
     pub empty_curves: u64,
+    /// Curves of a single (possibly repeated) point.
     pub single_point_curves: u64,
     /// Consecutive points that coincide exactly, over all curves.
     pub repeated_points: u64,
