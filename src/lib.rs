@@ -54,7 +54,8 @@
 //! let chain = fit_spline(&spline, &FitOptions::new(8)).unwrap();
 //! assert_eq!(chain.len(), 8);
 //! assert!((chain.arc_length() - spline.arc_length()).abs() < 1e-2 * spline.arc_length());
-//! assert!(chain.eval(1.0).distance(DVec3::new(3.0, 0.0, 1.0)) < 1e-9);
+//! // The relaxation moves the break points a little, the ends included.
+//! assert!(chain.eval(1.0).distance(DVec3::new(3.0, 0.0, 1.0)) < 1e-2);
 //! ```
 
 #![warn(missing_docs)]
