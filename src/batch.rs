@@ -10,8 +10,8 @@ use rayon::prelude::*;
 use crate::adaptive::{fit_polyline_chain, AdaptiveError, AdaptiveOptions, ChainFit};
 use crate::backend::{Backend, GpuError};
 use crate::codec::batch::ArcChecker;
-use crate::codec::container::{CodecHeader, CodecReader, CodecWriter};
-use crate::codec::stream::{compress_blocks, read_range};
+use crate::codec::container::{CodecHeader, CodecReader};
+use crate::codec::stream::{compress_to_bytes, read_range};
 use crate::io::container::SourceMeta;
 use crate::io::{Curve, Format, IoError, Metadata, VecReader};
 
@@ -127,7 +127,6 @@ pub fn compress_polylines(
         SourceMeta::from_metadata(&meta, None),
         Vec::new(),
     );
-    let mut writer = CodecWriter::in_memory(&header);
     let mut reader = VecReader::new(
         meta,
         curves
@@ -137,15 +136,12 @@ pub fn compress_polylines(
     );
     let checker = backend.arc_checker()?;
     let checker = checker.as_ref().map(|c| c as &dyn ArcChecker);
-    compress_blocks(
+    Ok(compress_to_bytes(
         &mut reader,
         Path::new(IN_MEMORY),
-        &mut writer,
         &header,
         checker,
-        &mut |_| {},
-    )?;
-    Ok(writer.finish_bytes()?)
+    )?)
 }
 
 /// Decode a container made by [`compress_polylines`] (or the bytes of any

@@ -84,6 +84,21 @@ fn sample_arclen(n: usize, length: f64, mut at: impl FnMut(f64) -> DVec3) -> Vec
     }
 }
 
+/// The `t ∈ [0, 1]` where the nondecreasing `f` reaches `target`, by 60
+/// halvings (to rounding in `t`).
+pub(crate) fn bisect_unit(f: impl Fn(f64) -> f64, target: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 #[inline]
 fn unit(t: f64) -> f64 {
     // NaN reads as 0, like the primitives' own clamps.
@@ -233,20 +248,12 @@ impl ParamCurve3 for RrmfSpline {
             }
             let c = &self.segments[i].curve.curve;
             let local = s - before;
-            let (mut lo, mut hi) = (0.0, 1.0);
-            if local >= lengths[i] {
-                lo = 1.0;
-                hi = 1.0;
-            }
-            for _ in 0..60 {
-                let mid = 0.5 * (lo + hi);
-                if c.arc_length_to(mid) < local {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            c.position(0.5 * (lo + hi))
+            let t = if local >= lengths[i] {
+                1.0
+            } else {
+                bisect_unit(|t| c.arc_length_to(t), local)
+            };
+            c.position(t)
         })
     }
 }

@@ -97,20 +97,31 @@ fn element(
     })
 }
 
+/// Helix elements starting within `reach` of the origin, `0 ≤ κ < kappa`,
+/// `|τ| < tau`, length in `length` (`None`: a degenerate random frame).
+fn elements(
+    reach: f64,
+    kappa: f64,
+    tau: f64,
+    length: std::ops::Range<f64>,
+) -> impl Strategy<Value = Option<HelixElement>> {
+    let unit_box = || prop::array::uniform3(-1.0f64..1.0);
+    (
+        prop::array::uniform3(-reach..reach),
+        unit_box(),
+        unit_box(),
+        0.0..kappa,
+        -tau..tau,
+        length,
+    )
+        .prop_map(|(p, a, b, k, t, l)| element(p, a, b, k, t, l))
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
 
     #[test]
-    fn helix_element(
-        p in prop::array::uniform3(-5.0f64..5.0),
-        a in prop::array::uniform3(-1.0f64..1.0),
-        b in prop::array::uniform3(-1.0f64..1.0),
-        kappa in 0.0f64..3.0,
-        tau in -3.0f64..3.0,
-        length in 0.1f64..4.0,
-        t in 0.01f64..0.99,
-    ) {
-        let e = element(p, a, b, kappa, tau, length);
+    fn helix_element(e in elements(5.0, 3.0, 3.0, 0.1..4.0), t in 0.01f64..0.99) {
         prop_assume!(e.is_some());
         check(&e.unwrap(), t, 1e-6, 1e-8)?;
     }
@@ -164,16 +175,7 @@ proptest! {
     /// The ATPH interpolant of the ends of a gently turning helix element
     /// (regular: the speed keeps its sign).
     #[test]
-    fn atph_curve(
-        p in prop::array::uniform3(-2.0f64..2.0),
-        a in prop::array::uniform3(-1.0f64..1.0),
-        b in prop::array::uniform3(-1.0f64..1.0),
-        kappa in 0.0f64..1.0,
-        tau in -1.0f64..1.0,
-        length in 0.5f64..2.0,
-        t in 0.01f64..0.99,
-    ) {
-        let e = element(p, a, b, kappa, tau, length);
+    fn atph_curve(e in elements(2.0, 1.0, 1.0, 0.5..2.0), t in 0.01f64..0.99) {
         prop_assume!(e.is_some());
         let e = e.unwrap();
         let c = strandfit::atph::interpolate(e.start, e.tangent, e.end_point(), e.end_frame().tangent);

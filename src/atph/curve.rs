@@ -116,16 +116,7 @@ impl AtphCurve {
         if s >= total {
             return 1.0;
         }
-        let (mut lo, mut hi) = (0.0, 1.0);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if self.arc_length_to(mid) < s {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        0.5 * (lo + hi)
+        crate::curve::bisect_unit(|xi| self.arc_length_to(xi), s)
     }
 
     /// `m ≥ 2` points equally spaced in arc length, ends included (in the

@@ -42,6 +42,20 @@ pub struct CompressSummary {
     pub batch_fallbacks: u64,
 }
 
+/// [`compress_blocks`] into memory: the bytes of a version-3 container
+/// holding every curve of `reader` (`input` names it in errors; `checker`
+/// as in [`compress_stream`]).
+pub fn compress_to_bytes(
+    reader: &mut dyn CurveReader,
+    input: &Path,
+    header: &CodecHeader,
+    checker: Option<&dyn ArcChecker>,
+) -> Result<Vec<u8>, IoError> {
+    let mut writer = CodecWriter::in_memory(header);
+    compress_blocks(reader, input, &mut writer, header, checker, &mut |_| {})?;
+    writer.finish_bytes()
+}
+
 /// Compresses every curve of `reader` into a version-3 container at `out`
 /// (written atomically). `checker`: where the candidate elements are
 /// checked ([`crate::backend::Backend::arc_checker`]; `None`: on the CPU,
