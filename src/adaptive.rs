@@ -135,6 +135,18 @@ pub enum AdaptiveError {
 }
 
 /// Fit one polyline (at least two distinct finite points).
+///
+/// ```
+/// use strandfit::{fit_polyline_chain, AdaptiveOptions, DVec3, ElementCount};
+///
+/// // A helix sampled every 0.1 rad, fitted to 0.01 with as few elements as can.
+/// let points: Vec<DVec3> = (0..100)
+///     .map(|k| { let a = 0.1 * k as f64; DVec3::new(a.cos(), a.sin(), 0.2 * a) })
+///     .collect();
+/// let fit = fit_polyline_chain(&points, &AdaptiveOptions::new(ElementCount::Tolerance(0.01))).unwrap();
+/// assert!(fit.within_tolerance && fit.frechet <= 0.01);
+/// assert!(fit.chain.len() < 10);
+/// ```
 pub fn fit_polyline_chain(
     points: &[DVec3],
     opts: &AdaptiveOptions,

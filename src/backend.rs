@@ -198,6 +198,22 @@ impl Backend {
     }
 
     /// Fit every spline with `opts.elements` helices (order kept).
+    ///
+    /// ```
+    /// use strandfit::{Backend, BezierSpline, DVec3, FitOptions};
+    ///
+    /// let splines: Vec<BezierSpline> = (1..=3)
+    ///     .map(|k| {
+    ///         let z = k as f64;
+    ///         BezierSpline::from_control_points(&[
+    ///             DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0), DVec3::new(2.0, -1.0, z), DVec3::new(3.0, 0.0, z),
+    ///         ]).unwrap()
+    ///     })
+    ///     .collect();
+    /// // `Backend::open(BackendChoice::Auto, …)` would take a GPU where there is one.
+    /// let chains = Backend::Cpu.fit(&splines, &FitOptions::new(12)).unwrap();
+    /// assert!(chains.iter().all(|c| c.as_ref().is_ok_and(|c| c.len() == 12)));
+    /// ```
     pub fn fit(
         &self,
         splines: &[BezierSpline],

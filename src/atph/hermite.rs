@@ -73,6 +73,16 @@ pub enum AtphError {
 
 /// G1 Hermite interpolation (Section 3): the ATPH curve from `p1` along `t1`
 /// to `p2` along `t2`, quadratic `ρ` for a spatial field.
+///
+/// ```
+/// use strandfit::{atph, DVec3};
+///
+/// let c = atph::interpolate(DVec3::ZERO, DVec3::X, DVec3::new(2.0, 1.0, 1.0), DVec3::Z).unwrap();
+/// assert!(c.position(0.0).length() < 1e-12);
+/// assert!((c.position(1.0) - DVec3::new(2.0, 1.0, 1.0)).length() < 1e-12);
+/// // The field ends along the end tangent (the curve runs along or against it).
+/// assert!((c.tangent.at(1.0) - DVec3::Z).length() < 1e-12);
+/// ```
 pub fn interpolate(p1: DVec3, t1: DVec3, p2: DVec3, t2: DVec3) -> Result<AtphCurve, AtphError> {
     interpolate_field(p1, p2, tangent_field(p1, t1, p2, t2)?, None)
 }

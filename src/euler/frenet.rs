@@ -212,6 +212,16 @@ impl FrenetProblem {
 
     /// Point and frame at `s = L` after `steps` steps of the fourth-order
     /// scheme (module docs): error `≈ C (Θ/steps)⁴` plus rounding.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    ///
+    /// // κ = 1, τ = 0 for L = π: half of the unit circle.
+    /// let half = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.0, 0.0, 0.0, std::f64::consts::PI);
+    /// let end = half.integrate(256).unwrap();
+    /// assert!((end.point - DVec3::new(0.0, 2.0, 0.0)).length() < 1e-9);
+    /// assert!((end.frame[0] + DVec3::X).length() < 1e-9);
+    /// ```
     pub fn integrate(&self, steps: usize) -> Result<FrenetEnd, FrenetError> {
         self.validate()?;
         if steps == 0 {

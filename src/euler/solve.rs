@@ -574,6 +574,16 @@ fn solve_from(sc: &Scaled, p: [f64; 5], steps: usize, opts: &SolveOptions) -> Ru
 }
 
 /// The spiral from `(x0, t0)` to `(xf, tf)` (tangents need not be unit).
+///
+/// ```
+/// use strandfit::euler::{solve_spiral, SolveOptions};
+/// use strandfit::DVec3;
+///
+/// // A quarter of the unit circle: the spiral is the arc (γ = τ₀ = δ = 0).
+/// let s = solve_spiral(DVec3::X, DVec3::Y, DVec3::Y, -DVec3::X, &SolveOptions::default()).unwrap();
+/// assert!((s.problem.kappa0 - 1.0).abs() < 1e-6);
+/// assert!((s.problem.length - std::f64::consts::FRAC_PI_2).abs() < 1e-6);
+/// ```
 pub fn solve_spiral(
     x0: DVec3,
     t0: DVec3,

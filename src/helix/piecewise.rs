@@ -113,6 +113,15 @@ impl PiecewiseHelix {
     }
 
     /// `m ≥ 2` points equally spaced in arc length, first and last included.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement::straight(DVec3::X, DVec3::X, 2.0);
+    /// let chain = PiecewiseHelix::new(vec![a, b]);
+    /// assert_eq!(chain.sample(4), vec![DVec3::ZERO, DVec3::X, 2.0 * DVec3::X, 3.0 * DVec3::X]);
+    /// ```
     pub fn sample(&self, m: usize) -> Vec<DVec3> {
         let mut out = Vec::with_capacity(m);
         self.sample_into(m, &mut out);
