@@ -12,7 +12,7 @@ fn atph(c: &mut Criterion) {
     let pairs = synthetic_hermite_pairs(100_000);
     let lengths: Vec<Option<f64>> = pairs
         .iter()
-        .map(|p| Some(1.2 * (p.2 - p.0).length()))
+        .map(|p| Some(1.2 * (p.p1 - p.p0).length()))
         .collect();
     let mut g = c.benchmark_group("atph");
     g.throughput(Throughput::Elements(pairs.len() as u64));
@@ -20,7 +20,7 @@ fn atph(c: &mut Criterion) {
         b.iter(|| {
             pairs
                 .iter()
-                .filter(|p| interpolate(p.0, p.1, p.2, p.3).is_ok())
+                .filter(|p| interpolate(p.p0, p.t0, p.p1, p.t1).is_ok())
                 .count()
         })
     });
@@ -29,7 +29,9 @@ fn atph(c: &mut Criterion) {
             pairs
                 .iter()
                 .zip(&lengths)
-                .filter(|(p, l)| interpolate_with_length(p.0, p.1, p.2, p.3, l.unwrap()).is_ok())
+                .filter(|(p, l)| {
+                    interpolate_with_length(p.p0, p.t0, p.p1, p.t1, l.unwrap()).is_ok()
+                })
                 .count()
         })
     });

@@ -8,9 +8,9 @@
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::DVec3;
-use strandfit::fit::{fit_spline_with, fit_splines, FitOptions, FitScratch};
 use strandfit::helix::{interpolate, relax_dense, relax_tridiagonal, RelaxScratch};
 use strandfit::synthetic::synthetic_splines;
+use strandfit::{fit_spline_with, fit_splines, FitOptions, FitScratch};
 
 /// Points and tangents of a synthetic spline at `n` elements.
 fn samples(n: usize) -> (Vec<DVec3>, Vec<DVec3>) {
@@ -106,8 +106,8 @@ fn whole_fit(c: &mut Criterion) {
 /// (rayon), GPU f64 and f32 (including host packing, transfers, readback).
 /// Skipped, with a note, when no GPU adapter exists.
 fn backends(c: &mut Criterion) {
-    use strandfit::backend::{Backend, BackendChoice, PrecisionChoice};
-    use strandfit::fit::relaxed_pairs;
+    use strandfit::relaxed_pairs;
+    use strandfit::{Backend, BackendChoice, PrecisionChoice};
     let splines = synthetic_splines(5000, 8);
     let opts = FitOptions::new(20);
     let mut pairs = Vec::new();
@@ -255,9 +255,9 @@ fn spline_sample(c: &mut Criterion) {
 /// cores (rayon over pairs), for comparison.
 fn completion(c: &mut Criterion) {
     use rayon::prelude::*;
-    use strandfit::backend::{Backend, BackendChoice, PrecisionChoice};
     use strandfit::euler::{paper_spiral, solve_spirals, PaperOptions, SolveOptions};
     use strandfit::synthetic::{random_spirals, spiral_end_pairs};
+    use strandfit::{Backend, BackendChoice, PrecisionChoice};
     let pairs = spiral_end_pairs(&random_spirals(1000, 1));
     let opts = SolveOptions::default();
     let mut g = c.benchmark_group("completion");
@@ -281,7 +281,7 @@ fn completion(c: &mut Criterion) {
         b.iter(|| {
             let out: Vec<_> = few
                 .par_iter()
-                .map(|&(x0, t0, xf, tf)| paper_spiral(x0, t0, xf, tf, &paper))
+                .map(|p| paper_spiral(p.p0, p.t0, p.p1, p.t1, &paper))
                 .collect();
             black_box(out)
         })

@@ -73,6 +73,7 @@ pub enum Distance {
 /// Options of [`fit_polyline_chain`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdaptiveOptions {
+    /// How the element count is chosen.
     pub count: ElementCount,
     /// Schneider tolerance for the smoothing spline. Default: `T/2` with a
     /// tolerance (half the budget to smoothing, half to the helices),
@@ -87,6 +88,7 @@ pub struct AdaptiveOptions {
 }
 
 impl AdaptiveOptions {
+    /// Options for `count`, with the defaults of the fields.
     pub fn new(count: ElementCount) -> Self {
         AdaptiveOptions {
             count,
@@ -101,6 +103,7 @@ impl AdaptiveOptions {
 /// One fitted curve.
 #[derive(Clone, Debug)]
 pub struct ChainFit {
+    /// The fitted chain.
     pub chain: PiecewiseHelix,
     /// Upper bound on the continuous Fréchet distance between the chain and
     /// the input polyline (relative accuracy 1e-6 plus the sampling
@@ -118,16 +121,32 @@ pub struct ChainFit {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum AdaptiveError {
     #[error("{0}")]
+    /// The smoothing spline could not be fitted.
     Smoothing(#[from] PolylineFitError),
     #[error("smoothing spline: {0}")]
+    /// The smoothing spline is invalid.
     Spline(#[from] SplineError),
     #[error("{0}")]
+    /// The floating tangents fit failed.
     Fit(#[from] FitError),
     #[error("invalid option: {0}")]
+    /// An option is out of range.
     Options(&'static str),
 }
 
 /// Fit one polyline (at least two distinct finite points).
+///
+/// ```
+/// use strandfit::{fit_polyline_chain, AdaptiveOptions, DVec3, ElementCount};
+///
+/// // A helix sampled every 0.1 rad, fitted to 0.01 with as few elements as can.
+/// let points: Vec<DVec3> = (0..100)
+///     .map(|k| { let a = 0.1 * k as f64; DVec3::new(a.cos(), a.sin(), 0.2 * a) })
+///     .collect();
+/// let fit = fit_polyline_chain(&points, &AdaptiveOptions::new(ElementCount::Tolerance(0.01))).unwrap();
+/// assert!(fit.within_tolerance && fit.frechet <= 0.01);
+/// assert!(fit.chain.len() < 10);
+/// ```
 pub fn fit_polyline_chain(
     points: &[DVec3],
     opts: &AdaptiveOptions,

@@ -52,18 +52,23 @@ pub enum PrecisionChoice {
     /// `f64` where the adapter offers `SHADER_F64`, else `f32`.
     #[default]
     Auto,
+    /// `f32` kernels.
     F32,
+    /// `f64` kernels (needs `SHADER_F64`).
     F64,
 }
 
 /// An opened GPU and the precision its kernels run in (each kernel is
 /// compiled on first use and kept by the context).
 pub struct GpuEngine {
+    /// The GPU context (device, queue, pipeline cache).
     pub ctx: GpuContext,
+    /// The precision the kernels run in.
     pub precision: Precision,
 }
 
 impl GpuEngine {
+    /// Open the engine on `ctx` with the chosen precision (an error if `F64` is asked for and the adapter lacks it).
     pub fn new(ctx: GpuContext, precision: PrecisionChoice) -> Result<Self, GpuError> {
         let precision = match precision {
             PrecisionChoice::Auto => ctx.best_precision(),
@@ -82,7 +87,9 @@ impl GpuEngine {
 
 /// A resolved backend.
 pub enum Backend {
+    /// The `f64` CPU reference, on all cores (rayon).
     Cpu,
+    /// The GPU.
     Gpu(Box<GpuEngine>),
 }
 
@@ -191,6 +198,22 @@ impl Backend {
     }
 
     /// Fit every spline with `opts.elements` helices (order kept).
+    ///
+    /// ```
+    /// use strandfit::{Backend, BezierSpline, DVec3, FitOptions};
+    ///
+    /// let splines: Vec<BezierSpline> = (1..=3)
+    ///     .map(|k| {
+    ///         let z = k as f64;
+    ///         BezierSpline::from_control_points(&[
+    ///             DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0), DVec3::new(2.0, -1.0, z), DVec3::new(3.0, 0.0, z),
+    ///         ]).unwrap()
+    ///     })
+    ///     .collect();
+    /// // `Backend::open(BackendChoice::Auto, …)` would take a GPU where there is one.
+    /// let chains = Backend::Cpu.fit(&splines, &FitOptions::new(12)).unwrap();
+    /// assert!(chains.iter().all(|c| c.as_ref().is_ok_and(|c| c.len() == 12)));
+    /// ```
     pub fn fit(
         &self,
         splines: &[BezierSpline],

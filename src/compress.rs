@@ -37,18 +37,23 @@ use crate::io::container::{encoded_size, QuantChain, Shape, Storage, StoredCurve
 /// Options of [`compress_curve`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CompressOptions {
+    /// How many elements per curve.
     pub count: ElementCount,
+    /// How the chain parameters are stored.
     pub storage: Storage,
     /// Share of the tolerance given to the fit; the rest is the
     /// quantisation's (compact storage only).
     pub fit_share: f64,
     /// Share of the fit's tolerance given to the Schneider smoothing spline.
     pub smoothing_share: f64,
+    /// Cap on elements per curve.
     pub max_elements: usize,
+    /// The distance the tolerance is measured in.
     pub distance: Distance,
 }
 
 impl CompressOptions {
+    /// Options for `count` and `storage`, with the default shares, cap and distance.
     pub fn new(count: ElementCount, storage: Storage) -> Self {
         CompressOptions {
             count,
@@ -71,10 +76,12 @@ impl CompressOptions {
 /// What happened to one curve.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CurveOutcome {
+    /// What is stored.
     pub shape: Shape,
     /// Distance (an upper bound, in the options' [`Distance`]) of what is
     /// stored, as decoded, to the input; 0 for verbatim curves.
     pub frechet: f64,
+    /// Helix elements stored (0 for verbatim curves).
     pub elements: usize,
     /// Within the tolerance (always true without one).
     pub within: bool,

@@ -26,6 +26,7 @@ pub struct FitOptions {
 }
 
 impl FitOptions {
+    /// Options for `elements` helices, tridiagonal relaxation, the default co-helicity tolerance.
     pub fn new(elements: usize) -> Self {
         FitOptions {
             elements,
@@ -39,19 +40,35 @@ impl FitOptions {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum FitError {
     #[error("invalid spline: {0}")]
+    /// The spline is invalid.
     Spline(#[from] SplineError),
     #[error("the number of elements must be at least 1")]
+    /// Zero elements were asked for.
     NoElements,
     #[error("need at least two points with tangents, got {0}")]
+    /// Fewer than two points with tangents.
     TooFewPoints(usize),
     #[error("points and tangents differ in count ({points} vs {tangents})")]
-    CountMismatch { points: usize, tangents: usize },
+    /// Points and tangents differ in count.
+    CountMismatch {
+        /// Number of points.
+        points: usize,
+        /// Number of tangents.
+        tangents: usize,
+    },
     #[error("point or tangent {index} is not finite")]
-    NonFinite { index: usize },
+    /// A point or tangent is not finite.
+    NonFinite {
+        /// Its index.
+        index: usize,
+    },
     #[error("element {index}: {source}")]
+    /// An element has no short helix.
     Element {
+        /// Index of the element.
         index: usize,
         #[source]
+        /// Why it has none.
         source: HelixError,
     },
 }

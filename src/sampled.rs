@@ -8,7 +8,9 @@ use glam::DVec3;
 /// (`points.len() == tangents.len()`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SampledCurve {
+    /// The points.
     pub points: Vec<DVec3>,
+    /// Their unit tangents.
     pub tangents: Vec<DVec3>,
 }
 

@@ -2,8 +2,8 @@
 
 use glam::DVec3;
 
-use crate::euler::batch::Pair;
 use crate::euler::FrenetProblem;
+use crate::pair::HermitePair;
 use crate::spline::{BezierSpline, SplineError};
 
 /// Cubic Hermite spline through `segments + 1` samples of `pos` on
@@ -55,14 +55,14 @@ pub fn synthetic_splines(count: usize, segments: usize) -> Vec<BezierSpline> {
 /// Deterministic point–tangent pairs `(P₁, T₁, P₂, T₂)` for completion
 /// benchmarks: the ends of arcs of the wandering helices above, each arc
 /// turning by 0.2 to 1.2 rad — gaps like those between fibre fragments.
-pub fn synthetic_hermite_pairs(count: usize) -> Vec<(DVec3, DVec3, DVec3, DVec3)> {
+pub fn synthetic_hermite_pairs(count: usize) -> Vec<HermitePair> {
     (0..count)
         .map(|c| {
             let pos = wandering_helix(c);
             let tangent = |u: f64| ((pos(u + 1e-6) - pos(u - 1e-6)) / 2e-6).normalize();
             let u0 = (c as f64 * 0.414_213_562_37).fract() * 6.0;
             let u1 = u0 + 0.1 + 0.5 * (c as f64 * 0.732_050_807_57).fract();
-            (pos(u0), tangent(u0), pos(u1), tangent(u1))
+            HermitePair::new(pos(u0), tangent(u0), pos(u1), tangent(u1))
         })
         .collect()
 }
@@ -206,13 +206,13 @@ pub fn random_spirals(count: usize, seed: u64) -> Vec<FrenetProblem> {
 /// 1024 integration steps (on all cores). The pair is the input to solve;
 /// how close it is to the generating spiral's exact end (about `1e-12`
 /// relative) does not matter.
-pub fn spiral_end_pairs(spirals: &[FrenetProblem]) -> Vec<Pair> {
+pub fn spiral_end_pairs(spirals: &[FrenetProblem]) -> Vec<HermitePair> {
     use rayon::prelude::*;
     spirals
         .par_iter()
         .map(|p| {
             let e = p.integrate_unchecked(1024);
-            (p.start, p.frame[0], e.point, e.frame[0])
+            HermitePair::new(p.start, p.frame[0], e.point, e.frame[0])
         })
         .collect()
 }

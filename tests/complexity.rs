@@ -3,9 +3,9 @@
 use std::f64::consts::TAU;
 
 use glam::DVec3;
-use strandfit::fit::{fit_spline, FitOptions};
 use strandfit::metrics::complexity_cubics;
 use strandfit::spline::{BezierSpline, CubicBez};
+use strandfit::{fit_spline, FitOptions};
 fn hermite(pos: impl Fn(f64) -> DVec3, u0: f64, u1: f64, segments: usize) -> BezierSpline {
     strandfit::synthetic::hermite_spline(pos, u0, u1, segments).unwrap()
 }

@@ -25,15 +25,16 @@
 //! 978 of the 1,000 pairs of the test below converged, worst 6.0e-7; of
 //! seeds 1–2, 97.6% and 98.0%, worst 8.6e-7.
 
-use strandfit::backend::Backend;
-use strandfit::euler::{solve_spiral, solve_spirals, Pair, SolveOptions, SpiralSolution};
+use strandfit::euler::{solve_spiral, solve_spirals, SolveOptions, SpiralSolution};
 use strandfit::synthetic::{random_spirals, spiral_end_pairs};
+use strandfit::Backend;
+use strandfit::HermitePair as Pair;
 
 /// `max(|x(L) − x_f| / |x_f − x₀|, |T(L) − T_f|)` of a solution, its end
 /// integrated with 4096 steps.
 fn end_error(s: &SpiralSolution, pair: &Pair) -> f64 {
     let e = s.problem.integrate(4096).expect("a valid solution");
-    let (x0, _, xf, tf) = *pair;
+    let (x0, _, xf, tf) = (*pair).into();
     let pos = e.point.distance(xf) / xf.distance(x0);
     let tan = e.frame[0].distance(tf.normalize());
     pos.max(tan)
@@ -177,7 +178,13 @@ fn restart_angle_study() {
     for seed in 1..=seeds {
         let pairs = spiral_end_pairs(&random_spirals(10_000, seed));
         total += pairs.len();
-        for &(x0, t0, xf, tf) in &pairs {
+        for &Pair {
+            p0: x0,
+            t0,
+            p1: xf,
+            t1: tf,
+        } in &pairs
+        {
             let s = solve_spiral(x0, t0, xf, tf, &single).unwrap();
             if s.error < 1e-20 {
                 continue;

@@ -3,10 +3,10 @@
 use std::f64::consts::TAU;
 
 use glam::DVec3;
-use strandfit::fit::{fit_spline, fit_splines, FitError, FitOptions};
 use strandfit::helix::Relaxation;
 use strandfit::metrics::discrete_frechet;
 use strandfit::spline::BezierSpline;
+use strandfit::{fit_spline, fit_splines, FitError, FitOptions};
 
 fn hermite(pos: impl Fn(f64) -> DVec3, u0: f64, u1: f64, segments: usize) -> BezierSpline {
     strandfit::synthetic::hermite_spline(pos, u0, u1, segments).unwrap()

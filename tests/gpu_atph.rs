@@ -40,7 +40,12 @@ fn pairs() -> (Vec<HermitePair>, Vec<Option<f64>>) {
             )
         };
         let (a, b) = (p(), p());
-        pairs.push((a, unit_vector(&mut rng), b, unit_vector(&mut rng)));
+        pairs.push(HermitePair::new(
+            a,
+            unit_vector(&mut rng),
+            b,
+            unit_vector(&mut rng),
+        ));
     }
     for i in 0..20_000 {
         let t = unit_vector(&mut rng);
@@ -67,12 +72,12 @@ fn pairs() -> (Vec<HermitePair>, Vec<Option<f64>>) {
                 (DVec3::ZERO, t, s * q, unit_vector(&mut rng))
             }
         };
-        pairs.push(pair);
+        pairs.push(pair.into());
     }
     let lengths = pairs
         .iter()
         .enumerate()
-        .map(|(i, p)| (i % 2 == 1).then(|| (1.05 + 0.1 * (i % 7) as f64) * (p.2 - p.0).length()))
+        .map(|(i, p)| (i % 2 == 1).then(|| (1.05 + 0.1 * (i % 7) as f64) * (p.p1 - p.p0).length()))
         .collect();
     (pairs, lengths)
 }
@@ -82,8 +87,8 @@ fn reference(pairs: &[HermitePair], lengths: &[Option<f64>]) -> Vec<Result<AtphC
         .iter()
         .zip(lengths)
         .map(|(p, l)| match l {
-            Some(l) => interpolate_with_length(p.0, p.1, p.2, p.3, *l),
-            None => interpolate(p.0, p.1, p.2, p.3),
+            Some(l) => interpolate_with_length(p.p0, p.t0, p.p1, p.t1, *l),
+            None => interpolate(p.p0, p.t0, p.p1, p.t1),
         })
         .collect()
 }

@@ -10,10 +10,10 @@ use std::path::Path;
 use std::process::Command;
 
 use glam::DVec3;
-use strandfit::backend::{Backend, GpuEngine, PrecisionChoice};
 use strandfit::codec::batch::ArcChecker;
 use strandfit::codec::{encode_block, encode_block_on, CodecParams};
 use strandfit::gpu::GpuContext;
+use strandfit::{Backend, GpuEngine, PrecisionChoice};
 
 /// The first `n` curves of a file.
 fn curves(path: &Path, n: usize) -> Vec<Vec<DVec3>> {

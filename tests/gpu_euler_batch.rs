@@ -12,9 +12,9 @@
 
 mod common;
 
-use strandfit::backend::{Backend, BackendChoice, PrecisionChoice};
 use strandfit::euler::{solve_spirals, solve_spirals_lockstep, SolveOptions};
 use strandfit::synthetic::{random_spirals, spiral_end_pairs};
+use strandfit::{Backend, BackendChoice, PrecisionChoice};
 
 #[test]
 fn batched_spiral_solve_gpu_matches_cpu() {
@@ -29,7 +29,16 @@ fn batched_spiral_solve_gpu_matches_cpu() {
     let cpu = solve_spirals_lockstep(&pairs, &opts, &Backend::Cpu).unwrap();
     let gpu = solve_spirals(&pairs, &opts, &gpu).unwrap();
     let (mut both, mut same, mut worst, mut worst_end) = (0, 0, 0.0f64, 0.0f64);
-    for ((c, g), &(x0, _, xf, tf)) in cpu.iter().zip(&gpu).zip(&pairs) {
+    for (
+        (c, g),
+        &strandfit::HermitePair {
+            p0: x0,
+            p1: xf,
+            t1: tf,
+            ..
+        },
+    ) in cpu.iter().zip(&gpu).zip(&pairs)
+    {
         let (c, g) = (c.as_ref().unwrap(), g.as_ref().unwrap());
         assert_eq!(
             c.error < 1e-20,

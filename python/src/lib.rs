@@ -12,9 +12,9 @@ use pyo3::exceptions::{PyIndexError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
-use strandfit::codec::container::{CodecHeader, CodecReader, CodecWriter, DecodedCurve};
+use strandfit::codec::container::{CodecHeader, CodecReader, DecodedCurve};
 use strandfit::codec::stream::{
-    compress_blocks, compress_stream, decompress_stream, output_curve, read_range,
+    compress_stream, compress_to_bytes, decompress_stream, output_curve, read_range,
 };
 use strandfit::io::container::SourceMeta;
 use strandfit::io::{
@@ -119,17 +119,8 @@ fn compress_arrays<'py>(
             let mut source = SourceMeta::from_metadata(&meta, None);
             source.format = "numpy".into();
             let header = CodecHeader::new(tolerance, source, Vec::new());
-            let mut writer = CodecWriter::in_memory(&header);
             let mut reader = VecReader::new(meta, curves);
-            compress_blocks(
-                &mut reader,
-                Path::new(ARRAYS),
-                &mut writer,
-                &header,
-                None,
-                &mut |_| {},
-            )?;
-            writer.finish_bytes()
+            compress_to_bytes(&mut reader, Path::new(ARRAYS), &header, None)
         })
         .map_err(py_err)?;
     Ok(PyBytes::new(py, &bytes))

@@ -2,14 +2,12 @@
 //! backend of [`crate::backend::Backend::interpolate_atph`] (the GPU one is
 //! [`crate::kernels::atph_hermite`]).
 
-use glam::DVec3;
 use rayon::prelude::*;
 
 use super::curve::AtphCurve;
 use super::hermite::{interpolate, interpolate_with_length, AtphError};
 
-/// `(P₁, T₁, P₂, T₂)`.
-pub type HermitePair = (DVec3, DVec3, DVec3, DVec3);
+pub use crate::pair::HermitePair;
 
 /// [`interpolate`] (or, where `lengths` gives one, [`interpolate_with_length`])
 /// for every pair; a pair that cannot be solved gets its own error.
@@ -22,9 +20,9 @@ pub fn interpolate_pairs(
         .enumerate()
         .with_min_len(1024)
         .map(
-            |(i, &(p1, t1, p2, t2))| match lengths.and_then(|l| l.get(i).copied().flatten()) {
-                Some(l) => interpolate_with_length(p1, t1, p2, t2, l),
-                None => interpolate(p1, t1, p2, t2),
+            |(i, p)| match lengths.and_then(|l| l.get(i).copied().flatten()) {
+                Some(l) => interpolate_with_length(p.p0, p.t0, p.p1, p.t1, l),
+                None => interpolate(p.p0, p.t0, p.p1, p.t1),
             },
         )
         .collect()
@@ -33,13 +31,14 @@ pub fn interpolate_pairs(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
 
     #[test]
     fn batch_equals_one_by_one_and_isolates_failures() {
         let mut pairs: Vec<HermitePair> = (0..3000)
             .map(|i| {
                 let a = i as f64 * 0.37;
-                (
+                HermitePair::new(
                     DVec3::new(a.sin(), a.cos(), 0.1 * a),
                     DVec3::new(1.0, a.sin(), 0.3),
                     DVec3::new(a.sin() + 2.0, a.cos() - 1.0, 0.1 * a + 1.0),
@@ -47,13 +46,13 @@ mod tests {
                 )
             })
             .collect();
-        pairs[17].2 = pairs[17].0;
+        pairs[17].p1 = pairs[17].p0;
         let lengths: Vec<Option<f64>> = (0..3000).map(|i| (i % 2 == 0).then_some(4.0)).collect();
         let got = interpolate_pairs(&pairs, Some(&lengths));
         for (i, (p, r)) in pairs.iter().zip(&got).enumerate() {
             let one = match lengths[i] {
-                Some(l) => interpolate_with_length(p.0, p.1, p.2, p.3, l),
-                None => interpolate(p.0, p.1, p.2, p.3),
+                Some(l) => interpolate_with_length(p.p0, p.t0, p.p1, p.t1, l),
+                None => interpolate(p.p0, p.t0, p.p1, p.t1),
             };
             assert_eq!(&one, r);
         }
@@ -86,7 +85,7 @@ mod tests {
         let random: Vec<HermitePair> = (0..10_000)
             .map(|_| {
                 let mut v = || DVec3::new(rnd(), rnd(), rnd());
-                (v(), v(), v(), v())
+                HermitePair::new(v(), v(), v(), v())
             })
             .collect();
         let on_random = forward(&interpolate_pairs(&random, None));

@@ -58,10 +58,12 @@ impl Bernstein {
         }
     }
 
+    /// The degree `n` (2 or 3).
     pub fn degree(&self) -> usize {
         self.degree
     }
 
+    /// The Bernstein coefficients `ρ₀ … ρₙ`.
     pub fn coefficients(&self) -> &[f64] {
         &self.coef[..=self.degree]
     }

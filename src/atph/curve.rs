@@ -20,9 +20,11 @@ use super::bernstein::{Bernstein, Sign};
 use super::tangent::SphericalTangent;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// A spatial ATPH curve on `ξ ∈ [0, 1]` (module docs): start point, unit tangent field and signed speed.
 pub struct AtphCurve {
     /// `r₀ = r(0)`.
     pub start: DVec3,
+    /// The unit tangent field `T(ξ)` (latitude and azimuth linear in `ξ`).
     pub tangent: SphericalTangent,
     /// `ρ`, the signed speed `r′ = ρT`.
     pub rho: Bernstein,
@@ -114,16 +116,7 @@ impl AtphCurve {
         if s >= total {
             return 1.0;
         }
-        let (mut lo, mut hi) = (0.0, 1.0);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if self.arc_length_to(mid) < s {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        0.5 * (lo + hi)
+        crate::curve::bisect_unit(|xi| self.arc_length_to(xi), s)
     }
 
     /// `m ≥ 2` points equally spaced in arc length, ends included (in the

@@ -12,7 +12,7 @@
 //! The paper's systems carry factors 2 from the product-to-sum step; here
 //! the columns are `∫₀¹ B_jⁿ(t) T(t) dt` directly, which is (3.1) and (4.1)
 //! with the rows divided by 2 where the paper multiplies. For a planar field
-//! the paper defers to its planar predecessor ([23]); we take the same
+//! the paper defers to its planar predecessor (\[23\]); we take the same
 //! construction in the plane with one fewer unknown, so the system is
 //! square again and the solution unique. The solve is Gaussian elimination
 //! with partial pivoting on the stack (fixed 2–4 unknowns; a general LU
@@ -37,25 +37,52 @@ pub const OFF_PLANE_TOL: f64 = 1e-9;
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum AtphError {
     #[error("an input is not finite, or a tangent is zero")]
+    /// An input is not finite, or a tangent is zero.
     BadInput,
     #[error("the end points coincide")]
+    /// The end points coincide.
     Coincident,
     #[error("the prescribed length {0} is not positive and finite")]
+    /// The prescribed length is not positive and finite.
     BadLength(f64),
     #[error(
         "the tangent field is constant (equal tangents at a pole) but the chord is not along it"
     )]
+    /// The tangent field is constant (equal tangents at a pole) but the chord is not along it.
     NotStraight,
     #[error("the data make a straight segment of length {chord}, not the prescribed {length}")]
-    StraightLength { chord: f64, length: f64 },
+    /// The data make a straight segment whose length is not the prescribed one.
+    StraightLength {
+        /// The chord length.
+        chord: f64,
+        /// The prescribed length.
+        length: f64,
+    },
     #[error("the tangent field is planar but the chord leaves its plane ({0:.3e} of its length)")]
+    /// The tangent field is planar but the chord leaves its plane (by this fraction of its length).
     ChordOffPlane(f64),
     #[error("the linear system {system} is singular (relative determinant {det:.3e})")]
-    Singular { system: &'static str, det: f64 },
+    /// A linear system of the interpolation is singular.
+    Singular {
+        /// Which system ("3.1" or "4.1").
+        system: &'static str,
+        /// Its relative determinant.
+        det: f64,
+    },
 }
 
 /// G1 Hermite interpolation (Section 3): the ATPH curve from `p1` along `t1`
 /// to `p2` along `t2`, quadratic `ρ` for a spatial field.
+///
+/// ```
+/// use strandfit::{atph, DVec3};
+///
+/// let c = atph::interpolate(DVec3::ZERO, DVec3::X, DVec3::new(2.0, 1.0, 1.0), DVec3::Z).unwrap();
+/// assert!(c.position(0.0).length() < 1e-12);
+/// assert!((c.position(1.0) - DVec3::new(2.0, 1.0, 1.0)).length() < 1e-12);
+/// // The field ends along the end tangent (the curve runs along or against it).
+/// assert!((c.tangent.at(1.0) - DVec3::Z).length() < 1e-12);
+/// ```
 pub fn interpolate(p1: DVec3, t1: DVec3, p2: DVec3, t2: DVec3) -> Result<AtphCurve, AtphError> {
     interpolate_field(p1, p2, tangent_field(p1, t1, p2, t2)?, None)
 }

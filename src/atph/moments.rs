@@ -24,7 +24,9 @@
 /// `M_k`, `k = 0..=3`, as real and imaginary parts.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Moments {
+    /// Real parts of `M₀ … M₃`.
     pub re: [f64; 4],
+    /// Imaginary parts of `M₀ … M₃`.
     pub im: [f64; 4],
 }
 

@@ -14,6 +14,7 @@ use super::hermite::{interpolate, AtphError};
 /// `[i, i + 1]`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AtphSpline {
+    /// The segments, segment `i` on `u ∈ [i, i + 1]`.
     pub segments: Vec<AtphCurve>,
 }
 
@@ -21,13 +22,23 @@ pub struct AtphSpline {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SplineError {
     #[error("a spline needs at least two points, got {0}")]
+    /// Fewer than two points.
     TooFew(usize),
     #[error("{points} points but {tangents} tangents")]
-    Mismatch { points: usize, tangents: usize },
+    /// Points and tangents differ in count.
+    Mismatch {
+        /// Number of points.
+        points: usize,
+        /// Number of tangents.
+        tangents: usize,
+    },
     #[error("segment {segment} (points {segment} to {}): {source}", segment + 1)]
+    /// A segment has no ATPH interpolant.
     Segment {
+        /// Index of the segment (from point `segment` to `segment + 1`).
         segment: usize,
         #[source]
+        /// Why it has none.
         source: AtphError,
     },
 }
@@ -61,11 +72,13 @@ impl AtphSpline {
         (i, u - i as f64)
     }
 
+    /// The point at `u ∈ [0, n]` (clamped).
     pub fn position(&self, u: f64) -> DVec3 {
         let (i, xi) = self.locate(u);
         self.segments[i].position(xi)
     }
 
+    /// The unit tangent at `u ∈ [0, n]` (clamped).
     pub fn unit_tangent(&self, u: f64) -> DVec3 {
         let (i, xi) = self.locate(u);
         self.segments[i].unit_tangent(xi)
@@ -76,6 +89,7 @@ impl AtphSpline {
         self.segments.iter().all(AtphCurve::is_regular)
     }
 
+    /// Total arc length, the sum of the segments'.
     pub fn length(&self) -> f64 {
         self.segments.iter().map(AtphCurve::length).sum()
     }

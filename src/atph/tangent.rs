@@ -39,9 +39,13 @@ pub const HALF_TURN_TOL: f64 = 1e-7;
 /// `θ(ξ) = a₁ξ + a₀` (latitude), `φ(ξ) = b₁ξ + b₀` (azimuth).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SphericalTangent {
+    /// `a₀`: latitude at `ξ = 0`.
     pub a0: f64,
+    /// `a₁`: latitude rate.
     pub a1: f64,
+    /// `b₀`: azimuth at `ξ = 0`.
     pub b0: f64,
+    /// `b₁`: azimuth rate.
     pub b1: f64,
 }
 
@@ -77,6 +81,7 @@ pub fn wrap_angle(x: f64) -> f64 {
 }
 
 impl SphericalTangent {
+    /// The field with `θ = a₁ξ + a₀`, `φ = b₁ξ + b₀`.
     pub fn new(a0: f64, a1: f64, b0: f64, b1: f64) -> Self {
         SphericalTangent { a0, a1, b0, b1 }
     }

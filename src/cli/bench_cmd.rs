@@ -217,7 +217,7 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     let (mut times, _) = time_runs(args.repeat, |_| {
         Ok(few
             .par_iter()
-            .map(|&(x0, t0, xf, tf)| paper_spiral(x0, t0, xf, tf, &paper))
+            .map(|p| paper_spiral(p.p0, p.t0, p.p1, p.t1, &paper))
             .collect::<Vec<_>>())
     })?;
     report(

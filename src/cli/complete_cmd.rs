@@ -22,6 +22,7 @@ use super::{CompleteArgs, CompleteMethod};
 use crate::atph::{AtphCurve, Sign};
 use crate::backend::Backend;
 use crate::euler::{solve_spirals, SolveOptions};
+use crate::HermitePair;
 
 #[derive(Deserialize)]
 struct Input {
@@ -145,9 +146,9 @@ pub fn run(args: &CompleteArgs, backend: &Backend) -> Result<()> {
     out.commit()
 }
 
-fn vectors(p: &PairIn) -> (DVec3, DVec3, DVec3, DVec3) {
+fn vectors(p: &PairIn) -> HermitePair {
     let v = |a: [f64; 3]| DVec3::from(a);
-    (v(p.p0), v(p.t0), v(p.p1), v(p.t1))
+    HermitePair::new(v(p.p0), v(p.t0), v(p.p1), v(p.t1))
 }
 
 /// ATPH curves, one per pair, with the pair's or the command's length.
@@ -162,7 +163,7 @@ fn atph(
     Ok(curves
         .into_iter()
         .zip(&pairs)
-        .map(|(r, &(_, _, p1, t1))| {
+        .map(|(r, &HermitePair { p1, t1, .. })| {
             let c: AtphCurve = r.map_err(|e| e.to_string())?;
             let t1 = t1.normalize();
             let residual =

@@ -34,6 +34,7 @@ use super::{decode_block, CodecParams, EncodedBlock};
 use crate::io::container::{SourceMeta, MAGIC};
 use crate::io::{AtomicFile, IoError};
 
+/// The container format version this module reads and writes.
 pub const VERSION: u16 = 3;
 /// The revision of the codec's model (what the geometry streams mean). A
 /// decoder reads only its own: a stream coded by another model would
@@ -55,7 +56,9 @@ pub struct CodecHeader {
     pub model: u8,
     /// The two-sided Hausdorff tolerance every curve was compressed to.
     pub tolerance: f64,
+    /// The codec's quantisation steps (multiples of the tolerance).
     pub steps: Steps,
+    /// The input's metadata (format, affine, units, per-curve data names).
     pub source: SourceMeta,
     /// Names of the per-point values stored with each curve (on its decoded
     /// points: [`super::point_data`]).
@@ -91,6 +94,7 @@ impl CodecHeader {
         }
     }
 
+    /// The codec parameters the geometry was written with.
     pub fn params(&self) -> CodecParams {
         CodecParams {
             tolerance: self.tolerance,
@@ -251,19 +255,25 @@ fn put_str(out: &mut Vec<u8>, s: &str) {
 /// One decoded curve.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DecodedCurve {
+    /// The curve's identifier, if the input had one.
     pub id: Option<String>,
+    /// The decoded points (`f32` values, within the tolerance of the input).
     pub points: Vec<DVec3>,
     /// Per decoded point, the values named in the header (row-major).
     pub point_data: Vec<f32>,
+    /// Per-curve values named in the header.
     pub curve_data: Vec<f32>,
 }
 
 /// A curve to store.
 pub struct CurveIn<'a> {
+    /// The curve's identifier, if any.
     pub id: Option<&'a str>,
+    /// The input points.
     pub points: &'a [DVec3],
     /// Per input point, the values named in the header (row-major).
     pub point_data: &'a [f32],
+    /// Per-curve values named in the header.
     pub curve_data: &'a [f32],
 }
 
@@ -347,10 +357,15 @@ fn inflate(stored: &[u8], len: usize) -> Result<Vec<u8>, String> {
 
 /// One encoded block, ready to write.
 pub struct BlockBytes {
+    /// Number of curves in the block.
     pub curves: u32,
+    /// Compressed geometry bytes.
     pub geometry: Vec<u8>,
+    /// Compressed side data (identifiers, per-point and per-curve values).
     pub side: Vec<u8>,
+    /// Length of the side data before compression.
     pub side_len: u32,
+    /// The encoded geometry (kept for verification).
     pub encoded: EncodedBlock,
     /// Which input curves were empty (for [`verify`](Self::verify)).
     empty: Vec<bool>,
@@ -564,6 +579,7 @@ impl CodecWriter {
         })
     }
 
+    /// Where the container is written (a placeholder path in memory).
     pub fn target(&self) -> &Path {
         match &self.out {
             Sink::File(f) => f.target(),
@@ -849,18 +865,22 @@ impl CodecReader {
         })
     }
 
+    /// The container's header.
     pub fn header(&self) -> &CodecHeader {
         &self.header
     }
 
+    /// The file read (a placeholder for bytes in memory).
     pub fn path(&self) -> &Path {
         &self.path
     }
 
+    /// Number of curves in the container.
     pub fn curve_count(&self) -> u64 {
         self.curves
     }
 
+    /// Number of blocks in the container.
     pub fn block_count(&self) -> usize {
         self.blocks.len()
     }
@@ -933,8 +953,11 @@ impl CodecReader {
 
 /// A block's checked bytes, decoded by [`RawBlock::decode`].
 pub struct RawBlock {
+    /// Index of the block in the container.
     pub index: usize,
+    /// Index of the block's first curve.
     pub first: u64,
+    /// Number of curves in the block.
     pub curves: u32,
     geometry: Vec<u8>,
     side: Vec<u8>,

@@ -2,7 +2,7 @@
 //!
 //! The coder is the carry-less-by-cache range coder of LZMA (Igor Pavlov,
 //! public domain): 32-bit range, 11-bit probabilities adapted by a shift of
-//! [`ADAPT_SHIFT`] after every bit. It is a few dozen lines and what it
+//! `ADAPT_SHIFT` after every bit. It is a few dozen lines and what it
 //! codes is ours: the codec's model is the choice of *which* adaptive
 //! context each bit goes through ([`IntModel`]). Measured against zstd -19
 //! on the same integer streams it is what makes the residuals small (see
@@ -11,7 +11,7 @@
 //!
 //! Integers are binarised as in CABAC's Exp-Golomb scheme: a zero flag, a
 //! sign, the bit length of the magnitude in unary (one context per
-//! position), the first [`MODELLED_MANTISSA`] bits below the leading one in
+//! position), the first `MODELLED_MANTISSA` bits below the leading one in
 //! contexts of (length, position), the rest at probability one half.
 
 /// Probability precision: probabilities are `p / 2^11` that the bit is 0.

@@ -46,14 +46,21 @@
 //! assert!(block.bytes.len() < 200 * 12 / 20); // over 20 times smaller than f32
 //! ```
 
+#[doc(hidden)]
 pub mod batch;
+#[doc(hidden)]
 pub mod check;
 pub mod container;
+#[doc(hidden)]
 pub mod encoder;
+#[doc(hidden)]
 pub mod entropy;
 pub mod point_data;
+#[doc(hidden)]
 pub mod predict;
+#[doc(hidden)]
 pub mod quantise;
+#[doc(hidden)]
 pub mod reference;
 pub mod shards;
 pub mod stream;
@@ -74,11 +81,14 @@ use reference::{Neighbours, Reference};
 /// container's header).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CodecParams {
+    /// The two-sided Hausdorff tolerance `T` every decoded curve is within.
     pub tolerance: f64,
+    /// Quantisation steps, as multiples of `T`.
     pub steps: Steps,
 }
 
 impl CodecParams {
+    /// Parameters for tolerance `T`, with the default steps.
     pub fn new(tolerance: f64) -> Self {
         CodecParams {
             tolerance,
@@ -109,6 +119,7 @@ pub enum ElementKind {
 /// One element's code (see [`predict`] for the geometry).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ElementCode {
+    /// What the element is (G1 arc, corner arc, jump).
     pub kind: ElementKind,
     /// Chord length in length steps, minus the previous element's.
     pub length: i64,
@@ -127,22 +138,29 @@ pub struct ElementCode {
 /// One curve's code.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CurveCode {
+    /// A curve without points.
     Empty,
     /// Points on the grid of step `2T/√3` (indices), predicted from their
-    /// own last step or from a neighbour's ([`reference`]).
+    /// own last step or from a neighbour's ([`reference`](mod@reference)).
     Points {
+        /// Grid indices of the points.
         grid: Vec<[i64; 3]>,
+        /// The neighbour whose steps predict this curve's, if any.
         reference: Option<Reference>,
-        /// Without a reference: predicted by [`helix_prediction`] rather
+        /// Without a reference: predicted by `helix_prediction` rather
         /// than second order.
         helix: bool,
     },
     /// Start point on the start grid, the first element's end relative to
     /// it on the same grid, its bulge, then the elements.
     Arcs {
+        /// Start point on the start grid.
         start: [i64; 3],
+        /// The first element's end relative to the start.
         first_end: [i64; 3],
+        /// The first element's bulge.
         first_bulge: [i64; 2],
+        /// The remaining elements.
         elements: Vec<ElementCode>,
     },
     /// The points verbatim (`f64`): values the grids cannot code
@@ -154,8 +172,15 @@ pub enum CurveCode {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum EncodeError {
     #[error("curve {curve}: point {point} is not finite")]
-    NonFinite { curve: usize, point: usize },
+    /// A point is not finite.
+    NonFinite {
+        /// Index of the curve in the block.
+        curve: usize,
+        /// Index of the point in the curve.
+        point: usize,
+    },
     #[error("tolerance {0} is not a positive finite number")]
+    /// The tolerance is not a positive finite number.
     BadTolerance(f64),
 }
 
@@ -163,14 +188,22 @@ pub enum EncodeError {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum DecodeError {
     #[error("curve {curve}: {why}")]
-    Curve { curve: usize, why: String },
+    /// A curve's code is inconsistent.
+    Curve {
+        /// Index of the curve in the block.
+        curve: usize,
+        /// What is wrong.
+        why: String,
+    },
     #[error("the block's coded stream ends early (truncated or corrupt)")]
+    /// The coded stream ends early (truncated or corrupt).
     Truncated,
 }
 
 /// What [`encode_block`] returns.
 #[derive(Debug)]
 pub struct EncodedBlock {
+    /// The entropy-coded geometry of the block.
     pub bytes: Vec<u8>,
     /// Per curve: how it was coded (0 empty, 1 points, 2 arcs, 3 raw).
     pub kinds: Vec<u8>,
@@ -191,7 +224,7 @@ pub struct EncodedBlock {
 pub const MAX_DECODED_POINTS: usize = 1 << 28;
 
 /// The ways one curve can be coded, before the block chooses (the choice
-/// depends on the curves before it, through [`reference`]).
+/// depends on the curves before it, through [`reference`](mod@reference)).
 pub struct CurveOptions {
     /// Grid points (points mode), if every point is codable.
     pub points: Option<Vec<[i64; 3]>>,

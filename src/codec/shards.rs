@@ -18,15 +18,18 @@ use crate::io::IoError;
 /// One output of [`split`] or [`merge`].
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct Shard {
+    /// The shard's file.
     pub path: PathBuf,
     /// Index of its first curve in the input (for [`split`]), or in the
     /// output (for the inputs of [`merge`]).
     pub first: u64,
-    /// (`curve_count` and `block_count` in `split`/`merge --json`.)
+    /// Number of curves in it (`curve_count` in `split`/`merge --json`).
     #[serde(rename = "curve_count")]
     pub curves: u64,
+    /// Number of blocks in it (`block_count`).
     #[serde(rename = "block_count")]
     pub blocks: usize,
+    /// Its size in bytes.
     pub bytes: u64,
 }
 

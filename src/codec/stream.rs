@@ -20,12 +20,15 @@ use crate::io::{Curve, CurveReader, CurveWriter, IoError};
 /// What [`compress_stream`] did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CompressSummary {
+    /// Curves compressed.
     pub curves: u64,
+    /// Input points.
     pub points: u64,
     /// Points the default decompression writes.
     pub output_points: u64,
     /// Curves by how they are coded: empty, points, arcs, raw.
     pub kinds: [u64; 4],
+    /// Bytes written.
     pub bytes: u64,
     /// Candidate elements checked in batches by the backend (0 on the
     /// CPU, where each curve checks its own).
@@ -37,6 +40,20 @@ pub struct CompressSummary {
     pub batch_rounds: u64,
     /// Blocks the backend could not take (finished on the CPU).
     pub batch_fallbacks: u64,
+}
+
+/// [`compress_blocks`] into memory: the bytes of a version-3 container
+/// holding every curve of `reader` (`input` names it in errors; `checker`
+/// as in [`compress_stream`]).
+pub fn compress_to_bytes(
+    reader: &mut dyn CurveReader,
+    input: &Path,
+    header: &CodecHeader,
+    checker: Option<&dyn ArcChecker>,
+) -> Result<Vec<u8>, IoError> {
+    let mut writer = CodecWriter::in_memory(header);
+    compress_blocks(reader, input, &mut writer, header, checker, &mut |_| {})?;
+    writer.finish_bytes()
 }
 
 /// Compresses every curve of `reader` into a version-3 container at `out`

@@ -19,8 +19,6 @@
 //! the next round instead of retrying at once, so a pair may take more
 //! rounds (each run is allowed `4 × max_iterations`).
 
-use glam::DVec3;
-
 use super::frenet::{FrenetEnd, FrenetProblem};
 use super::solve::{
     converged, first_steps, forward_from_reversed, lm_step, norm2, normal_equations, refine_steps,
@@ -30,15 +28,13 @@ use super::solve::{
 use crate::backend::Backend;
 use crate::backend::GpuError;
 use crate::euler::solve_spiral;
-
-/// One pair: `(x₀, T₀, x_f, T_f)`.
-pub type Pair = (DVec3, DVec3, DVec3, DVec3);
+use crate::pair::HermitePair;
 
 /// Solve every pair; results in input order. A pair's own bad input is its
 /// `Err`; a GPU failure fails the whole call. See the module docs for what
 /// each backend runs.
 pub fn solve_spirals(
-    pairs: &[Pair],
+    pairs: &[HermitePair],
     opts: &SolveOptions,
     backend: &Backend,
 ) -> Result<Vec<Result<SpiralSolution, SolveError>>, GpuError> {
@@ -46,7 +42,7 @@ pub fn solve_spirals(
     match backend {
         Backend::Cpu => Ok(pairs
             .par_iter()
-            .map(|&(x0, t0, xf, tf)| solve_spiral(x0, t0, xf, tf, opts))
+            .map(|p| solve_spiral(p.p0, p.t0, p.p1, p.t1, opts))
             .collect()),
         Backend::Gpu(_) => solve_spirals_lockstep(pairs, opts, backend),
     }
@@ -72,7 +68,7 @@ struct State {
     /// Whether the current run solves the reversed problem (the first leg
     /// of [`Restart::Reversed`]).
     reversed: bool,
-    pair: Pair,
+    pair: HermitePair,
     /// The current run (`r`, `err` valid from `Lm` on).
     run: Run,
     lambda: f64,
@@ -186,7 +182,7 @@ fn integrate_grouped(
 /// [`solve_spirals`] runs on the GPU; on the CPU backend, for tests and
 /// comparison.
 pub fn solve_spirals_lockstep(
-    pairs: &[Pair],
+    pairs: &[HermitePair],
     opts: &SolveOptions,
     backend: &Backend,
 ) -> Result<Vec<Result<SpiralSolution, SolveError>>, GpuError> {
@@ -194,7 +190,7 @@ pub fn solve_spirals_lockstep(
     let mut states: Vec<Result<State, SolveError>> = pairs
         .iter()
         .map(|&pair| {
-            let (x0, t0, xf, tf) = pair;
+            let (x0, t0, xf, tf) = pair.into();
             let base = Scaled::new(x0, t0, xf, tf, opts.start_normal)?;
             let p = base.initial;
             let mut s = State {
@@ -336,7 +332,7 @@ pub fn solve_spirals_lockstep(
             let s = st?;
             let (sc, mut run) = s.best.expect("a finished solve has a best start");
             run.iterations = s.total_iterations;
-            sc.as_ref().unwrap_or(&s.base).finish(s.pair.0, &run)
+            sc.as_ref().unwrap_or(&s.base).finish(s.pair.p0, &run)
         })
         .collect())
 }
@@ -353,7 +349,7 @@ mod tests {
         for (p, b) in pairs.iter().zip(&batch) {
             assert_eq!(
                 b,
-                &solve_spiral(p.0, p.1, p.2, p.3, &SolveOptions::default())
+                &solve_spiral(p.p0, p.t0, p.p1, p.t1, &SolveOptions::default())
             );
         }
     }
@@ -368,7 +364,7 @@ mod tests {
         let lock = solve_spirals_lockstep(&pairs, &opts, &Backend::Cpu).unwrap();
         let (mut both, mut same_start, mut agree, mut restarted) = (0, 0, 0, 0);
         for (pair, b) in pairs.iter().zip(&lock) {
-            let s = solve_spiral(pair.0, pair.1, pair.2, pair.3, &opts).unwrap();
+            let s = solve_spiral(pair.p0, pair.t0, pair.p1, pair.t1, &opts).unwrap();
             let b = b.as_ref().unwrap();
             restarted += usize::from(b.start > 0);
             if s.error < 1e-20 && b.error < 1e-20 {
@@ -403,7 +399,7 @@ mod tests {
     #[test]
     fn bad_pairs_fail_alone() {
         let mut pairs = spiral_end_pairs(&random_spirals(3, 1));
-        pairs[1].2 = pairs[1].0; // coincident ends
+        pairs[1].p1 = pairs[1].p0; // coincident ends
         for r in [
             solve_spirals(&pairs, &SolveOptions::default(), &Backend::Cpu).unwrap(),
             solve_spirals_lockstep(&pairs, &SolveOptions::default(), &Backend::Cpu).unwrap(),

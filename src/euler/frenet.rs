@@ -75,16 +75,24 @@ pub const FRAME_TOL: f64 = 1e-9;
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
 pub enum FrenetError {
     #[error("non-finite start point, frame, parameter or scaled rate")]
+    /// A start value is not finite.
     NonFinite,
     #[error("negative length {0}")]
+    /// The length is negative.
     NegativeLength(f64),
     #[error(
         "start frame is not orthonormal: max |FᵀF − I| = {deviation:.3e} exceeds {FRAME_TOL:e}"
     )]
-    FrameNotOrthonormal { deviation: f64 },
+    /// The start frame is not orthonormal.
+    FrameNotOrthonormal {
+        /// `max |FᵀF − I|`.
+        deviation: f64,
+    },
     #[error("start frame is left-handed: B = −T × N")]
+    /// The start frame is left-handed (`B = −T × N`).
     LeftHanded,
     #[error("the step count must be at least 1")]
+    /// The step count is zero.
     ZeroSteps,
 }
 
@@ -110,7 +118,9 @@ pub struct FrenetProblem {
 /// Point and frame `[T, N, B]` at one arc length.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrenetEnd {
+    /// `x(s)`.
     pub point: DVec3,
+    /// `[T, N, B](s)`.
     pub frame: [DVec3; 3],
 }
 
@@ -202,6 +212,16 @@ impl FrenetProblem {
 
     /// Point and frame at `s = L` after `steps` steps of the fourth-order
     /// scheme (module docs): error `≈ C (Θ/steps)⁴` plus rounding.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    ///
+    /// // κ = 1, τ = 0 for L = π: half of the unit circle.
+    /// let half = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.0, 0.0, 0.0, std::f64::consts::PI);
+    /// let end = half.integrate(256).unwrap();
+    /// assert!((end.point - DVec3::new(0.0, 2.0, 0.0)).length() < 1e-9);
+    /// assert!((end.frame[0] + DVec3::X).length() < 1e-9);
+    /// ```
     pub fn integrate(&self, steps: usize) -> Result<FrenetEnd, FrenetError> {
         self.validate()?;
         if steps == 0 {

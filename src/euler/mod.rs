@@ -18,7 +18,7 @@ pub mod frenet;
 pub mod paper;
 pub mod solve;
 
-pub use batch::{solve_spirals, solve_spirals_lockstep, Pair};
+pub use batch::{solve_spirals, solve_spirals_lockstep};
 pub use clothoid::{clothoid_g1, Clothoid, ClothoidError};
 pub use frenet::{FrenetEnd, FrenetError, FrenetProblem, FRAME_TOL};
 pub use paper::{paper_spiral, PaperIntegrator, PaperOptions};

@@ -33,6 +33,7 @@ pub enum PaperIntegrator {
 /// Options of [`paper_spiral`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PaperOptions {
+    /// The integrator of Step 3.
     pub integrator: PaperIntegrator,
     /// Bound `L` to one revolution of the planar spiral (Step 5).
     pub one_revolution: bool,

@@ -144,8 +144,11 @@ impl Default for SolveOptions {
 /// `steps` used), the iterations used (all runs) and how it was found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpiralSolution {
+    /// The spiral found.
     pub problem: FrenetProblem,
+    /// The residual of the end conditions (relative to the chord) at the solution.
     pub error: f64,
+    /// Levenberg–Marquardt iterations, over all starts.
     pub iterations: usize,
     /// Integration steps of the final run (after the truncation check).
     pub steps: usize,
@@ -162,10 +165,13 @@ pub struct SpiralSolution {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SolveError {
     #[error("the end points coincide")]
+    /// The end points coincide.
     Coincident,
     #[error("an input is not finite, or a tangent is zero")]
+    /// An input is not finite, or a tangent is zero.
     BadInput,
     #[error("integration: {0}")]
+    /// The Frenet integration refused a problem.
     Frenet(#[from] FrenetError),
 }
 
@@ -466,11 +472,11 @@ pub(crate) fn starts(opts: &SolveOptions) -> usize {
 /// The problem a restart solves first: the forward problem with the turned
 /// normal, or the reversed problem ([`Restart::Reversed`]).
 pub(crate) fn restart_problem(
-    pair: &(DVec3, DVec3, DVec3, DVec3),
+    pair: &crate::pair::HermitePair,
     base: &Scaled,
     restart: Restart,
 ) -> Result<Scaled, SolveError> {
-    let &(x0, t0, xf, tf) = pair;
+    let (x0, t0, xf, tf) = (*pair).into();
     match restart {
         Restart::Reversed => Scaled::new(xf, -tf, x0, -t0, None),
         Restart::Turned(a) => {
@@ -486,12 +492,12 @@ pub(crate) fn restart_problem(
 /// Both problems share the scale `D` (`x_f − x₀` only changes sign), so the
 /// scaled parameters convert as the unscaled ones.
 pub(crate) fn forward_from_reversed(
-    pair: &(DVec3, DVec3, DVec3, DVec3),
+    pair: &crate::pair::HermitePair,
     rev: &Scaled,
     p: &[f64; 5],
     steps: usize,
 ) -> Result<(Scaled, [f64; 5]), SolveError> {
-    let &(x0, t0, xf, tf) = pair;
+    let (x0, t0, xf, tf) = (*pair).into();
     let end = rev.problem(p).integrate_unchecked(steps);
     let sc = Scaled::new(x0, t0, xf, tf, Some(end.frame[1]))?;
     let l = p[4];
@@ -568,6 +574,16 @@ fn solve_from(sc: &Scaled, p: [f64; 5], steps: usize, opts: &SolveOptions) -> Ru
 }
 
 /// The spiral from `(x0, t0)` to `(xf, tf)` (tangents need not be unit).
+///
+/// ```
+/// use strandfit::euler::{solve_spiral, SolveOptions};
+/// use strandfit::DVec3;
+///
+/// // A quarter of the unit circle: the spiral is the arc (γ = τ₀ = δ = 0).
+/// let s = solve_spiral(DVec3::X, DVec3::Y, DVec3::Y, -DVec3::X, &SolveOptions::default()).unwrap();
+/// assert!((s.problem.kappa0 - 1.0).abs() < 1e-6);
+/// assert!((s.problem.length - std::f64::consts::FRAC_PI_2).abs() < 1e-6);
+/// ```
 pub fn solve_spiral(
     x0: DVec3,
     t0: DVec3,
@@ -575,7 +591,7 @@ pub fn solve_spiral(
     tf: DVec3,
     opts: &SolveOptions,
 ) -> Result<SpiralSolution, SolveError> {
-    let pair = (x0, t0, xf, tf);
+    let pair = crate::pair::HermitePair::new(x0, t0, xf, tf);
     let base = Scaled::new(x0, t0, xf, tf, opts.start_normal)?;
     // The best forward run so far, with its problem (`None`: `base`).
     let mut best: Option<(Option<Scaled>, Run)> = None;

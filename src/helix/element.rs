@@ -74,8 +74,11 @@ pub fn sinc_defect3(x: f64) -> f64 {
 /// An orthonormal Frenet-type frame `(t, n, b)`, `b = t × n`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
+    /// Unit tangent `t`.
     pub tangent: DVec3,
+    /// Unit principal normal `n`.
     pub normal: DVec3,
+    /// Unit binormal `b = t × n`.
     pub binormal: DVec3,
 }
 
@@ -148,6 +151,17 @@ impl HelixElement {
 
     /// Point at arc length `s` from the start (any real `s`; the element is
     /// the part `0 ≤ s ≤ L`).
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    /// use std::f64::consts::PI;
+    ///
+    /// // One turn of a helix of radius 1 and pitch 2π·0.5: κ = 1/(1 + 0.25), τ = 0.5/(1 + 0.25).
+    /// let h = HelixElement { start: DVec3::X, tangent: DVec3::new(0.0, 1.0, 0.5).normalize(),
+    ///     normal: -DVec3::X, curvature: 0.8, torsion: 0.4, length: 2.0 * PI * 1.25f64.sqrt() };
+    /// let end = h.point(h.length);
+    /// assert!((end - DVec3::new(1.0, 0.0, PI)).length() < 1e-12);
+    /// ```
     #[inline]
     pub fn point(&self, s: f64) -> DVec3 {
         let (k, tau) = (self.curvature, self.torsion);

@@ -47,18 +47,21 @@ pub const PARALLEL_EPS: f64 = 1e-12;
 /// miss `p₁`.
 pub const DEFAULT_COHELICAL_TOL: f64 = 1e-6;
 
-/// Two points with tangents: the data of one interpolation (tangents need
-/// not be unit).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HermitePair {
-    pub p0: DVec3,
-    pub t0: DVec3,
-    pub p1: DVec3,
-    pub t1: DVec3,
-}
+pub use crate::pair::HermitePair;
 
 impl HermitePair {
-    /// [`interpolate`] on this pair.
+    /// Ghosh's short helix [`interpolate`] on this pair.
+    ///
+    /// ```
+    /// use strandfit::{helix, DVec3, HermitePair};
+    ///
+    /// // A quarter of the unit circle.
+    /// let pair = HermitePair::new(DVec3::X, DVec3::Y, DVec3::Y, -DVec3::X);
+    /// let h = pair.interpolate(helix::DEFAULT_COHELICAL_TOL).unwrap();
+    /// assert!((h.element.curvature - 1.0).abs() < 1e-12);
+    /// assert!(h.element.torsion.abs() < 1e-12);
+    /// assert!((h.element.length - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    /// ```
     pub fn interpolate(&self, tol: f64) -> Result<ShortHelix, HelixError> {
         interpolate(self.p0, self.t0, self.p1, self.t1, tol)
     }

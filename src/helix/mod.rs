@@ -17,17 +17,30 @@ use thiserror::Error;
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
 pub enum HelixError {
     #[error("non-finite coordinate in points or tangents")]
+    /// A point or tangent is not finite.
     NonFinite,
     #[error("a tangent has zero length")]
+    /// A tangent has zero length.
     ZeroTangent,
     #[error("p0 and p1 coincide: no helix joins a point to itself")]
+    /// The two points coincide.
     CoincidentPoints,
     #[error(
         "points and tangents are not co-helical: |<p1-p0, t1-t0>|/(|p1-p0||t1-t0|) = {residual:.3e} exceeds tolerance {tolerance:.1e} (Ghosh's condition, Eq. (6))"
     )]
-    NotCoHelical { residual: f64, tolerance: f64 },
+    /// The data are not co-helical (Ghosh's condition, Eq. (6)).
+    NotCoHelical {
+        /// `|⟨p₁ − p₀, t₁ − t₀⟩|/(|p₁ − p₀||t₁ − t₀|)`.
+        residual: f64,
+        /// The tolerance it exceeds.
+        tolerance: f64,
+    },
     #[error(
         "tangents are parallel but the chord is {deviation:.3e} rad off the tangent: only a full-turn helix joins them, not a short one"
     )]
-    ParallelTangentsOffChord { deviation: f64 },
+    /// The tangents are parallel but the chord is off them: only a full-turn helix joins the points.
+    ParallelTangentsOffChord {
+        /// Angle between the chord and the tangents (radians).
+        deviation: f64,
+    },
 }

@@ -19,8 +19,11 @@ pub struct PiecewiseHelix {
 /// tangent.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ElementParams {
+    /// Arc length `L`.
     pub length: f64,
+    /// Curvature `κ ≥ 0`.
     pub curvature: f64,
+    /// Torsion `τ`.
     pub torsion: f64,
     /// Signed angle (radians, about the start tangent) from the reference
     /// normal carried over from the previous element's end to this element's
@@ -33,10 +36,13 @@ pub struct ElementParams {
 /// the chain (see [`PiecewiseHelix::from_params`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ChainParams {
+    /// Start point.
     pub start: DVec3,
+    /// Unit start tangent.
     pub tangent: DVec3,
     /// Reference normal at the start (the first curved element's normal).
     pub normal: DVec3,
+    /// Per element, in order.
     pub elements: Vec<ElementParams>,
 }
 
@@ -53,14 +59,17 @@ impl PiecewiseHelix {
         PiecewiseHelix { elements, cum }
     }
 
+    /// The elements, in order.
     pub fn elements(&self) -> &[HelixElement] {
         &self.elements
     }
 
+    /// Number of elements.
     pub fn len(&self) -> usize {
         self.elements.len()
     }
 
+    /// No elements.
     pub fn is_empty(&self) -> bool {
         self.elements.is_empty()
     }
@@ -104,6 +113,15 @@ impl PiecewiseHelix {
     }
 
     /// `m ≥ 2` points equally spaced in arc length, first and last included.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement::straight(DVec3::X, DVec3::X, 2.0);
+    /// let chain = PiecewiseHelix::new(vec![a, b]);
+    /// assert_eq!(chain.sample(4), vec![DVec3::ZERO, DVec3::X, 2.0 * DVec3::X, 3.0 * DVec3::X]);
+    /// ```
     pub fn sample(&self, m: usize) -> Vec<DVec3> {
         let mut out = Vec::with_capacity(m);
         self.sample_into(m, &mut out);

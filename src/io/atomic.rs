@@ -84,6 +84,7 @@ fn resolve_target(target: &Path) -> Result<PathBuf, IoError> {
     ))
 }
 
+/// A file written under a temporary name and moved into place by `commit`, so that readers never see a partial output.
 pub struct AtomicFile {
     /// The path the user named (for messages).
     target: PathBuf,

@@ -35,6 +35,7 @@ use crate::helix::{ChainParams, ElementParams};
 /// File magic: non-ASCII first byte, then "SFH", then CR LF SUB LF (as PNG
 /// does), so text-mode transfers and truncated-to-text files are caught.
 pub const MAGIC: [u8; 8] = *b"\x89SFH\r\n\x1a\n";
+/// The container format version written.
 pub const VERSION: u16 = 1;
 const BLOCK_MAGIC: [u8; 4] = *b"SFHB";
 const END_MAGIC: [u8; 4] = *b"SFHE";
@@ -53,7 +54,9 @@ const KIND_QCHAIN: u8 = 3;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Storage {
+    /// `f64` chain parameters.
     F64,
+    /// `f32` chain parameters.
     F32,
     /// Quantised on per-curve power-of-two grids, delta- and varint-coded.
     Compact,
@@ -62,6 +65,7 @@ pub enum Storage {
 /// The container header (stored as JSON).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Header {
+    /// How the chain parameters are stored.
     pub storage: Storage,
     /// The Fréchet tolerance the curves were compressed to, if one was set.
     pub tolerance: Option<f64>,
@@ -72,6 +76,7 @@ pub struct Header {
     /// Per-point data names of the input that are not stored (the points
     /// themselves are replaced by helices).
     pub dropped_point_data: Vec<String>,
+    /// The program that wrote the file.
     pub written_by: String,
 }
 
@@ -80,21 +85,28 @@ pub struct Header {
 /// on a small tractogram the header is a noticeable share of the file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SourceMeta {
+    /// The input's format (e.g. "tck").
     pub format: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// The input's file name, if recorded.
     pub file: Option<String>,
     /// Row-major 4×4.
     #[serde(default = "identity", skip_serializing_if = "is_identity")]
     pub vox_to_world: [[f64; 4]; 4],
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Voxel sizes of the reference image.
     pub voxel_size: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Dimensions of the reference image.
     pub dimensions: Option<[u32; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Length unit of the coordinates.
     pub units: Option<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    /// Names of the per-curve values.
     pub curve_data_names: Vec<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    /// Other header fields of the input, as key–value pairs.
     pub extra: Vec<(String, String)>,
 }
 
@@ -107,6 +119,7 @@ fn is_identity(m: &[[f64; 4]; 4]) -> bool {
 }
 
 impl SourceMeta {
+    /// The serialisable form of `m`, with the input's file name if given.
     pub fn from_metadata(m: &Metadata, file: Option<&Path>) -> Self {
         SourceMeta {
             format: m.format.extension().to_string(),
@@ -149,8 +162,11 @@ impl SourceMeta {
 /// on instead of resetting it, which would reinterpret every later twist.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct QuantChain {
+    /// Length grid exponent: lengths on steps of `2^len_exp`.
     pub len_exp: i8,
+    /// Angle grid exponent.
     pub angle_exp: i8,
+    /// Start point on the length grid.
     pub start: [i64; 3],
     /// Quaternion `(x, y, z)` of the start frame (`w ≥ 0` implied).
     pub frame: [i64; 3],
@@ -264,6 +280,7 @@ impl QuantChain {
 /// What a curve record holds.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
+    /// A curve without points.
     Empty,
     /// Stored verbatim (one-point curves, curves that could not be fitted).
     Points(Vec<DVec3>),
@@ -276,11 +293,14 @@ pub enum Shape {
 /// One curve of the container.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StoredCurve {
+    /// The curve's identifier, if the input had one.
     pub id: Option<String>,
     /// Points of the input curve, so that decompression can give back as
     /// many by default.
     pub source_points: u64,
+    /// Per-curve values named in the header.
     pub curve_data: Vec<f32>,
+    /// The curve's geometry.
     pub shape: Shape,
 }
 
@@ -688,6 +708,7 @@ pub struct ContainerWriter {
 }
 
 impl ContainerWriter {
+    /// Create a container at `path` with `header`.
     pub fn create(path: &Path, header: Header) -> Result<Self, IoError> {
         let mut out = AtomicFile::create(path)?;
         let json = serde_json::to_vec(&header)
@@ -705,10 +726,12 @@ impl ContainerWriter {
         })
     }
 
+    /// The header being written.
     pub fn header(&self) -> &Header {
         &self.header
     }
 
+    /// Append one curve.
     pub fn write(&mut self, c: &StoredCurve) -> Result<(), IoError> {
         let err = |r: String| IoError::new(self.out.target(), r).curve(self.curves);
         if c.curve_data.len() != self.header.source.curve_data_names.len() {
@@ -816,6 +839,7 @@ pub struct ContainerReader {
 }
 
 impl ContainerReader {
+    /// Open a container and read its header.
     pub fn open(path: &Path) -> Result<Self, IoError> {
         let mut src = ByteSource::open(path)?;
         let magic = src.array::<8>("the magic number")?;
@@ -879,10 +903,12 @@ impl ContainerReader {
         })
     }
 
+    /// The container's header.
     pub fn header(&self) -> &Header {
         &self.header
     }
 
+    /// The file read.
     pub fn path(&self) -> &Path {
         self.src.path()
     }

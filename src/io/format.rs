@@ -26,6 +26,7 @@ pub enum Format {
 }
 
 impl Format {
+    /// Every format, in the order the command line lists them.
     pub const ALL: [Format; 7] = [
         Format::Tck,
         Format::Trk,

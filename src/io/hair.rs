@@ -58,6 +58,7 @@ struct PointArray {
     floats: usize,
 }
 
+/// Reader of Cem Yuksel's `.hair` files.
 pub struct HairReader {
     meta: Metadata,
     /// Segments per strand, when the file has the array.
@@ -77,6 +78,7 @@ pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
 }
 
 impl HairReader {
+    /// Open a `.hair` file and read its header.
     pub fn open(path: &Path) -> Result<Self, IoError> {
         let mut src = ByteSource::open(path)?;
         let len = src.len();
@@ -317,6 +319,7 @@ struct OutArray {
     spool: Spool,
 }
 
+/// Writer of `.hair` files.
 pub struct HairWriter {
     path: PathBuf,
     out: AtomicFile,
@@ -334,6 +337,7 @@ pub struct HairWriter {
 }
 
 impl HairWriter {
+    /// Create a `.hair` file at `path` for curves described by `meta`.
     pub fn new(path: &Path, meta: &Metadata) -> Result<Self, IoError> {
         let out = AtomicFile::create(path)?;
         let col = |n: &str| meta.point_data_names.iter().position(|m| m == n);

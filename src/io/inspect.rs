@@ -10,20 +10,26 @@ use super::Curve;
 /// Running statistics over the curves of one file.
 #[derive(Clone, Debug, Serialize)]
 pub struct CurveStats {
+    /// Number of curves.
     #[serde(rename = "curve_count")]
     pub curves: u64,
+    /// Number of points.
     #[serde(rename = "point_count")]
     pub points: u64,
     /// Points per curve: min, median, max (0 for an empty file).
     #[serde(rename = "point_count_min")]
     pub points_min: u64,
+    /// Median points per curve.
     #[serde(rename = "point_count_median")]
     pub points_median: u64,
+    /// Most points in a curve.
     #[serde(rename = "point_count_max")]
     pub points_max: u64,
     /// Sum, min and max of the polyline arc lengths.
     pub length_total: f64,
+    /// Shortest polyline.
     pub length_min: f64,
+    /// Longest polyline.
     pub length_max: f64,
     /// Mean distance between consecutive distinct points.
     pub step_mean: f64,
@@ -33,6 +39,7 @@ pub struct CurveStats {
     /// one point).
     #[serde(rename = "empty_curve_count")]
     pub empty_curves: u64,
+    /// Curves of a single (possibly repeated) point.
     #[serde(rename = "single_point_curve_count")]
     pub single_point_curves: u64,
     /// Consecutive points that coincide exactly, over all curves.

@@ -20,6 +20,7 @@
 //! (a failed run) leaves nothing behind and never clobbers an existing file.
 
 pub mod atomic;
+#[doc(hidden)]
 pub mod bytes;
 pub mod container;
 pub mod format;
@@ -84,6 +85,7 @@ pub struct Metadata {
     /// Voxel sizes (mm) and image dimensions of the reference image, where
     /// the format has them (`.trk`).
     pub voxel_size: Option<[f64; 3]>,
+    /// Image dimensions in voxels (`.trk`).
     pub dimensions: Option<[u32; 3]>,
     /// Length unit of the world coordinates, e.g. "mm" for tractography,
     /// "solar radius" for the bundled field lines; `None` when unknown.
@@ -128,11 +130,13 @@ impl Metadata {
 #[derive(Debug, thiserror::Error)]
 #[error("{}{}{}: {reason}", path.display(), curve.map(|c| format!(", curve {c}")).unwrap_or_default(), at.as_ref().map(|a| format!(" ({a})")).unwrap_or_default())]
 pub struct IoError {
+    /// The file concerned.
     pub path: PathBuf,
     /// 0-based index of the curve being read or written, if any.
     pub curve: Option<u64>,
     /// Where in the file: "byte 1234", "line 17", "header field `count`".
     pub at: Option<String>,
+    /// What went wrong.
     pub reason: String,
     /// The operating-system error, when there is one. Its text is already
     /// in `reason`, so it is not the `Error::source` (an error chain would
@@ -177,6 +181,7 @@ impl IoError {
 /// A streaming reader: its [`Metadata`] up front, then the curves in file
 /// order. After the first `Err` the iterator ends (returns `None`).
 pub trait CurveReader: Iterator<Item = Result<Curve, IoError>> {
+    /// The file's metadata (read from its header).
     fn metadata(&self) -> &Metadata;
     /// Curves left out so far under [`BadCurves::Skip`], in file order
     /// (none for a reader that skips nothing).
@@ -302,7 +307,9 @@ impl CurveReader for Checked {
 /// A streaming writer. Curves are written in order; [`finish`](Self::finish)
 /// completes the file (counts, terminators) and renames it into place.
 pub trait CurveWriter {
+    /// Write one curve.
     fn write_curve(&mut self, curve: &Curve) -> Result<(), IoError>;
+    /// Finish the file (trailers, counts) and move it into place.
     fn finish(self: Box<Self>) -> Result<(), IoError>;
 }
 

@@ -148,6 +148,7 @@ pub struct VecReader {
 }
 
 impl VecReader {
+    /// A reader that yields `curves` with metadata `meta`.
     pub fn new(meta: Metadata, curves: Vec<Curve>) -> Self {
         VecReader {
             meta,

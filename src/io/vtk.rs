@@ -811,6 +811,7 @@ struct Scan {
     stopped: bool,
 }
 
+/// Reader of legacy VTK polydata files (`.vtk`, ASCII or binary).
 pub struct VtkReader {
     src: Src,
     meta: Metadata,
@@ -831,6 +832,7 @@ pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
 }
 
 impl VtkReader {
+    /// Open a `.vtk` file and read its header.
     pub fn open(path: &Path) -> Result<Self, IoError> {
         let mut src = Src::open(path)?;
         let scan = scan(&mut src)?;
@@ -1591,6 +1593,7 @@ impl OutArray {
     }
 }
 
+/// Writer of legacy VTK polydata files.
 pub struct VtkWriter {
     path: PathBuf,
     out: AtomicFile,
@@ -1610,6 +1613,7 @@ pub struct VtkWriter {
 }
 
 impl VtkWriter {
+    /// Create a `.vtk` file at `path` for curves described by `meta`.
     pub fn new(path: &Path, meta: &Metadata) -> Result<Self, IoError> {
         let out = AtomicFile::create(path)?;
         let binary = !meta

@@ -14,7 +14,9 @@ use super::{AtomicFile, IoError};
 
 /// One path: its points and the frame `(𝐟₁, 𝐟₂, 𝐟₃)` at each.
 pub struct FramedPath {
+    /// The path's points.
     pub points: Vec<DVec3>,
+    /// The frame `(𝐟₁, 𝐟₂, 𝐟₃)` at each point.
     pub frames: Vec<[DVec3; 3]>,
 }
 

@@ -63,9 +63,10 @@ impl MapKernel for AtphHermite {
             );
             let p2 = p1 + rng.range(0.5, 2.0) * rng.unit_vector();
             let length = (k % 2 == 1).then(|| (p2 - p1).length() * rng.range(1.1, 1.6));
-            if let Prepared::Kernel { record, .. } =
-                prepare(&(p1, rng.unit_vector(), p2, rng.unit_vector()), length)
-            {
+            if let Prepared::Kernel { record, .. } = prepare(
+                &HermitePair::new(p1, rng.unit_vector(), p2, rng.unit_vector()),
+                length,
+            ) {
                 // Well-conditioned systems only: the twin's and the GPU's
                 // rounding are amplified by 1/rel_det.
                 if twin::atph_hermite(&record)[OUT_REL_DET] > 0.05 {
@@ -92,7 +93,7 @@ enum Prepared {
 }
 
 fn prepare(pair: &HermitePair, length: Option<f64>) -> Prepared {
-    let (p1, t1, p2, t2) = *pair;
+    let (p1, t1, p2, t2) = (*pair).into();
     let field = match tangent_field(p1, t1, p2, t2) {
         Ok(f) => f,
         Err(e) => return Prepared::Done(Err(e)),

@@ -415,6 +415,7 @@ pub fn source<K: Kernel, R: Real>(cfg: K::Config) -> String {
 /// Calls `$m!` with every declared kernel type, so that lists of kernels
 /// (sources, parity tests) are written once.
 #[macro_export]
+#[doc(hidden)]
 macro_rules! for_each_kernel {
     ($m:ident) => {
         $m!(

@@ -41,6 +41,14 @@ use super::error::{check, MetricsError};
 ///
 /// Errors: [`MetricsError::Empty`] if either is empty,
 /// [`MetricsError::NonFinite`] on NaN or infinite coordinates.
+///
+/// ```
+/// use strandfit::{metrics::hausdorff, DVec3};
+///
+/// let a = [DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0)];
+/// let b = [DVec3::new(0.0, 0.5, 0.0), DVec3::new(1.0, 0.5, 0.0), DVec3::new(2.0, 0.5, 0.0)];
+/// assert_eq!(hausdorff(&a, &b).unwrap(), 0.5);
+/// ```
 pub fn hausdorff(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError> {
     check(a)?;
     check(b)?;

@@ -37,31 +37,49 @@ pub const INPUT_TOL: f64 = 1e-9;
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum LocalError {
     #[error("an input is not finite")]
+    /// An input is not finite.
     NotFinite,
     #[error("the end points coincide")]
+    /// The end points coincide.
     Coincident,
     #[error("the initial frame is not orthonormal and right-handed (error {0:.2e})")]
+    /// The initial frame is not orthonormal and right-handed (by this error).
     BadFrame(f64),
     #[error("the end tangent is zero")]
+    /// The end tangent is zero.
     ZeroTangent,
     #[error("condition (4.1) fails: u_i.du = {left:.6}, du.u_f = {right:.6}")]
-    NotSymmetric { left: f64, right: f64 },
+    /// Condition (4.1) fails.
+    NotSymmetric {
+        /// `𝐮ᵢ·𝚫𝐩` (unit chord).
+        left: f64,
+        /// `𝚫𝐩·𝐮_f`.
+        right: f64,
+    },
     #[error("the end tangents are parallel or opposite (gamma = {0:.3e} rad); the method needs u_i x u_f != 0")]
+    /// The end tangents are parallel or opposite (angle `γ`); the method needs `𝐮ᵢ × 𝐮_f ≠ 0`.
     ParallelTangents(f64),
     #[error("no RRMF5-I interpolant: gamma = {gamma:.4} <= 2pi/5 and the sufficient condition (4.30) fails")]
-    NoSolution { gamma: f64 },
+    /// No RRMF5-I interpolant: `γ ≤ 2π/5` and the sufficient condition (4.30) fails.
+    NoSolution {
+        /// The angle `γ` between the end tangents.
+        gamma: f64,
+    },
     #[error("rational RMF: {0}")]
+    /// No rational RMF for the interpolant.
     Rmf(#[from] RmfError),
 }
 
 /// The solution of one local problem.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LocalSolution {
+    /// The interpolant with its rational RMF.
     pub curve: RrmfQuintic,
     /// `μ` of (4.4) and (4.17).
     pub mu: f64,
     /// `θ₁` (4.13) and `φ₂ = θ₂` in the canonical frame.
     pub theta1: f64,
+    /// `φ₂ = θ₂` in the canonical frame.
     pub phi2: f64,
     /// `γ`, the angle between `𝐮ᵢ` and `𝐮_f`.
     pub gamma: f64,

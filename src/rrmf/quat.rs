@@ -17,6 +17,7 @@ use glam::DVec3;
 use std::ops::{Add, Mul, Neg, Sub};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// A quaternion `s + 𝐯` (scalar and vector part).
 pub struct Quat {
     /// `scal(𝒜)`.
     pub s: f64,
@@ -24,20 +25,26 @@ pub struct Quat {
     pub v: DVec3,
 }
 
+/// `𝐢`, as a vector.
 pub const I: DVec3 = DVec3::X;
+/// `𝐣`, as a vector.
 pub const J: DVec3 = DVec3::Y;
+/// `𝐤`, as a vector.
 pub const K: DVec3 = DVec3::Z;
 
 impl Quat {
+    /// `0`.
     pub const ZERO: Quat = Quat {
         s: 0.0,
         v: DVec3::ZERO,
     };
+    /// `1`.
     pub const ONE: Quat = Quat {
         s: 1.0,
         v: DVec3::ZERO,
     };
 
+    /// The quaternion `s + 𝐯`.
     pub const fn new(s: f64, v: DVec3) -> Self {
         Quat { s, v }
     }
@@ -50,6 +57,7 @@ impl Quat {
         }
     }
 
+    /// `[s, vx, vy, vz]`.
     pub fn to_array(self) -> [f64; 4] {
         [self.s, self.v.x, self.v.y, self.v.z]
     }
@@ -65,6 +73,7 @@ impl Quat {
         Quat { s: c, v: axis * s }
     }
 
+    /// The conjugate `s − 𝐯`.
     pub fn conj(self) -> Self {
         Quat {
             s: self.s,
@@ -77,10 +86,12 @@ impl Quat {
         self.s * self.s + self.v.length_squared()
     }
 
+    /// `|q| = √(s² + |𝐯|²)`.
     pub fn norm(self) -> f64 {
         self.norm2().sqrt()
     }
 
+    /// All four components are finite.
     pub fn is_finite(self) -> bool {
         self.s.is_finite() && self.v.is_finite()
     }

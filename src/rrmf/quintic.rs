@@ -51,6 +51,7 @@ fn de_casteljau_f64<const N: usize>(mut c: [f64; N], t: f64) -> f64 {
 }
 
 impl PhQuintic {
+    /// The PH quintic from `start` with pre-image Bernstein coefficients `pre_image`.
     pub fn new(start: DVec3, pre_image: [Quat; 3]) -> Self {
         PhQuintic { start, pre_image }
     }
@@ -129,6 +130,7 @@ impl PhQuintic {
         de_casteljau_f64(s, t)
     }
 
+    /// Total arc length `s(1)`, exact.
     pub fn length(&self) -> f64 {
         self.speed_weights().iter().sum::<f64>() / 5.0
     }

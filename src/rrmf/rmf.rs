@@ -309,16 +309,19 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum RmfError {
     #[error("the pre-image vanishes on [0, 1] (a degenerate PH quintic, Definition 2.3)")]
+    /// The pre-image vanishes on `[0, 1]` (a degenerate PH quintic, Definition 2.3).
     Degenerate,
     #[error(
         "no quadratic W satisfies condition (2.5) (residual {0:.3e}): not a class I RRMF quintic"
     )]
+    /// No quadratic `𝒲` satisfies condition (2.5) (by this residual): not a class I RRMF quintic.
     NotRrmf(f64),
 }
 
 /// A class I RRMF quintic with its rational RMF.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RrmfQuintic {
+    /// The PH quintic.
     pub curve: PhQuintic,
     /// Bernstein coefficients of `𝒲 = a + 𝐢b`, as quaternions `a + b𝐢`.
     pub w: [Quat; 3],

@@ -38,24 +38,39 @@ pub const STRAIGHT_TAU: f64 = 1e-9;
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum MotionError {
     #[error("a motion needs at least two points, got {0}")]
+    /// Fewer than two points.
     TooFew(usize),
     #[error("point {0} is not finite")]
+    /// A point is not finite (its index).
     NotFinite(usize),
     #[error("points {index} and {next} coincide", next = .0 + 1, index = .0)]
+    /// Two consecutive points coincide (the first's index).
     Repeated(usize),
     #[error("{points} points but {references} reference tangents")]
-    Mismatch { points: usize, references: usize },
+    /// Points and reference tangents differ in count.
+    Mismatch {
+        /// Number of points.
+        points: usize,
+        /// Number of reference tangents.
+        references: usize,
+    },
     #[error("the parameter c = {0} of Algorithm 1 must be in (0, 1]")]
+    /// The parameter `c` of Algorithm 1 is not in `(0, 1]`.
     BadC(f64),
     #[error("reference tangent {0} is zero or not finite")]
+    /// A reference tangent is zero or not finite (its index).
     BadReference(usize),
     #[error("segment {segment} (points {segment} to {}): {source}", segment + 1)]
+    /// A segment's local problem has no solution.
     Segment {
+        /// Index of the segment.
         segment: usize,
         #[source]
+        /// Why it has none.
         source: LocalError,
     },
     #[error("segment {0}: no admissible end tangent (tau = {1:.4} rad)")]
+    /// A segment has no admissible end tangent (its index and `τ`, radians).
     NoTangent(usize, f64),
 }
 
@@ -63,8 +78,11 @@ pub enum MotionError {
 /// `after + 1`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Inserted {
+    /// Index of the data point it follows.
     pub after: usize,
+    /// The inserted point.
     pub point: DVec3,
+    /// Its tangent.
     pub tangent: DVec3,
     /// `τ` of the original segment, which triggered the insertion.
     pub tau: f64,
@@ -74,7 +92,9 @@ pub struct Inserted {
 /// belongs to (two segments share it when a point was inserted).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotionSegment {
+    /// Index of the data segment the spline segment belongs to.
     pub data_segment: usize,
+    /// The quintic with its RMF.
     pub curve: RrmfQuintic,
     /// `μ` of (4.4) (`|𝚫𝐩|^{1/2}` for a straight segment).
     pub mu: f64,
@@ -84,8 +104,11 @@ pub struct MotionSegment {
 /// cumulative chord lengths.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RrmfSpline {
+    /// The spline segments, in order.
     pub segments: Vec<MotionSegment>,
+    /// Global parameter at each segment's start, and at the end (cumulative chord lengths).
     pub knots: Vec<f64>,
+    /// Points inserted by Algorithm 1.
     pub inserted: Vec<Inserted>,
 }
 
@@ -314,11 +337,13 @@ impl RrmfSpline {
         (i, ((u - a) / (b - a)).clamp(0.0, 1.0))
     }
 
+    /// The point at global parameter `u` (clamped to `[0, u_N]`).
     pub fn position(&self, u: f64) -> DVec3 {
         let (i, t) = self.locate(u);
         self.segments[i].curve.curve.position(t)
     }
 
+    /// The rotation-minimising frame at `u` (clamped).
     pub fn frame(&self, u: f64) -> [DVec3; 3] {
         let (i, t) = self.locate(u);
         self.segments[i].curve.frame(t)

@@ -4,7 +4,7 @@
 //! junctions (the fine fit trades the tangent gaps against the drawing;
 //! `z` continuity is imposed afterwards). Here the lifted polyline — the
 //! drawing's vertices with the lifted `z` — is re-fitted by the
-//! floating-tangents fitter of the core ([`crate::adaptive`]: Schneider
+//! floating-tangents fitter of the core ([`crate::fit_polyline_chain`]: Schneider
 //! smoothing, then the fewest helix elements within a tolerance `T`), whose
 //! chain is G1 by construction. What that costs in the drawing is
 //! measured, not assumed: the chain is sampled, projected on `z = 0` and

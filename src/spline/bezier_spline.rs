@@ -113,6 +113,17 @@ impl BezierSpline {
     ///
     /// Errors: a count that is not `3k + 1` with `k ≥ 1`, a non-finite
     /// coordinate, all points equal (zero length), or overflowing length.
+    ///
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// // A straight cubic with its controls at thirds: length 3.
+    /// let s = BezierSpline::from_control_points(&[
+    ///     DVec3::ZERO, DVec3::X, 2.0 * DVec3::X, 3.0 * DVec3::X,
+    /// ]).unwrap();
+    /// assert!((s.length() - 3.0).abs() < 1e-12);
+    /// assert!((s.point_at_arclen(1.5) - DVec3::new(1.5, 0.0, 0.0)).length() < 1e-12);
+    /// ```
     pub fn from_control_points(points: &[DVec3]) -> Result<Self, SplineError> {
         Self::from_control_points_with_accuracy(points, DEFAULT_ACCURACY)
     }

@@ -5,14 +5,19 @@ use glam::DVec3;
 /// A cubic Bézier segment `B(t) = Σ bᵢ,₃(t) Pᵢ`, `t ∈ [0, 1]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CubicBez {
+    /// Start point.
     pub p0: DVec3,
+    /// First inner control point.
     pub p1: DVec3,
+    /// Second inner control point.
     pub p2: DVec3,
+    /// End point.
     pub p3: DVec3,
 }
 
 impl CubicBez {
     #[inline]
+    /// The cubic with control points `p0 … p3`.
     pub fn new(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3) -> Self {
         CubicBez { p0, p1, p2, p3 }
     }

@@ -26,8 +26,11 @@ pub enum SplineError {
     /// Equal-arc-length sampling needs at least one element (two points).
     #[error("need at least {min} {what}, got {got}")]
     TooFewSamples {
+        /// What was counted.
         what: &'static str,
+        /// The least allowed.
         min: usize,
+        /// The count given.
         got: usize,
     },
 }

@@ -57,6 +57,7 @@ pub struct SchneiderOptions {
 }
 
 impl SchneiderOptions {
+    /// Options with `tolerance` and the default iteration settings.
     pub fn new(tolerance: f64) -> Self {
         SchneiderOptions {
             tolerance,
@@ -70,10 +71,13 @@ impl SchneiderOptions {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PolylineFitError {
     #[error("point {0} is not finite")]
+    /// A point is not finite (its index).
     NonFinite(usize),
     #[error("fewer than two distinct points ({0} points given)")]
+    /// Fewer than two distinct points (the count given).
     TooFewPoints(usize),
     #[error("tolerance must be positive and finite, got {0}")]
+    /// The tolerance is not positive and finite.
     BadTolerance(f64),
 }
 

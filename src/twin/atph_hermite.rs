@@ -164,7 +164,7 @@ pub fn atph_hermite<R: Real>(rec: &[R]) -> [R; OUT_STRIDE] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::atph::{interpolate, interpolate_with_length, FieldKind};
+    use crate::atph::{interpolate, interpolate_with_length, FieldKind, HermitePair};
     use glam::DVec3;
 
     fn record(p1: DVec3, t1: DVec3, p2: DVec3, t2: DVec3, l: Option<f64>) -> Option<[f64; 8]> {
@@ -190,7 +190,16 @@ mod tests {
     fn twin_f64_matches_the_reference() {
         let pairs = crate::synthetic::synthetic_hermite_pairs(2000);
         let mut worst = 0.0f64;
-        for (i, &(p1, t1, p2, t2)) in pairs.iter().enumerate() {
+        for (
+            i,
+            &HermitePair {
+                p0: p1,
+                t0: t1,
+                p1: p2,
+                t1: t2,
+            },
+        ) in pairs.iter().enumerate()
+        {
             let l = (i % 2 == 1).then(|| 1.3 * (p2 - p1).length());
             let Some(rec) = record(p1, t1, p2, t2, l) else {
                 continue;

@@ -1,7 +1,7 @@
 //! Twin of `shaders/helix_eval.wgsl`: one point and unit tangent of a helix
 //! element per invocation (decompression of piecewise helices into samples).
 //!
-//! The formula is [`crate::helix::element`]'s cancellation-free form, with
+//! The formula is [`crate::helix::HelixElement`]'s cancellation-free form, with
 //! `φ = ωs` and `b₀ = t₀ × n₀`:
 //!
 //! ```text
