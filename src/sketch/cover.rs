@@ -38,7 +38,7 @@
 //! true junction, or stop short inside its own stretch (a local minimum of
 //! the fit). After the covering, in passes until the count of pieces
 //! stops dropping: each junction is slid to where its two helices, refitted,
-//! leave the least `E_D` ([`polish_junctions`]); neighbours that one helix
+//! leave the least `E_D` (`polish_junctions`); neighbours that one helix
 //! fits within `E_max` are merged; a piece whose neighbours can meet inside
 //! it is absorbed. Measured on projections of 2–4 helices with a corner at
 //! each join: every junction at the corner vertex, none spurious

@@ -94,7 +94,7 @@ fn sg9(points: &[DVec2], i: usize) -> DVec2 {
     (0..9).map(|j| SG9[j] * points[i + j - 4]).sum::<DVec2>() / 231.0
 }
 
-/// The polyline smoothed by the 9-point Savitzky–Golay filter ([`SG9`]),
+/// The polyline smoothed by the 9-point Savitzky–Golay filter (`SG9`),
 /// its first and last four vertices kept: for judging the drawing's
 /// sampling where noise moves each vertex by a sizeable part of an edge.
 pub fn smoothed(points: &[DVec2]) -> Vec<DVec2> {
@@ -113,7 +113,7 @@ pub fn smoothed(points: &[DVec2]) -> Vec<DVec2> {
 /// Noise of a drawing: the standard deviation `σ` of independent noise on
 /// each coordinate of each vertex, estimated from how far every vertex
 /// lies from the local cubic fitted by least squares to it and its four
-/// neighbours on each side (the Savitzky–Golay filter [`SG9`]), in the
+/// neighbours on each side (the Savitzky–Golay filter `SG9`), in the
 /// vertex index (a drawing sampled at a slowly varying rate is a smooth
 /// curve in it too).
 ///
@@ -194,7 +194,7 @@ fn turning(points: &[DVec2], i: usize) -> f64 {
         .abs()
 }
 
-/// A vertex turning by more than [`CORNER_TURN`] and [`CORNER_RATIO`] times
+/// A vertex turning by more than `CORNER_TURN` and `CORNER_RATIO` times
 /// the median turning of the vertices around it (a corner; on a smooth
 /// stroke the turning varies slowly).
 pub fn is_corner(points: &[DVec2], i: usize) -> bool {

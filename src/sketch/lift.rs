@@ -93,12 +93,16 @@ impl Default for SketchOptions {
 /// Why a sketch cannot be lifted.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SketchError {
+    /// Fewer than 3 distinct points (the count found).
     #[error("a sketch needs at least 3 distinct points, found {0}")]
     TooFew(usize),
+    /// A coordinate is NaN or infinite (the point's index).
     #[error("point {0} is not finite")]
     NonFinite(usize),
+    /// Every point is the same.
     #[error("the sketch has zero length")]
     ZeroLength,
+    /// An option out of its range (which, and why).
     #[error("invalid option: {0}")]
     Options(&'static str),
 }
@@ -109,18 +113,24 @@ pub struct LiftedHelix {
     /// `(a, b, c)` of Section 4.1 (radius `|a|`, pitch `|b|` per radian,
     /// tilt `c`).
     pub helix: ProjectedHelix,
-    /// Placement of the helix frame in the sketch plane (Section 6.1).
+    /// Placement of the helix frame in the sketch plane (Section 6.1):
+    /// its rotation,
     pub theta: f64,
+    /// where `H(0)` lands,
     pub origin: DVec2,
+    /// and whether its `x` axis is flipped first.
     pub reflect: bool,
     /// `H_3D,S` (the mirror) rather than `H_3D,R`.
     pub mirror: bool,
     /// `z` offset: the lift is `(P(t), ±z(t) + z0)`.
     pub z0: f64,
-    /// Parameter range and vertex range (inclusive).
+    /// Parameter at the first vertex.
     pub t_start: f64,
+    /// Parameter at the last vertex (`t` may run either way).
     pub t_end: f64,
+    /// First vertex covered (of [`SketchLift::points_2d`]).
     pub first: usize,
+    /// Last vertex covered (inclusive; shared with the next helix).
     pub last: usize,
     /// Largest vertex distance from the projected helix.
     pub max_error: f64,
@@ -169,6 +179,7 @@ impl LiftedHelix {
 /// G1 there).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Junction {
+    /// The vertex the two helices share.
     pub vertex: usize,
     /// Angle between the 3D tangents of the two helices, radians.
     pub tangent_angle: f64,
@@ -179,6 +190,7 @@ pub struct Junction {
 /// The result of [`lift_sketch`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SketchLift {
+    /// The helices, in order along the drawing.
     pub helices: Vec<LiftedHelix>,
     /// The vertices the fit ran on: the input, or (where `resampled`) the
     /// input evened out as [`SketchOptions::resampling`] says (densified:
@@ -188,9 +200,11 @@ pub struct SketchLift {
     pub resampled: bool,
     /// The lifted vertices `(x, y, z)` (Section 7: `x, y` are the sketch's).
     pub points_3d: Vec<DVec3>,
+    /// What is left at each junction.
     pub junctions: Vec<Junction>,
-    /// Largest and root-mean-square vertex distance from the projected fit.
+    /// Largest vertex distance from the projected fit.
     pub max_error: f64,
+    /// Root-mean-square vertex distance from the projected fit.
     pub rms_error: f64,
     /// Length of the sketch polyline.
     pub length: f64,

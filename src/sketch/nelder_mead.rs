@@ -1,6 +1,6 @@
 //! The Nelder–Mead simplex search as Lagarias, Reeds, Wright & Wright
 //! (1998) state it — the method the paper uses for its small fits (Section
-//! 6.2, reference [14]): reflection ρ = 1, expansion χ = 2, contraction
+//! 6.2, reference \[14\]): reflection ρ = 1, expansion χ = 2, contraction
 //! γ = ½ (outside and inside), shrink σ = ½, with their tie-breaking
 //! (a new vertex goes after the old ones of equal value).
 //!
@@ -11,8 +11,11 @@
 /// Stopping rules.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NelderMeadOptions {
+    /// Most evaluations of the function.
     pub max_evals: usize,
+    /// Relative spread of the simplex's values to stop at.
     pub ftol: f64,
+    /// Largest vertex distance (∞-norm) from the best to stop at.
     pub xtol: f64,
 }
 
@@ -29,8 +32,11 @@ impl Default for NelderMeadOptions {
 /// The best vertex found, its value and the evaluations spent.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Minimum<const N: usize> {
+    /// The best vertex.
     pub x: [f64; N],
+    /// The function's value there.
     pub value: f64,
+    /// Evaluations spent.
     pub evals: usize,
 }
 

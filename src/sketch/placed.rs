@@ -24,6 +24,7 @@ pub const PARAMS: usize = 6;
 /// A projected helix in sketch coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlacedHelix {
+    /// The projected helix in its own frame.
     pub helix: ProjectedHelix,
     /// Rotation of the helix frame into the sketch.
     pub theta: f64,
@@ -49,6 +50,8 @@ impl PlacedHelix {
         }
     }
 
+    /// The parameter vector `[θ, o_x, o_y, a, b, c]` (the inverse of
+    /// [`from_params`](Self::from_params)).
     pub fn params(&self) -> [f64; PARAMS] {
         [
             self.theta,
@@ -153,10 +156,15 @@ impl PlacedHelix {
 /// [`Evaluator::project`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Foot {
+    /// The parameter of the foot.
     pub t: f64,
+    /// Signed distance of the vertex from the curve along `normal`.
     pub offset: f64,
+    /// Unit normal of the projected curve at the foot.
     pub normal: DVec2,
+    /// `sin t`, kept for the Jacobian.
     pub sin_t: f64,
+    /// `cos t`, kept for the Jacobian.
     pub cos_t: f64,
 }
 

@@ -16,12 +16,16 @@ use glam::{DVec2, DVec3};
 /// `(a, b, c)`: radius `a ≥ 0`, pitch `b ≥ 0`, tilt `c` about the `x` axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProjectedHelix {
+    /// Radius (signed; `|a|` is the radius).
     pub a: f64,
+    /// Pitch per radian (signed).
     pub b: f64,
+    /// Tilt of the axis out of the sketch plane, radians.
     pub c: f64,
 }
 
 impl ProjectedHelix {
+    /// The helix `(a, b, c)`.
     pub fn new(a: f64, b: f64, c: f64) -> Self {
         ProjectedHelix { a, b, c }
     }

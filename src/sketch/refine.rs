@@ -33,10 +33,12 @@ use super::placed::{Foot, PlacedHelix, PARAMS};
 /// One helix of the covering with the sketch vertices it fits.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Piece {
+    /// The helix, placed in the sketch.
     pub helix: PlacedHelix,
     /// First and last vertex (inclusive); a junction vertex is the `last`
     /// of one piece and the `first` of the next.
     pub first: usize,
+    /// See `first`.
     pub last: usize,
     /// Closest-point parameters of vertices `first..=last`, monotone.
     pub ts: Vec<f64>,
@@ -148,8 +150,11 @@ pub struct Objective {
 /// What a refinement did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RefineReport {
+    /// Iterations run.
     pub iterations: usize,
+    /// The objective before.
     pub before: f64,
+    /// The objective after.
     pub after: f64,
 }
 
