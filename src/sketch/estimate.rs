@@ -12,6 +12,18 @@ use glam::DVec2;
 /// Tangent and signed curvature at every vertex, window half-width `q ≥ 1`
 /// (clamped to the polyline). Needs at least 3 vertices and no zero-length
 /// edges (checked by the callers).
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::estimate::tangents_and_curvatures;
+/// // A circle of radius 2, counter-clockwise: κ = +1/2, to 1 %.
+/// let pts: Vec<DVec2> = (0..50).map(|i| 2.0 * DVec2::from_angle(0.05 * i as f64)).collect();
+/// let found = tangents_and_curvatures(&pts, 3);
+/// for (i, (tangent, kappa)) in found.into_iter().enumerate() {
+///     assert!((kappa - 0.5).abs() < 0.005, "{i}: {kappa}");
+///     assert!((tangent.length() - 1.0).abs() < 1e-12);
+/// }
+/// ```
 pub fn tangents_and_curvatures(points: &[DVec2], q: usize) -> Vec<(DVec2, f64)> {
     let n = points.len();
     let q = q.max(1).min(n.saturating_sub(1) / 2).max(1);
@@ -157,6 +169,15 @@ pub fn estimate_noise(points: &[DVec2]) -> f64 {
 
 /// The polyline resampled at `m ≥ 2` points equally spaced in arc length
 /// (ends kept).
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::estimate::resample;
+/// let l = [DVec2::ZERO, DVec2::new(1.0, 0.0), DVec2::new(1.0, 3.0)];
+/// let r = resample(&l, 5); // length 4: a point every unit
+/// assert_eq!(r[1], DVec2::new(1.0, 0.0));
+/// assert_eq!(r[4], DVec2::new(1.0, 3.0));
+/// ```
 pub fn resample(points: &[DVec2], m: usize) -> Vec<DVec2> {
     let m = m.max(2);
     let n = points.len();

@@ -234,6 +234,26 @@ fn check(points: &[DVec2]) -> Result<Vec<DVec2>, SketchError> {
 }
 
 /// Lift a 2D polyline to a 3D piecewise helix.
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::{lift_sketch, SketchOptions};
+/// // The projection of a helix of radius 1 and pitch 0.3 per radian whose
+/// // axis is tilted 0.8 rad out of the page, one and a half turns.
+/// let (tilt, pitch) = (0.8f64, 0.3);
+/// let drawing: Vec<DVec2> = (0..120)
+///     .map(|k| {
+///         let u = 3.0 * std::f64::consts::PI * k as f64 / 119.0;
+///         DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin())
+///     })
+///     .collect();
+/// let lift = lift_sketch(&drawing, &SketchOptions::default()).unwrap();
+/// assert_eq!(lift.helices.len(), 1);
+/// assert!(lift.max_error <= 1e-3 * lift.length);
+/// // The helix found has the drawn one's radius and pitch.
+/// let h = lift.helices[0].helix;
+/// assert!((h.a.abs() - 1.0).abs() < 1e-3 && (h.b.abs() - pitch).abs() < 1e-3);
+/// ```
 pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift, SketchError> {
     if let Some(e) = opts.emax {
         if !(e > 0.0 && e < 1.0) {

@@ -42,6 +42,13 @@ pub struct Minimum<const N: usize> {
 
 /// Minimise `f` from `x0`, the initial simplex `x0` and `x0 + step_i e_i`.
 /// A `NaN` value counts as `+∞` (so a bad region is left, not trusted).
+///
+/// ```
+/// use strandfit::sketch::nelder_mead::{minimize, NelderMeadOptions};
+/// let rosenbrock = |x: &[f64; 2]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2);
+/// let m = minimize(rosenbrock, [-1.2, 1.0], [0.1, 0.1], &NelderMeadOptions::default());
+/// assert!((m.x[0] - 1.0).abs() < 1e-4 && (m.x[1] - 1.0).abs() < 1e-4, "{:?}", m.x);
+/// ```
 pub fn minimize<const N: usize>(
     mut f: impl FnMut(&[f64; N]) -> f64,
     x0: [f64; N],

@@ -53,6 +53,15 @@ impl ProjectedHelix {
     }
 
     /// `H(t)`, the projection on `z = 0`.
+    ///
+    /// ```
+    /// use strandfit::sketch::ProjectedHelix;
+    /// let h = ProjectedHelix::new(1.0, 0.2, 0.5);
+    /// let t = 0.7;
+    /// assert_eq!(h.point(t), h.point_3d(t).truncate());
+    /// // Every point of the lift lies at distance |a| from the helix axis.
+    /// assert!(h.point_3d(0.0).length() < 1e-15);
+    /// ```
     pub fn point(&self, t: f64) -> DVec2 {
         let p = self.point_3d(t);
         DVec2::new(p.x, p.y)
