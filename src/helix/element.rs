@@ -24,6 +24,15 @@
 use glam::DVec3;
 
 /// `sin x / x`, accurate for all `x` (series near 0).
+///
+/// `sinc(π/2) = 2/π`, and the series branch gives `1 − x²/6` near 0:
+/// ```
+/// use strandfit::helix::sinc;
+/// use std::f64::consts::{FRAC_PI_2, PI};
+///
+/// assert!((sinc(FRAC_PI_2) - 2.0 / PI).abs() < 1e-15);
+/// assert!((sinc(1e-5) - (1.0 - 1e-10 / 6.0)).abs() < 1e-16);
+/// ```
 #[inline]
 pub fn sinc(x: f64) -> f64 {
     if x.abs() < 1e-4 {
@@ -35,6 +44,14 @@ pub fn sinc(x: f64) -> f64 {
 }
 
 /// `(1 − cos x)/x² = ½ sinc²(x/2)`: the half-angle form has no cancellation.
+///
+/// It agrees with the direct form where that is accurate, and tends to `½`:
+/// ```
+/// use strandfit::helix::versinc2;
+///
+/// assert!((versinc2(2.0) - (1.0 - 2f64.cos()) / 4.0).abs() < 1e-15);
+/// assert!((versinc2(1e-9) - 0.5).abs() < 1e-16);
+/// ```
 #[inline]
 pub fn versinc2(x: f64) -> f64 {
     let s = sinc(0.5 * x);
@@ -44,6 +61,15 @@ pub fn versinc2(x: f64) -> f64 {
 /// `(x − sin x)/x³`. For `|x| < 1` the Taylor series
 /// `Σₖ (−1)ᵏ x²ᵏ/(2k+3)!` to `k = 8` (next term < 1e-17 relative); beyond,
 /// the direct form loses at most `6ε/x² < 1e-15` relative.
+///
+/// It agrees with the direct form where that is accurate, and tends to `1/6`:
+/// ```
+/// use strandfit::helix::sinc_defect3;
+///
+/// assert!((sinc_defect3(2.0) - (2.0 - 2f64.sin()) / 8.0).abs() < 1e-15);
+/// // Here the direct form loses every digit: x − sin x is below x's rounding.
+/// assert!((sinc_defect3(1e-8) - 1.0 / 6.0).abs() < 1e-15);
+/// ```
 #[inline]
 pub fn sinc_defect3(x: f64) -> f64 {
     if x.abs() < 1.0 {
@@ -105,6 +131,15 @@ pub struct HelixElement {
 
 impl HelixElement {
     /// A straight segment of length `length` along the unit vector `tangent`.
+    ///
+    /// The end point is `start + L·tangent`, and the kept normal is ⊥ the tangent:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    ///
+    /// let e = HelixElement::straight(DVec3::ONE, DVec3::Z, 2.5);
+    /// assert!((e.end_point() - DVec3::new(1.0, 1.0, 3.5)).length() < 1e-15);
+    /// assert!(e.normal.dot(DVec3::Z).abs() < 1e-15 && (e.normal.length() - 1.0).abs() < 1e-15);
+    /// ```
     pub fn straight(start: DVec3, tangent: DVec3, length: f64) -> Self {
         HelixElement {
             start,
@@ -117,24 +152,59 @@ impl HelixElement {
     }
 
     /// Length of the Darboux vector, `ω = √(κ² + τ²)`.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    ///
+    /// let h = HelixElement { start: DVec3::ZERO, tangent: DVec3::X, normal: DVec3::Y,
+    ///     curvature: 0.8, torsion: -0.6, length: 1.0 };
+    /// assert!((h.omega() - 1.0).abs() < 1e-15);
+    /// ```
     #[inline]
     pub fn omega(&self) -> f64 {
         self.curvature.hypot(self.torsion)
     }
 
     /// Total turning angle about the axis, `φ* = ωL` (the "azimuth" of paper 000).
+    ///
+    /// A helix of radius 1 and pitch `2π·0.5` turns once in `L = 2π√1.25`:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    /// use std::f64::consts::PI;
+    ///
+    /// let h = HelixElement { start: DVec3::X, tangent: DVec3::new(0.0, 1.0, 0.5).normalize(),
+    ///     normal: -DVec3::X, curvature: 0.8, torsion: 0.4, length: 2.0 * PI * 1.25f64.sqrt() };
+    /// assert!((h.phi() - 2.0 * PI).abs() < 1e-12);
+    /// ```
     #[inline]
     pub fn phi(&self) -> f64 {
         self.omega() * self.length
     }
 
     /// Start binormal `b₀ = t₀ × n₀`.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    ///
+    /// let e = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let e = HelixElement { normal: DVec3::Y, ..e };
+    /// assert_eq!(e.binormal(), DVec3::Z);
+    /// ```
     #[inline]
     pub fn binormal(&self) -> DVec3 {
         self.tangent.cross(self.normal)
     }
 
     /// Unit helix axis `Ω̄ = (τ t₀ + κ b₀)/ω`; the tangent for a straight element.
+    ///
+    /// A helix winding about the `z` axis (radius 1, `κ = 0.8`, `τ = 0.4`):
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    ///
+    /// let h = HelixElement { start: DVec3::X, tangent: DVec3::new(0.0, 1.0, 0.5).normalize(),
+    ///     normal: -DVec3::X, curvature: 0.8, torsion: 0.4, length: 1.0 };
+    /// assert!((h.axis() - DVec3::Z).length() < 1e-15);
+    /// ```
     pub fn axis(&self) -> DVec3 {
         let w = self.omega();
         if w == 0.0 {
@@ -144,6 +214,15 @@ impl HelixElement {
     }
 
     /// Radius of the cylinder the helix winds on, `κ/ω²` (∞ when straight).
+    ///
+    /// `κ = r/(r² + c²)`, `τ = c/(r² + c²)` for radius `r = 2`, pitch `2π·c`, `c = 1`:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    ///
+    /// let h = HelixElement { start: DVec3::ZERO, tangent: DVec3::X, normal: DVec3::Y,
+    ///     curvature: 2.0 / 5.0, torsion: 1.0 / 5.0, length: 1.0 };
+    /// assert!((h.radius() - 2.0).abs() < 1e-15);
+    /// ```
     pub fn radius(&self) -> f64 {
         let w = self.omega();
         self.curvature / (w * w)
@@ -177,12 +256,35 @@ impl HelixElement {
     }
 
     /// Unit tangent at arc length `s`.
+    ///
+    /// After a quarter turn about `z` the tangent has turned from `+y` to `−x`:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    /// use std::f64::consts::FRAC_PI_2;
+    ///
+    /// let h = HelixElement { start: DVec3::X, tangent: DVec3::new(0.0, 1.0, 0.5).normalize(),
+    ///     normal: -DVec3::X, curvature: 0.8, torsion: 0.4, length: 1.0 };
+    /// let t = h.tangent_at(FRAC_PI_2 * 1.25f64.sqrt());
+    /// assert!((t - DVec3::new(-1.0, 0.0, 0.5).normalize()).length() < 1e-15);
+    /// ```
     #[inline]
     pub fn tangent_at(&self, s: f64) -> DVec3 {
         self.frame(s).tangent
     }
 
     /// Frenet frame at arc length `s`: the start frame rotated by `ωs` about `Ω̄`.
+    ///
+    /// The normal points at the axis (`z`), and the frame stays orthonormal:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    /// use std::f64::consts::FRAC_PI_2;
+    ///
+    /// let h = HelixElement { start: DVec3::X, tangent: DVec3::new(0.0, 1.0, 0.5).normalize(),
+    ///     normal: -DVec3::X, curvature: 0.8, torsion: 0.4, length: 1.0 };
+    /// let f = h.frame(FRAC_PI_2 * 1.25f64.sqrt()); // a quarter turn, at (0, 1, π/4)
+    /// assert!((f.normal - -DVec3::Y).length() < 1e-15);
+    /// assert!((f.tangent.cross(f.normal) - f.binormal).length() < 1e-15);
+    /// ```
     #[inline]
     pub fn frame(&self, s: f64) -> Frame {
         let (k, tau) = (self.curvature, self.torsion);
@@ -198,18 +300,47 @@ impl HelixElement {
     }
 
     /// End point `α(L)`.
+    ///
+    /// Half a turn of a helix of radius 1 and pitch `2π·0.5`:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    /// use std::f64::consts::{FRAC_PI_2, PI};
+    ///
+    /// let h = HelixElement { start: DVec3::X, tangent: DVec3::new(0.0, 1.0, 0.5).normalize(),
+    ///     normal: -DVec3::X, curvature: 0.8, torsion: 0.4, length: PI * 1.25f64.sqrt() };
+    /// assert!((h.end_point() - DVec3::new(-1.0, 0.0, FRAC_PI_2)).length() < 1e-14);
+    /// ```
     #[inline]
     pub fn end_point(&self) -> DVec3 {
         self.point(self.length)
     }
 
     /// End frame at `s = L`.
+    ///
+    /// After one full turn the frame is back to the start frame:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    /// use std::f64::consts::PI;
+    ///
+    /// let h = HelixElement { start: DVec3::X, tangent: DVec3::new(0.0, 1.0, 0.5).normalize(),
+    ///     normal: -DVec3::X, curvature: 0.8, torsion: 0.4, length: 2.0 * PI * 1.25f64.sqrt() };
+    /// let f = h.end_frame();
+    /// assert!((f.tangent - h.tangent).length() < 1e-14 && (f.normal - h.normal).length() < 1e-14);
+    /// ```
     #[inline]
     pub fn end_frame(&self) -> Frame {
         self.frame(self.length)
     }
 
     /// Parameters are finite and consistent (`κ ≥ 0`, `L ≥ 0`).
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement};
+    ///
+    /// let e = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// assert!(e.is_finite());
+    /// assert!(!HelixElement { curvature: f64::NAN, ..e }.is_finite());
+    /// ```
     pub fn is_finite(&self) -> bool {
         self.start.is_finite()
             && self.tangent.is_finite()

@@ -88,6 +88,20 @@ pub struct ShortHelix {
 ///
 /// Tangents need not be unit. `tol` is the relative co-helicity tolerance
 /// (see [`DEFAULT_COHELICAL_TOL`]).
+///
+/// Two points a quarter turn apart on the helix of radius 1 and pitch `2π·0.5`
+/// about `z` give back its `κ = 0.8`, `τ = 0.4` and `φ* = π/2`:
+/// ```
+/// use strandfit::helix::{interpolate, DEFAULT_COHELICAL_TOL};
+/// use strandfit::DVec3;
+/// use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+///
+/// let (p0, t0) = (DVec3::X, DVec3::new(0.0, 1.0, 0.5));
+/// let (p1, t1) = (DVec3::new(0.0, 1.0, FRAC_PI_4), DVec3::new(-1.0, 0.0, 0.5));
+/// let h = interpolate(p0, t0, p1, t1, DEFAULT_COHELICAL_TOL).unwrap();
+/// assert!((h.element.curvature - 0.8).abs() < 1e-12 && (h.element.torsion - 0.4).abs() < 1e-12);
+/// assert!((h.phi - FRAC_PI_2).abs() < 1e-12 && (h.axis - DVec3::Z).length() < 1e-12);
+/// ```
 pub fn interpolate(
     p0: DVec3,
     t0: DVec3,

@@ -75,17 +75,48 @@ impl PiecewiseHelix {
     }
 
     /// Total arc length.
+    ///
+    /// The sum of the element lengths:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement::straight(DVec3::X, DVec3::X, 2.5);
+    /// assert_eq!(PiecewiseHelix::new(vec![a, b]).length(), 3.5);
+    /// ```
     pub fn length(&self) -> f64 {
         *self.cum.last().unwrap_or(&0.0)
     }
 
     /// The paper's complexity `∫√(κ² + τ²) ds` (Eq. 12): exactly `Σ ωᵢLᵢ`.
+    ///
+    /// A straight unit segment (`ω = 0`) then a quarter of the unit circle (`ω = 1`):
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    /// use std::f64::consts::FRAC_PI_2;
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement { start: DVec3::X, tangent: DVec3::X, normal: DVec3::Y,
+    ///     curvature: 1.0, torsion: 0.0, length: FRAC_PI_2 };
+    /// assert!((PiecewiseHelix::new(vec![a, b]).complexity() - FRAC_PI_2).abs() < 1e-15);
+    /// ```
     pub fn complexity(&self) -> f64 {
         self.elements.iter().map(|e| e.phi()).sum()
     }
 
     /// Element index and local arc length for a global arc length `s`
     /// (clamped to `[0, length]`).
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement::straight(DVec3::X, DVec3::X, 2.0);
+    /// let chain = PiecewiseHelix::new(vec![a, b]);
+    /// assert_eq!(chain.locate(1.5), Some((1, 0.5)));
+    /// assert_eq!(chain.locate(9.0), Some((1, 2.0))); // clamped to the end
+    /// assert_eq!(PiecewiseHelix::default().locate(0.0), None);
+    /// ```
     pub fn locate(&self, s: f64) -> Option<(usize, f64)> {
         if self.elements.is_empty() {
             return None;
@@ -98,16 +129,53 @@ impl PiecewiseHelix {
     }
 
     /// Point at global arc length `s` (clamped).
+    ///
+    /// A unit segment along `x`, then a quarter of the unit circle to `(2, 1, 0)`:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    /// use std::f64::consts::FRAC_PI_2;
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement { start: DVec3::X, tangent: DVec3::X, normal: DVec3::Y,
+    ///     curvature: 1.0, torsion: 0.0, length: FRAC_PI_2 };
+    /// let chain = PiecewiseHelix::new(vec![a, b]);
+    /// assert!((chain.point(0.5).unwrap() - DVec3::new(0.5, 0.0, 0.0)).length() < 1e-15);
+    /// assert!((chain.point(1.0 + FRAC_PI_2).unwrap() - DVec3::new(2.0, 1.0, 0.0)).length() < 1e-15);
+    /// ```
     pub fn point(&self, s: f64) -> Option<DVec3> {
         self.locate(s).map(|(i, u)| self.elements[i].point(u))
     }
 
     /// Frenet frame at global arc length `s` (clamped).
+    ///
+    /// Halfway round the quarter circle the normal points at its centre `(1, 1, 0)`:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    /// use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement { start: DVec3::X, tangent: DVec3::X, normal: DVec3::Y,
+    ///     curvature: 1.0, torsion: 0.0, length: FRAC_PI_2 };
+    /// let chain = PiecewiseHelix::new(vec![a, b]);
+    /// let (p, f) = (chain.point(1.0 + FRAC_PI_4).unwrap(), chain.frame(1.0 + FRAC_PI_4).unwrap());
+    /// assert!((f.normal - (DVec3::new(1.0, 1.0, 0.0) - p)).length() < 1e-15);
+    /// ```
     pub fn frame(&self, s: f64) -> Option<Frame> {
         self.locate(s).map(|(i, u)| self.elements[i].frame(u))
     }
 
     /// Unit tangent at global arc length `s` (clamped).
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    /// use std::f64::consts::FRAC_PI_2;
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement { start: DVec3::X, tangent: DVec3::X, normal: DVec3::Y,
+    ///     curvature: 1.0, torsion: 0.0, length: FRAC_PI_2 };
+    /// let chain = PiecewiseHelix::new(vec![a, b]);
+    /// assert!((chain.tangent(1.0 + FRAC_PI_2).unwrap() - DVec3::Y).length() < 1e-15);
+    /// ```
     pub fn tangent(&self, s: f64) -> Option<DVec3> {
         self.frame(s).map(|f| f.tangent)
     }
@@ -129,6 +197,15 @@ impl PiecewiseHelix {
     }
 
     /// [`sample`](Self::sample) into a reusable buffer.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    ///
+    /// let chain = PiecewiseHelix::new(vec![HelixElement::straight(DVec3::ZERO, DVec3::Y, 2.0)]);
+    /// let mut buf = vec![DVec3::NAN; 7]; // cleared first
+    /// chain.sample_into(3, &mut buf);
+    /// assert_eq!(buf, vec![DVec3::ZERO, DVec3::Y, 2.0 * DVec3::Y]);
+    /// ```
     pub fn sample_into(&self, m: usize, out: &mut Vec<DVec3>) {
         out.clear();
         if self.elements.is_empty() || m == 0 {
@@ -151,6 +228,19 @@ impl PiecewiseHelix {
 
     /// The points of [`sample`](Self::sample) with their unit tangents
     /// (same arc lengths, same element choice).
+    ///
+    /// Three samples of a quarter of the unit circle:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    /// use std::f64::consts::FRAC_PI_2;
+    ///
+    /// let arc = HelixElement { start: DVec3::X, tangent: DVec3::Y, normal: -DVec3::X,
+    ///     curvature: 1.0, torsion: 0.0, length: FRAC_PI_2 };
+    /// let (p, t) = PiecewiseHelix::new(vec![arc]).sample_with_tangents(3);
+    /// let mid = DVec3::new(1.0, 1.0, 0.0).normalize();
+    /// assert!((p[1] - mid).length() < 1e-15);
+    /// assert!((t[1] - DVec3::new(-1.0, 1.0, 0.0).normalize()).length() < 1e-15);
+    /// ```
     pub fn sample_with_tangents(&self, m: usize) -> (Vec<DVec3>, Vec<DVec3>) {
         if self.elements.is_empty() || m == 0 {
             return (Vec::new(), Vec::new());
@@ -174,6 +264,15 @@ impl PiecewiseHelix {
     }
 
     /// Points every `step` of arc length (plus the end point).
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    ///
+    /// let chain = PiecewiseHelix::new(vec![HelixElement::straight(DVec3::ZERO, DVec3::X, 3.0)]);
+    /// let p = chain.sample_step(1.0);
+    /// assert_eq!(p.len(), 4);
+    /// assert!((p[2] - 2.0 * DVec3::X).length() < 1e-15);
+    /// ```
     pub fn sample_step(&self, step: f64) -> Vec<DVec3> {
         if !(step > 0.0) || self.elements.is_empty() {
             return Vec::new();
@@ -184,6 +283,17 @@ impl PiecewiseHelix {
 
     /// The largest gap between an element's end and the next one's start
     /// (position), and the largest tangent mismatch (radians).
+    ///
+    /// Two elements joined with a gap of `0.1` and a right-angle kink:
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement::straight(DVec3::new(1.1, 0.0, 0.0), DVec3::Y, 1.0);
+    /// let (gap, angle) = PiecewiseHelix::new(vec![a, b]).continuity_defects();
+    /// assert!((gap - 0.1).abs() < 1e-15);
+    /// assert!((angle - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    /// ```
     pub fn continuity_defects(&self) -> (f64, f64) {
         let mut gap: f64 = 0.0;
         let mut angle: f64 = 0.0;
@@ -197,6 +307,20 @@ impl PiecewiseHelix {
     }
 
     /// The compact form (start frame + `(L, κ, τ, twist)` per element).
+    ///
+    /// The compact form rebuilds the same curve ([`from_params`](Self::from_params)):
+    /// ```
+    /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
+    ///
+    /// let a = HelixElement::straight(DVec3::ZERO, DVec3::X, 1.0);
+    /// let b = HelixElement { start: DVec3::X, tangent: DVec3::X, normal: DVec3::new(0.0, 0.6, 0.8),
+    ///     curvature: 0.7, torsion: -0.3, length: 2.0 };
+    /// let chain = PiecewiseHelix::new(vec![a, b]);
+    /// let params = chain.to_params().unwrap();
+    /// assert_eq!((params.elements[1].curvature, params.elements[1].torsion), (0.7, -0.3));
+    /// let back = PiecewiseHelix::from_params(&params);
+    /// assert!((back.point(3.0).unwrap() - chain.point(3.0).unwrap()).length() < 1e-14);
+    /// ```
     pub fn to_params(&self) -> Option<ChainParams> {
         let first = self.elements.first()?;
         // Reference normal: the first curved element's normal (twist 0 there),
@@ -243,6 +367,19 @@ impl PiecewiseHelix {
     /// Rebuild a chain from its compact form alone. Each element starts
     /// exactly at the previous one's end, with its end tangent (G1 by
     /// construction).
+    ///
+    /// A twist of `π/2` about `x` turns a quarter circle from the `xy` plane into `xz`:
+    /// ```
+    /// use strandfit::helix::{ChainParams, ElementParams, PiecewiseHelix};
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::FRAC_PI_2;
+    ///
+    /// let arc = ElementParams { length: FRAC_PI_2, curvature: 1.0, torsion: 0.0, twist: FRAC_PI_2 };
+    /// let params = ChainParams { start: DVec3::ZERO, tangent: DVec3::X, normal: DVec3::Y,
+    ///     elements: vec![arc] };
+    /// let end = PiecewiseHelix::from_params(&params).point(FRAC_PI_2).unwrap();
+    /// assert!((end - DVec3::new(1.0, 0.0, 1.0)).length() < 1e-15);
+    /// ```
     pub fn from_params(params: &ChainParams) -> Self {
         let mut p = params.start;
         let mut t = params.tangent.normalize();

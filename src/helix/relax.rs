@@ -45,6 +45,17 @@ pub enum Relaxation {
 }
 
 /// Relax `points` (N + 1 of them) against `tangents` (unit, same count).
+///
+/// Tangents `x` then `y` ask for a chord ⊥ `y − x`; each point moves half the
+/// way, along `y − x`:
+/// ```
+/// use strandfit::helix::{relax, Relaxation};
+/// use strandfit::DVec3;
+///
+/// let p = relax(&[DVec3::ZERO, DVec3::X], &[DVec3::X, DVec3::Y], Relaxation::Tridiagonal);
+/// assert!((p[0] - DVec3::new(0.25, -0.25, 0.0)).length() < 1e-15);
+/// assert!((p[1] - DVec3::new(0.75, 0.25, 0.0)).length() < 1e-15);
+/// ```
 pub fn relax(points: &[DVec3], tangents: &[DVec3], method: Relaxation) -> Vec<DVec3> {
     match method {
         Relaxation::Tridiagonal => {
@@ -102,6 +113,21 @@ fn segment_dirs(t0: DVec3, t1: DVec3) -> ([DVec3; 2], usize) {
 ///
 /// # Panics
 /// If `points` and `tangents` differ in length (a programming error).
+///
+/// It satisfies every constraint `⟨p'ᵢ₊₁ − p'ᵢ, tᵢ₊₁ − tᵢ⟩ = 0`, and agrees with [`relax_dense`]:
+/// ```
+/// use strandfit::helix::{relax_dense, relax_tridiagonal, RelaxScratch};
+/// use strandfit::DVec3;
+///
+/// let p = [DVec3::ZERO, DVec3::new(1.0, 0.2, 0.1), DVec3::new(1.5, 1.0, 0.4), DVec3::new(1.0, 2.0, 0.5)];
+/// let t = [DVec3::X, DVec3::new(1.0, 1.0, 0.0).normalize(), DVec3::Y, DVec3::new(-1.0, 1.0, 0.2).normalize()];
+/// let (mut out, mut scratch) = (Vec::new(), RelaxScratch::default());
+/// relax_tridiagonal(&p, &t, &mut out, &mut scratch);
+/// for i in 0..3 {
+///     assert!((out[i + 1] - out[i]).dot(t[i + 1] - t[i]).abs() < 1e-14);
+/// }
+/// assert!(out.iter().zip(relax_dense(&p, &t)).all(|(a, b)| a.distance(b) < 1e-12));
+/// ```
 pub fn relax_tridiagonal(
     points: &[DVec3],
     tangents: &[DVec3],
@@ -251,6 +277,17 @@ fn mat_vec(a: &Block, r: usize, c: usize, v: &[f64; 2]) -> [f64; 2] {
 ///
 /// # Panics
 /// If `points` and `tangents` differ in length (a programming error).
+///
+/// Tangents `x` then `y` ask for a chord ⊥ `y − x`; each point moves half the
+/// way, along `y − x`:
+/// ```
+/// use strandfit::helix::relax_dense;
+/// use strandfit::DVec3;
+///
+/// let p = relax_dense(&[DVec3::ZERO, DVec3::X], &[DVec3::X, DVec3::Y]);
+/// assert!((p[0] - DVec3::new(0.25, -0.25, 0.0)).length() < 1e-15);
+/// assert!((p[1] - DVec3::new(0.75, 0.25, 0.0)).length() < 1e-15);
+/// ```
 pub fn relax_dense(points: &[DVec3], tangents: &[DVec3]) -> Vec<DVec3> {
     assert_eq!(points.len(), tangents.len(), "one tangent per point");
     let n = points.len().saturating_sub(1);
