@@ -131,6 +131,20 @@ impl BezierSpline {
     /// Builds the spline with arc lengths accurate to `accuracy × length`
     /// (absolute error of every tabulated and computed arc length; values
     /// below `16ε` are raised to `16ε`).
+    ///
+    /// A parabola `y = x²`, `x ∈ [0, 1]` (a degree-elevated quadratic) has length
+    /// `√5/2 + asinh(2)/4`; the table honours the requested accuracy, and requests
+    /// below `16ε` are raised to it:
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let c = [DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0), DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0)];
+    /// let exact = 5f64.sqrt() / 2.0 + 2f64.asinh() / 4.0;
+    /// let s = BezierSpline::from_control_points_with_accuracy(&c, 1e-4).unwrap();
+    /// assert!((s.length() - exact).abs() <= 1e-4 * exact);
+    /// let fine = BezierSpline::from_control_points_with_accuracy(&c, 1e-30).unwrap();
+    /// assert_eq!(fine.accuracy(), 16.0 * f64::EPSILON);
+    /// ```
     pub fn from_control_points_with_accuracy(
         points: &[DVec3],
         accuracy: f64,
@@ -256,12 +270,31 @@ impl BezierSpline {
     }
 
     /// Total arc length `L`.
+    ///
+    /// The parabola `y = x²`, `x ∈ [0, 1]`: `∫₀¹ √(1 + 4x²) dx = √5/2 + asinh(2)/4`:
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0),
+    ///     DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0)]).unwrap();
+    /// assert!((s.length() - (5f64.sqrt() / 2.0 + 2f64.asinh() / 4.0)).abs() < 1e-12);
+    /// ```
     #[inline]
     pub fn length(&self) -> f64 {
         self.cum[self.segs.len()]
     }
 
     /// Arc length of segment `seg` (0 for an index out of range).
+    ///
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::X, 2.0 * DVec3::X,
+    ///     3.0 * DVec3::X, 3.0 * DVec3::X, 3.0 * DVec3::X, DVec3::new(3.0, 2.0, 0.0)]).unwrap();
+    /// assert!((s.segment_length(0) - 3.0).abs() < 1e-12);
+    /// assert!((s.segment_length(1) - 2.0).abs() < 1e-12);
+    /// assert_eq!(s.segment_length(2), 0.0); // out of range
+    /// ```
     #[inline]
     pub fn segment_length(&self, seg: usize) -> f64 {
         if seg < self.segs.len() {
@@ -278,6 +311,16 @@ impl BezierSpline {
 
     /// `B(t)` on segment `seg`; `seg` is clamped to the last segment and
     /// `t` to `[0, 1]` (NaN reads as 0).
+    ///
+    /// The parabola `y = x²` (its `x` is linear in `t`):
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0),
+    ///     DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0)]).unwrap();
+    /// assert!((s.eval(0, 0.3) - DVec3::new(0.3, 0.09, 0.0)).length() < 1e-15);
+    /// assert_eq!(s.eval(7, 2.0), DVec3::new(1.0, 1.0, 0.0)); // clamped
+    /// ```
     #[inline]
     pub fn eval(&self, seg: usize, t: f64) -> DVec3 {
         let (seg, t) = self.clamp_param(seg, t);
@@ -286,6 +329,16 @@ impl BezierSpline {
 
     /// Arc length from the start of the spline to parameter `t` of segment
     /// `seg` (clamped as in [`eval`](Self::eval)).
+    ///
+    /// On the parabola `y = x²`, `s(x) = x√(1 + 4x²)/2 + asinh(2x)/4`:
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0),
+    ///     DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0)]).unwrap();
+    /// let exact = 0.5 * 2f64.sqrt() / 2.0 + 1f64.asinh() / 4.0; // x = 0.5
+    /// assert!((s.arclen_at(0, 0.5) - exact).abs() < 1e-12);
+    /// ```
     pub fn arclen_at(&self, seg: usize, t: f64) -> f64 {
         let (seg, t) = self.clamp_param(seg, t);
         let ks = self.seg_knots(seg);
@@ -307,6 +360,17 @@ impl BezierSpline {
     /// A point on a join belongs to the segment that starts there (`t = 0`),
     /// the end of the spline to the last segment (`t = 1`); zero-length
     /// segments are never returned.
+    ///
+    /// The inverse of [`arclen_at`](Self::arclen_at):
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0),
+    ///     DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0)]).unwrap();
+    /// let (seg, t) = s.param_at_arclen(s.arclen_at(0, 0.3));
+    /// assert_eq!(seg, 0);
+    /// assert!((t - 0.3).abs() < 1e-12);
+    /// ```
     pub fn param_at_arclen(&self, s: f64) -> (usize, f64) {
         if !(s > 0.0) {
             return (self.first_live, 0.0);
@@ -324,6 +388,16 @@ impl BezierSpline {
     }
 
     /// The point at arc length `s` (clamped to `[0, L]`).
+    ///
+    /// On the parabola `y = x²`, the point at `s(½) = √2/4 + asinh(1)/4` is `(½, ¼)`:
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0),
+    ///     DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0)]).unwrap();
+    /// let p = s.point_at_arclen(2f64.sqrt() / 4.0 + 1f64.asinh() / 4.0);
+    /// assert!((p - DVec3::new(0.5, 0.25, 0.0)).length() < 1e-12);
+    /// ```
     pub fn point_at_arclen(&self, s: f64) -> DVec3 {
         let (seg, t) = self.param_at_arclen(s);
         self.segs[seg].eval(t)
@@ -334,6 +408,18 @@ impl BezierSpline {
     /// [`CubicBez::unit_tangent`]). On a zero-length segment this is the
     /// start tangent of the next segment of positive length, or failing
     /// that the end tangent of the previous one.
+    ///
+    /// The parabola's tangent `(1, 2x)` normalised, and a start where `B'` vanishes
+    /// (`P₀ = P₁`), which still gives the direction of motion:
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0),
+    ///     DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0)]).unwrap();
+    /// assert!((s.unit_tangent(0, 0.5) - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-15);
+    /// let cusp = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::ZERO, DVec3::Y, DVec3::X]).unwrap();
+    /// assert!((cusp.unit_tangent(0, 0.0) - DVec3::Y).length() < 1e-15);
+    /// ```
     pub fn unit_tangent(&self, seg: usize, t: f64) -> DVec3 {
         let (seg, t) = self.clamp_param(seg, t);
         if let Some(v) = self.segs[seg].unit_tangent(t) {
@@ -353,6 +439,16 @@ impl BezierSpline {
     }
 
     /// Unit tangent at arc length `s` (clamped to `[0, L]`).
+    ///
+    /// At the end of the parabola `y = x²` the tangent is `(1, 2)/√5`:
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0),
+    ///     DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0)]).unwrap();
+    /// let t = s.tangent_at_arclen(s.length());
+    /// assert!((t - DVec3::new(1.0, 2.0, 0.0).normalize()).length() < 1e-15);
+    /// ```
     pub fn tangent_at_arclen(&self, s: f64) -> DVec3 {
         let (seg, t) = self.param_at_arclen(s);
         self.unit_tangent(seg, t)
@@ -361,6 +457,18 @@ impl BezierSpline {
     /// `N + 1` points with unit tangents at `s_j = j·L/N`, `j = 0..=N`
     /// (step 1 of the floating tangents method). The first and last points
     /// are exactly the first and last control points.
+    ///
+    /// A straight cubic parameterised unevenly (`B(t) = (3t² − 2t³)·3x`) is still
+    /// sampled at equal arc lengths; `B'(0) = 0`, yet the start tangent is `x`:
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::ZERO, 3.0 * DVec3::X, 3.0 * DVec3::X]).unwrap();
+    /// let samples = s.sample_equal_arclen(3).unwrap();
+    /// for (j, (p, t)) in samples.iter().enumerate() {
+    ///     assert!((*p - j as f64 * DVec3::X).length() < 1e-12 && (*t - DVec3::X).length() < 1e-15);
+    /// }
+    /// ```
     pub fn sample_equal_arclen(
         &self,
         n_elements: usize,
@@ -373,6 +481,21 @@ impl BezierSpline {
 
     /// As [`sample_equal_arclen`](Self::sample_equal_arclen), writing into
     /// caller buffers (cleared first; no allocation once they have room).
+    ///
+    /// On the parabola `y = x²`, the `x` of sample `j` solves `s(x) = jL/N`, with
+    /// `s(x) = x√(1 + 4x²)/2 + asinh(2x)/4`:
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0),
+    ///     DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0)]).unwrap();
+    /// let (mut p, mut t) = (Vec::new(), Vec::new());
+    /// s.sample_equal_arclen_into(8, &mut p, &mut t).unwrap();
+    /// let arc = |x: f64| x * (1.0 + 4.0 * x * x).sqrt() / 2.0 + (2.0 * x).asinh() / 4.0;
+    /// for j in 0..=8 {
+    ///     assert!((arc(p[j].x) - j as f64 * s.length() / 8.0).abs() < 1e-12);
+    /// }
+    /// ```
     pub fn sample_equal_arclen_into(
         &self,
         n_elements: usize,
@@ -396,6 +519,15 @@ impl BezierSpline {
     }
 
     /// `m ≥ 2` points equally spaced in arc length, ends included.
+    ///
+    /// A straight cubic parameterised unevenly (`B(t) = (3t² − 2t³)·3x`):
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::ZERO, 3.0 * DVec3::X, 3.0 * DVec3::X]).unwrap();
+    /// let p = s.sample_points(7).unwrap();
+    /// assert!((p[3] - 1.5 * DVec3::X).length() < 1e-12 && (p[5] - 2.5 * DVec3::X).length() < 1e-12);
+    /// ```
     pub fn sample_points(&self, m: usize) -> Result<Vec<DVec3>, SplineError> {
         let mut out = Vec::new();
         self.sample_points_into(m, &mut out)?;
@@ -403,6 +535,16 @@ impl BezierSpline {
     }
 
     /// As [`sample_points`](Self::sample_points), into a caller buffer.
+    ///
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::ZERO, 3.0 * DVec3::X, 3.0 * DVec3::X]).unwrap();
+    /// let mut buf = vec![DVec3::NAN; 10]; // cleared first
+    /// s.sample_points_into(4, &mut buf).unwrap();
+    /// assert!(buf.iter().enumerate().all(|(j, p)| p.distance(j as f64 * DVec3::X) < 1e-12));
+    /// assert!(s.sample_points_into(1, &mut buf).is_err()); // m ≥ 2
+    /// ```
     pub fn sample_points_into(&self, m: usize, out: &mut Vec<DVec3>) -> Result<(), SplineError> {
         check_count("points", 2, m)?;
         out.clear();

@@ -23,6 +23,15 @@ impl CubicBez {
     }
 
     /// `B(t)`, by de Casteljau's algorithm (stable for `t ∈ [0, 1]`).
+    ///
+    /// For `B(t) = t³ x` (control points `0, 0, 0, x`):
+    /// ```
+    /// use strandfit::spline::CubicBez;
+    /// use strandfit::DVec3;
+    ///
+    /// let c = CubicBez::new(DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, DVec3::X);
+    /// assert_eq!(c.eval(0.5), 0.125 * DVec3::X);
+    /// ```
     #[inline]
     pub fn eval(&self, t: f64) -> DVec3 {
         let a = self.p0.lerp(self.p1, t);
@@ -34,6 +43,15 @@ impl CubicBez {
     }
 
     /// `B'(t) = 3[(1−t)²(P1−P0) + 2t(1−t)(P2−P1) + t²(P3−P2)]`.
+    ///
+    /// For `B(t) = t³ x`, `B'(t) = 3t² x`:
+    /// ```
+    /// use strandfit::spline::CubicBez;
+    /// use strandfit::DVec3;
+    ///
+    /// let c = CubicBez::new(DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, DVec3::X);
+    /// assert!((c.deriv(0.5) - 0.75 * DVec3::X).length() < 1e-15);
+    /// ```
     #[inline]
     pub fn deriv(&self, t: f64) -> DVec3 {
         let d0 = self.p1 - self.p0;
@@ -45,6 +63,15 @@ impl CubicBez {
     }
 
     /// `B''(t) = 6[(1−t)(P2 − 2P1 + P0) + t(P3 − 2P2 + P1)]`.
+    ///
+    /// For `B(t) = t³ x`, `B''(t) = 6t x`:
+    /// ```
+    /// use strandfit::spline::CubicBez;
+    /// use strandfit::DVec3;
+    ///
+    /// let c = CubicBez::new(DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, DVec3::X);
+    /// assert!((c.deriv2(0.5) - 3.0 * DVec3::X).length() < 1e-15);
+    /// ```
     #[inline]
     pub fn deriv2(&self, t: f64) -> DVec3 {
         let a = self.p2 - 2.0 * self.p1 + self.p0;
@@ -53,6 +80,17 @@ impl CubicBez {
     }
 
     /// `B'''(t) = 6(P3 − 3P2 + 3P1 − P0)` (constant).
+    ///
+    /// For `B(t) = t³ x`, `B''' = 6x`; for a quadratic (degree-elevated), 0:
+    /// ```
+    /// use strandfit::spline::CubicBez;
+    /// use strandfit::DVec3;
+    ///
+    /// let c = CubicBez::new(DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, DVec3::X);
+    /// assert_eq!(c.deriv3(), 6.0 * DVec3::X);
+    /// let q = CubicBez::new(DVec3::ZERO, DVec3::new(1.0, 2.0, 0.0), DVec3::new(2.0, 2.0, 0.0), DVec3::new(3.0, 0.0, 0.0));
+    /// assert!(q.deriv3().length() < 1e-15);
+    /// ```
     #[inline]
     pub fn deriv3(&self) -> DVec3 {
         6.0 * (self.p3 - 3.0 * self.p2 + 3.0 * self.p1 - self.p0)
@@ -77,12 +115,30 @@ const END_SNAP: f64 = 1e-6;
 
 impl CubicBez {
     /// `true` when all four control points coincide (a zero-length segment).
+    ///
+    /// ```
+    /// use strandfit::spline::CubicBez;
+    /// use strandfit::DVec3;
+    ///
+    /// assert!(CubicBez::new(DVec3::ONE, DVec3::ONE, DVec3::ONE, DVec3::ONE).is_point());
+    /// assert!(!CubicBez::new(DVec3::ONE, DVec3::ONE, DVec3::ONE, DVec3::X).is_point());
+    /// ```
     #[inline]
     pub fn is_point(&self) -> bool {
         self.p0 == self.p1 && self.p1 == self.p2 && self.p2 == self.p3
     }
 
     /// Longest control polygon leg `max |Pᵢ₊₁ − Pᵢ|`; `|B'(t)| ≤ 3·leg`.
+    ///
+    /// The bound `|B'(t)| ≤ 3·leg` holds along the curve:
+    /// ```
+    /// use strandfit::spline::CubicBez;
+    /// use strandfit::DVec3;
+    ///
+    /// let c = CubicBez::new(DVec3::ZERO, DVec3::new(1.0, 2.0, 2.0), DVec3::new(2.0, 2.0, 2.0), DVec3::X);
+    /// assert_eq!(c.leg_scale(), 3.0);
+    /// assert!((0..=10).all(|i| c.deriv(i as f64 / 10.0).length() <= 3.0 * c.leg_scale()));
+    /// ```
     #[inline]
     pub fn leg_scale(&self) -> f64 {
         let a = (self.p1 - self.p0).length();
@@ -104,6 +160,19 @@ impl CubicBez {
     ///
     /// `B'`, `B''`, `B'''` cannot all vanish for a non-point cubic (they
     /// determine `B'` on `[0, 1]` by Taylor's formula), so the cascade ends.
+    ///
+    /// Where `B'` vanishes: `B(t) = t³ x` starts along `B''' = 6x`; with `P₂ = P₃`
+    /// the end direction is `−B''(1) ∥ P₃ − P₁`:
+    /// ```
+    /// use strandfit::spline::CubicBez;
+    /// use strandfit::DVec3;
+    ///
+    /// let c = CubicBez::new(DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, DVec3::X);
+    /// assert_eq!(c.unit_tangent(0.0), Some(DVec3::X));
+    /// let e = CubicBez::new(DVec3::ZERO, DVec3::Y, DVec3::X, DVec3::X);
+    /// assert!((e.unit_tangent(1.0).unwrap() - DVec3::new(1.0, -1.0, 0.0).normalize()).length() < 1e-15);
+    /// assert_eq!(CubicBez::new(DVec3::X, DVec3::X, DVec3::X, DVec3::X).unit_tangent(0.5), None);
+    /// ```
     pub fn unit_tangent(&self, t: f64) -> Option<DVec3> {
         if self.is_point() {
             return None;

@@ -84,6 +84,24 @@ pub enum PolylineFitError {
 /// Fit `points` with a G1 cubic spline within `opts.tolerance`: the `3k + 1`
 /// control points of `k` segments (ready for
 /// [`BezierSpline::from_control_points`](super::BezierSpline::from_control_points)).
+///
+/// Every input point ends within the tolerance of the fitted spline (here 40
+/// points on a helix, tolerance `10⁻³`):
+/// ```
+/// use strandfit::spline::schneider::{fit_polyline, SchneiderOptions};
+/// use strandfit::{BezierSpline, DVec3};
+///
+/// let pts: Vec<DVec3> = (0..40).map(|i| {
+///     let a = i as f64 * 0.15;
+///     DVec3::new(a.cos(), a.sin(), 0.2 * a)
+/// }).collect();
+/// let ctrl = fit_polyline(&pts, &SchneiderOptions::new(1e-3)).unwrap();
+/// assert_eq!(ctrl.len() % 3, 1);
+/// let dense = BezierSpline::from_control_points(&ctrl).unwrap().sample_points(4000).unwrap();
+/// for p in &pts {
+///     assert!(dense.iter().map(|q| q.distance(*p)).fold(f64::MAX, f64::min) < 1e-3);
+/// }
+/// ```
 pub fn fit_polyline(
     points: &[DVec3],
     opts: &SchneiderOptions,
