@@ -111,6 +111,20 @@ const GL_W: [f64; 4] = [
 /// about `tol` (a non-positive or NaN `tol` asks for full precision; the
 /// work stays bounded by the depth limit). See the module documentation for
 /// the degenerate cases; non-finite control points give NaN.
+///
+/// The parabola `y = x²`, `x ∈ [0, 1]`, is planar without inflection, so `C` is
+/// the angle between its end tangents `(1, 0)` and `(1, 2)`, at any scale:
+/// ```
+/// use strandfit::metrics::complexity_cubic;
+/// use strandfit::spline::CubicBez;
+/// use strandfit::DVec3;
+///
+/// let c = CubicBez::new(DVec3::ZERO, DVec3::new(1.0 / 3.0, 0.0, 0.0),
+///     DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0), DVec3::new(1.0, 1.0, 0.0));
+/// assert!((complexity_cubic(&c, 1e-12) - 2f64.atan()).abs() < 1e-10);
+/// let big = CubicBez::new(c.p0 * 50.0, c.p1 * 50.0, c.p2 * 50.0, c.p3 * 50.0);
+/// assert!((complexity_cubic(&big, 1e-12) - 2f64.atan()).abs() < 1e-10);
+/// ```
 pub fn complexity_cubic(seg: &CubicBez, tol: f64) -> f64 {
     if ![seg.p0, seg.p1, seg.p2, seg.p3]
         .iter()
@@ -135,6 +149,20 @@ pub fn complexity_cubic(seg: &CubicBez, tol: f64) -> f64 {
 /// so that the total is good to about `tol`. Only the segment interiors
 /// contribute: a G1 spline has no turning at the joins, and the turning at a
 /// corner of a G0 spline is not counted. An empty slice has complexity 0.
+///
+/// The parabola `y = x²` on `[−1, 0]` and `[0, 1]`: its tangent turns by
+/// `atan 2` on each:
+/// ```
+/// use strandfit::metrics::complexity_cubics;
+/// use strandfit::spline::CubicBez;
+/// use strandfit::DVec3;
+///
+/// let v = |x: f64, y: f64| DVec3::new(x, y, 0.0);
+/// let left = CubicBez::new(v(-1.0, 1.0), v(-2.0 / 3.0, 1.0 / 3.0), v(-1.0 / 3.0, 0.0), v(0.0, 0.0));
+/// let right = CubicBez::new(v(0.0, 0.0), v(1.0 / 3.0, 0.0), v(2.0 / 3.0, 1.0 / 3.0), v(1.0, 1.0));
+/// assert!((complexity_cubics(&[left, right], 1e-12) - 2.0 * 2f64.atan()).abs() < 1e-10);
+/// assert_eq!(complexity_cubics(&[], 1e-12), 0.0);
+/// ```
 pub fn complexity_cubics(segs: &[CubicBez], tol: f64) -> f64 {
     if segs.is_empty() {
         return 0.0;

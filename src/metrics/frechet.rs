@@ -37,6 +37,18 @@ pub fn discrete_frechet(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError> {
 /// [`discrete_frechet`], using `row` as scratch space (cleared and resized to
 /// `min(a.len(), b.len())`), so that a caller measuring thousands of curves
 /// allocates once.
+///
+/// The middle vertex of `a` must be coupled with an end of `b`, one unit away
+/// (the continuous distance of these two segments is 0):
+/// ```
+/// use strandfit::{metrics::discrete_frechet_with_buf, DVec3};
+///
+/// let a = [DVec3::ZERO, DVec3::X, 2.0 * DVec3::X];
+/// let b = [DVec3::ZERO, 2.0 * DVec3::X];
+/// let mut row = Vec::new();
+/// assert_eq!(discrete_frechet_with_buf(&a, &b, &mut row).unwrap(), 1.0);
+/// assert_eq!(discrete_frechet_with_buf(&b, &a, &mut row).unwrap(), 1.0); // symmetric
+/// ```
 pub fn discrete_frechet_with_buf(
     a: &[DVec3],
     b: &[DVec3],

@@ -63,6 +63,16 @@ fn from(iv: Interval, lo: f64) -> Interval {
 
 /// `F(P, Q) ≤ eps`? Polylines of one point are points. Errors: empty or
 /// non-finite input.
+///
+/// A tent of height `0.3` over a segment: `F = 0.3`:
+/// ```
+/// use strandfit::{metrics::frechet_within, DVec3};
+///
+/// let p = [DVec3::ZERO, DVec3::X];
+/// let q = [DVec3::ZERO, DVec3::new(0.5, 0.3, 0.0), DVec3::X];
+/// assert!(frechet_within(&p, &q, 0.3 + 1e-12).unwrap());
+/// assert!(!frechet_within(&p, &q, 0.3 - 1e-9).unwrap());
+/// ```
 pub fn frechet_within(p: &[DVec3], q: &[DVec3], eps: f64) -> Result<bool, MetricsError> {
     check(p)?;
     check(q)?;
@@ -151,6 +161,18 @@ fn within(
 /// Continuous Fréchet distance between polylines, to within `rel_tol`
 /// relative (plus `1e-300` absolute): the returned value `F̃` satisfies
 /// `F ≤ F̃ ≤ F(1 + rel_tol)`. Errors: empty or non-finite input.
+///
+/// A path along `x` that runs ahead to `1.5`, back to `0.5`, then on to `2`:
+/// the Hausdorff distance is 0, but the coupling has to wait out half the
+/// backtrack, `F = 0.5`:
+/// ```
+/// use strandfit::{metrics::frechet_polyline, DVec3};
+///
+/// let p = [DVec3::ZERO, 2.0 * DVec3::X];
+/// let q = [DVec3::ZERO, 1.5 * DVec3::X, 0.5 * DVec3::X, 2.0 * DVec3::X];
+/// let f = frechet_polyline(&p, &q, 1e-9).unwrap();
+/// assert!(f >= 0.5 && f <= 0.5 * (1.0 + 1e-9));
+/// ```
 pub fn frechet_polyline(p: &[DVec3], q: &[DVec3], rel_tol: f64) -> Result<f64, MetricsError> {
     let (mut l, mut r) = (Vec::new(), Vec::new());
     smallest_passing(p, q, rel_tol, |eps| within(p, q, eps, &mut l, &mut r))
@@ -202,6 +224,19 @@ fn smallest_passing(
 /// previous one) is exact for this decision: an earlier position never
 /// removes options for the points after it. `O(m + n)` segment tests plus
 /// one scan per point of the segments it skips.
+///
+/// Points visited out of order along a segment need `eps ≥ 0.5`, in order any
+/// `eps ≥ 0`:
+/// ```
+/// use strandfit::{metrics::ordered_within, DVec3};
+///
+/// let q = [DVec3::ZERO, 2.0 * DVec3::X];
+/// let back = [DVec3::ZERO, 1.5 * DVec3::X, 0.5 * DVec3::X, 2.0 * DVec3::X];
+/// assert!(!ordered_within(&back, &q, 0.49).unwrap());
+/// assert!(ordered_within(&back, &q, 0.5).unwrap());
+/// let forth = [DVec3::ZERO, 0.5 * DVec3::X, 1.5 * DVec3::X, 2.0 * DVec3::X];
+/// assert!(ordered_within(&forth, &q, 0.0).unwrap());
+/// ```
 pub fn ordered_within(p: &[DVec3], q: &[DVec3], eps: f64) -> Result<bool, MetricsError> {
     check(p)?;
     check(q)?;
@@ -246,6 +281,17 @@ fn ordered(p: &[DVec3], q: &[DVec3], eps: f64) -> bool {
 
 /// The smallest `eps` for which [`ordered_within`] holds, to `rel_tol`
 /// (returns an upper bound `≤ (1 + rel_tol)·exact`).
+///
+/// Positions `t₁ ≤ t₂` along `q` within `eps` of `1.5` and of `0.5` need
+/// `1.5 − eps ≤ 0.5 + eps`, so the distance is `0.5`:
+/// ```
+/// use strandfit::{metrics::ordered_distance, DVec3};
+///
+/// let q = [DVec3::ZERO, 2.0 * DVec3::X];
+/// let p = [DVec3::ZERO, 1.5 * DVec3::X, 0.5 * DVec3::X, 2.0 * DVec3::X];
+/// let d = ordered_distance(&p, &q, 1e-9).unwrap();
+/// assert!(d >= 0.5 && d <= 0.5 * (1.0 + 1e-9));
+/// ```
 pub fn ordered_distance(p: &[DVec3], q: &[DVec3], rel_tol: f64) -> Result<f64, MetricsError> {
     smallest_passing(p, q, rel_tol, |eps| ordered(p, q, eps))
 }

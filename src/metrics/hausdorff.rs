@@ -59,6 +59,16 @@ pub fn hausdorff(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError> {
 /// Directed vertex-to-polyline distance `max_{a ∈ vert A} d(a, B)`.
 ///
 /// Errors as for [`hausdorff`].
+///
+/// A point half a unit above a segment, and the other way round:
+/// ```
+/// use strandfit::{metrics::hausdorff_directed, DVec3};
+///
+/// let a = [DVec3::new(1.0, 0.5, 0.0)];
+/// let b = [DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0)];
+/// assert_eq!(hausdorff_directed(&a, &b).unwrap(), 0.5);
+/// assert!((hausdorff_directed(&b, &a).unwrap() - 1.25f64.sqrt()).abs() < 1e-15);
+/// ```
 pub fn hausdorff_directed(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError> {
     check(a)?;
     check(b)?;
@@ -72,6 +82,16 @@ pub fn hausdorff_directed(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError>
 /// with some point of the other sequence.
 ///
 /// Errors as for [`hausdorff`].
+///
+/// Vertices only: the middle vertex of `b` is `√1.25` from the nearest vertex of
+/// `a`, though only `0.5` from the segment ([`hausdorff`] gives `0.5`):
+/// ```
+/// use strandfit::{metrics::hausdorff_vertices, DVec3};
+///
+/// let a = [DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0)];
+/// let b = [DVec3::new(0.0, 0.5, 0.0), DVec3::new(1.0, 0.5, 0.0), DVec3::new(2.0, 0.5, 0.0)];
+/// assert!((hausdorff_vertices(&a, &b).unwrap() - 1.25f64.sqrt()).abs() < 1e-15);
+/// ```
 pub fn hausdorff_vertices(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError> {
     check(a)?;
     check(b)?;
@@ -82,6 +102,15 @@ pub fn hausdorff_vertices(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError>
 /// Directed vertex-set distance `max_{a ∈ A} min_{b ∈ B} |a − b|`.
 ///
 /// Errors as for [`hausdorff`].
+///
+/// ```
+/// use strandfit::{metrics::hausdorff_vertices_directed, DVec3};
+///
+/// let a = [DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0)];
+/// let b = [DVec3::new(0.0, 0.5, 0.0), DVec3::new(1.0, 0.5, 0.0), DVec3::new(2.0, 0.5, 0.0)];
+/// assert_eq!(hausdorff_vertices_directed(&a, &b).unwrap(), 0.5);
+/// assert!((hausdorff_vertices_directed(&b, &a).unwrap() - 1.25f64.sqrt()).abs() < 1e-15);
+/// ```
 pub fn hausdorff_vertices_directed(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError> {
     check(a)?;
     check(b)?;
