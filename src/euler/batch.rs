@@ -33,6 +33,25 @@ use crate::pair::HermitePair;
 /// Solve every pair; results in input order. A pair's own bad input is its
 /// `Err`; a GPU failure fails the whole call. See the module docs for what
 /// each backend runs.
+///
+/// On the CPU: [`solve_spiral`] on each pair. Each solved spiral meets its end
+/// conditions:
+/// ```
+/// use strandfit::euler::{solve_spirals, SolveOptions};
+/// use strandfit::{Backend, DVec3, HermitePair};
+///
+/// let pairs = [
+///     HermitePair::new(DVec3::X, DVec3::Y, DVec3::Y, -DVec3::X),
+///     HermitePair::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.5), DVec3::new(0.0, 1.0, 1.0)),
+/// ];
+/// let out = solve_spirals(&pairs, &SolveOptions::default(), &Backend::Cpu).unwrap();
+/// for (pair, s) in pairs.iter().zip(out) {
+///     let s = s.unwrap();
+///     let end = s.problem.integrate(s.steps).unwrap();
+///     assert!((end.point - pair.p1).length() < 1e-9);
+///     assert!((end.frame[0] - pair.t1.normalize()).length() < 1e-9);
+/// }
+/// ```
 pub fn solve_spirals(
     pairs: &[HermitePair],
     opts: &SolveOptions,
@@ -181,6 +200,20 @@ fn integrate_grouped(
 /// The lockstep solve (module docs) through any backend: what
 /// [`solve_spirals`] runs on the GPU; on the CPU backend, for tests and
 /// comparison.
+///
+/// The lockstep solve (here on the CPU) reaches the same spiral as
+/// [`solve_spiral`]:
+/// ```
+/// use strandfit::euler::{solve_spiral, solve_spirals_lockstep, SolveOptions};
+/// use strandfit::{Backend, DVec3, HermitePair};
+///
+/// let pair = HermitePair::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.5), DVec3::new(0.0, 1.0, 1.0));
+/// let opts = SolveOptions::default();
+/// let lock = solve_spirals_lockstep(&[pair], &opts, &Backend::Cpu).unwrap().remove(0).unwrap();
+/// let one = solve_spiral(pair.p0, pair.t0, pair.p1, pair.t1, &opts).unwrap();
+/// assert!((lock.problem.kappa0 - one.problem.kappa0).abs() < 1e-6);
+/// assert!((lock.problem.length - one.problem.length).abs() < 1e-6);
+/// ```
 pub fn solve_spirals_lockstep(
     pairs: &[HermitePair],
     opts: &SolveOptions,

@@ -99,6 +99,19 @@ impl Cx {
 /// Power series for `|x| < 1.5`; for larger `|x|` the continued fraction of
 /// `erfc` (modified Lentz), `C + iS = (1+i)/2 (1 − e^{iπx²/2} h)`. Odd in `x`.
 /// Verified to ≈ 1e-15 absolute against quadrature (tests).
+///
+/// Published values at 1 (Abramowitz & Stegun, Table 7.7), and the asymptotic
+/// form `C ≈ ½ + sin(πx²/2)/(πx)`, `S ≈ ½ − cos(πx²/2)/(πx)` at 1000:
+/// ```
+/// use strandfit::euler::clothoid::fresnel_cs;
+/// use std::f64::consts::PI;
+///
+/// let (c, s) = fresnel_cs(1.0);
+/// assert!((c - 0.779_893_400_376_823).abs() < 1e-14 && (s - 0.438_259_147_390_355).abs() < 1e-14);
+/// assert_eq!(fresnel_cs(-1.0), (-c, -s)); // odd
+/// let (c, s) = fresnel_cs(1000.0);
+/// assert!((c - 0.5).abs() < 1e-9 && (s - (0.5 - 1.0 / (1000.0 * PI))).abs() < 1e-9);
+/// ```
 pub fn fresnel_cs(x: f64) -> (f64, f64) {
     let ax = x.abs();
     let (c, s) = if ax < 1e-150 {
@@ -215,6 +228,19 @@ const A_SERIES_WIDE: f64 = 12.0;
 /// Generalised Fresnel integrals and moments `X_k, Y_k` for `k = 0, 1, 2`:
 /// `X_k(a,b,c) = ∫₀¹ tᵏ cos(a t²/2 + b t + c) dt`, `Y_k` with `sin`
 /// (Bertolazzi & Frego).
+///
+/// With `a = 0`, `b = 0`: `X_k = 1/(k + 1)`, `Y_k = 0`; with `a = π` and with
+/// `a = 4π` (the other branch), Fresnel's `C(1)` and `C(2)/2`:
+/// ```
+/// use strandfit::euler::clothoid::{fresnel_cs, generalized_fresnel};
+/// use std::f64::consts::PI;
+///
+/// let (x, y) = generalized_fresnel(0.0, 0.0, 0.0);
+/// assert!((x[0] - 1.0).abs() < 1e-15 && (x[1] - 0.5).abs() < 1e-15 && (x[2] - 1.0 / 3.0).abs() < 1e-15);
+/// assert!(y.iter().all(|v| v.abs() < 1e-15));
+/// assert!((generalized_fresnel(PI, 0.0, 0.0).0[0] - fresnel_cs(1.0).0).abs() < 1e-14);
+/// assert!((generalized_fresnel(4.0 * PI, 0.0, 0.0).0[0] - fresnel_cs(2.0).0 / 2.0).abs() < 1e-14);
+/// ```
 pub fn generalized_fresnel(a: f64, b: f64, c: f64) -> ([f64; 3], [f64; 3]) {
     if a.abs() < A_SERIES || (a.abs() < A_SERIES_WIDE && b.abs() > 2.0 * a.abs()) {
         // Series in a: X_k + iY_k = e^{ic} Σₙ (ia/2)ⁿ/n! J_{k+2n}(b).
@@ -286,24 +312,76 @@ pub struct Clothoid {
 
 impl Clothoid {
     /// Point at arc length `s`: `P₀ + s (X₀, Y₀)(κ′s², κ₀s, θ₀)`.
+    ///
+    /// The clothoid `κ(s) = πs` from the origin is Fresnel's `(C(s), S(s))`:
+    /// ```
+    /// use strandfit::euler::clothoid::{fresnel_cs, Clothoid};
+    /// use glam::DVec2;
+    /// use std::f64::consts::PI;
+    ///
+    /// let c = Clothoid { start: DVec2::ZERO, theta0: 0.0, kappa0: 0.0, dkappa: PI, length: 2.0 };
+    /// let (fc, fs) = fresnel_cs(1.5);
+    /// assert!((c.eval(1.5) - DVec2::new(fc, fs)).length() < 1e-14);
+    /// ```
     pub fn eval(&self, s: f64) -> DVec2 {
         let (x, y) = generalized_fresnel((self.dkappa * s) * s, self.kappa0 * s, self.theta0);
         self.start + s * DVec2::new(x[0], y[0])
     }
     /// Tangent angle `θ(s) = θ₀ + κ₀s + κ′s²/2`.
+    ///
+    /// The direction of `P′(s)` (here by central difference) is `θ(s)`:
+    /// ```
+    /// use strandfit::euler::Clothoid;
+    /// use glam::DVec2;
+    ///
+    /// let c = Clothoid { start: DVec2::ZERO, theta0: 0.3, kappa0: -0.5, dkappa: 2.0, length: 2.0 };
+    /// let h = 1e-5;
+    /// let d = (c.eval(1.2 + h) - c.eval(1.2 - h)) / (2.0 * h);
+    /// assert!((d - DVec2::from_angle(c.angle(1.2))).length() < 1e-8);
+    /// ```
     pub fn angle(&self, s: f64) -> f64 {
         self.theta0 + s * (self.kappa0 + 0.5 * self.dkappa * s)
     }
     /// Curvature `κ(s) = κ₀ + κ′s`.
+    ///
+    /// ```
+    /// use strandfit::euler::Clothoid;
+    /// use glam::DVec2;
+    ///
+    /// let c = Clothoid { start: DVec2::ZERO, theta0: 0.3, kappa0: -0.5, dkappa: 2.0, length: 2.0 };
+    /// assert_eq!(c.curvature(1.5), 2.5);
+    /// ```
     pub fn curvature(&self, s: f64) -> f64 {
         self.kappa0 + self.dkappa * s
     }
     /// End point `P(L)`.
+    ///
+    /// A quarter of the unit circle (`κ ≡ 1`) from the origin along `x`:
+    /// ```
+    /// use strandfit::euler::Clothoid;
+    /// use glam::DVec2;
+    /// use std::f64::consts::FRAC_PI_2;
+    ///
+    /// let arc = Clothoid { start: DVec2::ZERO, theta0: 0.0, kappa0: 1.0, dkappa: 0.0, length: FRAC_PI_2 };
+    /// assert!((arc.end() - DVec2::new(1.0, 1.0)).length() < 1e-15);
+    /// ```
     pub fn end(&self) -> DVec2 {
         self.eval(self.length)
     }
     /// The same curve traversed from its end: `θ₀ ← θ(L) + π`,
     /// `κ₀ ← −(κ₀ + κ′L)`, `κ′` unchanged.
+    ///
+    /// The reversed clothoid ends where the original starts, heading back:
+    /// ```
+    /// use strandfit::euler::clothoid::{normalize_angle, Clothoid};
+    /// use glam::DVec2;
+    /// use std::f64::consts::PI;
+    ///
+    /// let c = Clothoid { start: DVec2::new(1.0, 2.0), theta0: 0.3, kappa0: -0.5, dkappa: 2.0, length: 2.0 };
+    /// let r = c.reversed();
+    /// assert!((r.end() - c.start).length() < 1e-14);
+    /// assert!(normalize_angle(r.angle(r.length) - (c.theta0 + PI)).abs() < 1e-14);
+    /// ```
     pub fn reversed(&self) -> Clothoid {
         Clothoid {
             start: self.end(),
@@ -331,6 +409,15 @@ pub enum ClothoidError {
 }
 
 /// Reduce an angle to `(−π, π]`.
+///
+/// ```
+/// use strandfit::euler::clothoid::normalize_angle;
+/// use std::f64::consts::{FRAC_PI_2, PI};
+///
+/// assert!((normalize_angle(3.0 * FRAC_PI_2) + FRAC_PI_2).abs() < 1e-15);
+/// assert_eq!(normalize_angle(-PI), PI);
+/// assert!((normalize_angle(7.0 * PI + 0.25) - (0.25 - PI)).abs() < 1e-14);
+/// ```
 pub fn normalize_angle(x: f64) -> f64 {
     let mut y = x - TAU * (x / TAU).round();
     if y <= -PI {
@@ -359,6 +446,19 @@ fn g_and_dg(a: f64, delta: f64, phi0: f64) -> (f64, f64) {
 /// bracket around the guess; then `L = r / X₀(2A, δ − A, φ₀)`,
 /// `κ′ = 2A/L²`, `κ₀ = (δ − A)/L`. The returned `theta0` is
 /// `φ + φ₀` (the input reduced mod 2π), and `angle(L) = φ + φ₁`.
+///
+/// From `(1, 0)` heading up to `(0, 1)` heading left the clothoid is the quarter
+/// of the unit circle (`κ₀ = 1`, `κ′ = 0`, `L = π/2`):
+/// ```
+/// use strandfit::euler::clothoid_g1;
+/// use glam::DVec2;
+/// use std::f64::consts::{FRAC_PI_2, PI};
+///
+/// let c = clothoid_g1(DVec2::X, FRAC_PI_2, DVec2::Y, PI).unwrap();
+/// assert!((c.kappa0 - 1.0).abs() < 1e-12 && c.dkappa.abs() < 1e-12);
+/// assert!((c.length - FRAC_PI_2).abs() < 1e-12);
+/// assert!((c.end() - DVec2::Y).length() < 1e-12);
+/// ```
 pub fn clothoid_g1(
     p0: DVec2,
     theta0: f64,

@@ -149,17 +149,38 @@ impl FrenetProblem {
     }
 
     /// `κ(s) = κ₀ + γs`.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    ///
+    /// let p = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.5, 0.2, -0.1, 4.0);
+    /// assert_eq!(p.curvature(2.0), 2.0);
+    /// ```
     pub fn curvature(&self, s: f64) -> f64 {
         self.kappa0 + self.gamma * s
     }
 
     /// `τ(s) = τ₀ + δs`.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    ///
+    /// let p = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.5, 0.2, -0.1, 4.0);
+    /// assert!((p.torsion(2.0) - 0.0).abs() < 1e-15);
+    /// ```
     pub fn torsion(&self, s: f64) -> f64 {
         self.tau0 + self.delta * s
     }
 
     /// The dimensionless rates `[κ₀L, γL², τ₀L, δL²]` of the scaled problem
     /// (`u = s/L`): what the integrator (and the GPU kernel) works with.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    ///
+    /// let p = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.5, 0.25, -0.125, 2.0);
+    /// assert_eq!(p.rates(), [2.0, 2.0, 0.5, -0.5]);
+    /// ```
     pub fn rates(&self) -> [f64; 4] {
         let l = self.length;
         [
@@ -175,11 +196,31 @@ impl FrenetProblem {
     /// `h(max|t₀ + d u| + max|k₀ + g u|) + h³|c|/12` (the maxima at the ends,
     /// `ω` being linear). The GPU kernel refuses steps beyond
     /// [`crate::twin::frenet_integrate::STEP_ANGLE_MAX`].
+    ///
+    /// For a circle (`κ = 1`, `L = π`) every step turns by exactly `π/steps`:
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    /// use std::f64::consts::PI;
+    ///
+    /// let half = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.0, 0.0, 0.0, PI);
+    /// assert!((half.max_step_angle(8) - PI / 8.0).abs() < 1e-15);
+    /// ```
     pub fn max_step_angle(&self, steps: usize) -> f64 {
         step_angle_bound(self.rates(), steps)
     }
 
     /// Finite values, `L ≥ 0`, an orthonormal right-handed frame.
+    ///
+    /// ```
+    /// use strandfit::euler::FrenetError;
+    /// use strandfit::{DVec3, FrenetProblem};
+    ///
+    /// let p = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.0, 0.0, 0.0, 1.0);
+    /// assert_eq!(p.validate(), Ok(()));
+    /// let left = FrenetProblem { frame: [DVec3::X, DVec3::Y, -DVec3::Z], ..p };
+    /// assert_eq!(left.validate(), Err(FrenetError::LeftHanded));
+    /// assert_eq!(FrenetProblem { length: -1.0, ..p }.validate(), Err(FrenetError::NegativeLength(-1.0)));
+    /// ```
     pub fn validate(&self) -> Result<(), FrenetError> {
         let [t, n, b] = self.frame;
         let finite = self.start.is_finite()
@@ -233,6 +274,18 @@ impl FrenetProblem {
     /// [`integrate`](Self::integrate) without validation (`steps = 0` is
     /// taken as 1). Invalid input gives meaningless (possibly non-finite)
     /// output, never a panic.
+    ///
+    /// Constant `κ = 0.8`, `τ = 0.4` is the helix of radius 1 and pitch `2π·0.5`
+    /// about `z`; one turn (`L = 2π√1.25`) climbs `π`:
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    /// use std::f64::consts::PI;
+    ///
+    /// let helix = FrenetProblem::new(DVec3::X, DVec3::new(0.0, 1.0, 0.5).normalize(), -DVec3::X,
+    ///     0.8, 0.0, 0.4, 0.0, 2.0 * PI * 1.25f64.sqrt());
+    /// let end = helix.integrate_unchecked(512);
+    /// assert!((end.point - DVec3::new(1.0, 0.0, PI)).length() < 1e-9);
+    /// ```
     pub fn integrate_unchecked(&self, steps: usize) -> FrenetEnd {
         let steps = steps.max(1);
         let mut end = self.state(DVec3::ZERO, DQuat::IDENTITY);
@@ -260,6 +313,19 @@ impl FrenetProblem {
     /// derivatives of the discrete end (which differ by as much) — what a
     /// Gauss–Newton step needs, at about 1.4 marches instead of the ten of
     /// central differences.
+    ///
+    /// `∂x(L)/∂L = T(L)`, and `∂x(L)/∂κ₀` matches a central difference:
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    ///
+    /// let p = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 0.7, 0.3, 0.2, -0.1, 2.0);
+    /// let (end, d_point, _d_tangent) = p.integrate_with_derivatives_unchecked(256);
+    /// assert!((d_point[4] - end.frame[0]).length() < 1e-15);
+    /// let h = 1e-5;
+    /// let plus = FrenetProblem { kappa0: 0.7 + h, ..p }.integrate_unchecked(256).point;
+    /// let minus = FrenetProblem { kappa0: 0.7 - h, ..p }.integrate_unchecked(256).point;
+    /// assert!(((plus - minus) / (2.0 * h) - d_point[0]).length() < 1e-7);
+    /// ```
     pub fn integrate_with_derivatives_unchecked(
         &self,
         steps: usize,
@@ -303,6 +369,19 @@ impl FrenetProblem {
     /// `O(h Θ)` (ERRATA 004.1: with 100 samples the end point is off by
     /// about 0.075 on a curve of length 2.76). [`integrate`](Self::integrate)
     /// is the default. Errors as for `integrate`.
+    ///
+    /// First order: on half of the unit circle, twice the steps halve the error
+    /// (and the frame is no longer orthonormal):
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    /// use std::f64::consts::PI;
+    ///
+    /// let half = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.0, 0.0, 0.0, PI);
+    /// let err = |n| (half.integrate_explicit_euler(n).unwrap().point - DVec3::new(0.0, 2.0, 0.0)).length();
+    /// let ratio = err(200) / err(100);
+    /// assert!((ratio - 0.5).abs() < 0.02, "{ratio}");
+    /// assert!((half.integrate_explicit_euler(100).unwrap().frame[0].length() - 1.0).abs() > 1e-3);
+    /// ```
     pub fn integrate_explicit_euler(&self, steps: usize) -> Result<FrenetEnd, FrenetError> {
         self.validate()?;
         if steps == 0 {
@@ -330,6 +409,19 @@ impl FrenetProblem {
     /// steps between consecutive samples: one march of
     /// `(m − 1)·steps_per_interval` steps, whose last sample is
     /// [`integrate`](Self::integrate)`((m − 1)·steps_per_interval)`.
+    ///
+    /// Five samples of half the unit circle, `π/4` apart:
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    /// use std::f64::consts::{FRAC_PI_4, PI};
+    ///
+    /// let half = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.0, 0.0, 0.0, PI);
+    /// let s = half.sample(5, 64).unwrap();
+    /// for (j, e) in s.iter().enumerate() {
+    ///     let a = j as f64 * FRAC_PI_4;
+    ///     assert!((e.point - DVec3::new(a.sin(), 1.0 - a.cos(), 0.0)).length() < 1e-10);
+    /// }
+    /// ```
     pub fn sample(
         &self,
         m: usize,
@@ -344,6 +436,17 @@ impl FrenetProblem {
 
     /// [`sample`](Self::sample) without validation (`steps_per_interval = 0`
     /// is taken as 1).
+    ///
+    /// The last sample is the end of one march of `(m − 1)·steps_per_interval` steps:
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    ///
+    /// let p = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 0.7, 0.3, 0.2, -0.1, 2.0);
+    /// let s = p.sample_unchecked(4, 10);
+    /// assert_eq!(s.len(), 4);
+    /// assert!((s[3].point - p.integrate_unchecked(30).point).length() < 1e-14);
+    /// assert_eq!(p.sample_unchecked(1, 10)[0].point, DVec3::ZERO);
+    /// ```
     pub fn sample_unchecked(&self, m: usize, steps_per_interval: usize) -> Vec<FrenetEnd> {
         let every = steps_per_interval.max(1);
         match m {
@@ -367,6 +470,18 @@ impl FrenetProblem {
     /// `κ̃(σ) = κ(L − σ)` and `τ̃(σ) = τ(L − σ)` (torsion is a property of the
     /// curve, not of its direction). Its end is `x₀` with frame
     /// `(−T₀, N₀, −B₀)`.
+    ///
+    /// The scheme is self-adjoint: integrating the reversed spiral from the end
+    /// returns to the start, with frame `(−T₀, N₀, −B₀)`, even with few steps:
+    /// ```
+    /// use strandfit::{DVec3, FrenetProblem};
+    ///
+    /// let p = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 0.7, 0.3, 0.2, -0.1, 2.0);
+    /// let end = p.integrate(8).unwrap();
+    /// let back = p.reversed(&end).integrate(8).unwrap();
+    /// assert!(back.point.length() < 1e-13);
+    /// assert!((back.frame[0] + DVec3::X).length() < 1e-13 && (back.frame[1] - DVec3::Y).length() < 1e-13);
+    /// ```
     pub fn reversed(&self, end: &FrenetEnd) -> FrenetProblem {
         let [t, n, b] = end.frame;
         FrenetProblem {
