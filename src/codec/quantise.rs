@@ -149,6 +149,111 @@ pub fn bcc_point(k: [i64; 3], half: f64) -> glam::DVec3 {
     glam::DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * half
 }
 
+/// The 14 nearest neighbours of a BCC lattice point, in half-step units:
+/// the 8 of the other parity at `half·√3` and the 6 of the same at
+/// `2·half`.
+const BCC_NEIGHBOURS: [[i64; 3]; 14] = [
+    [1, 1, 1],
+    [1, 1, -1],
+    [1, -1, 1],
+    [1, -1, -1],
+    [-1, 1, 1],
+    [-1, 1, -1],
+    [-1, -1, 1],
+    [-1, -1, -1],
+    [2, 0, 0],
+    [-2, 0, 0],
+    [0, 2, 0],
+    [0, -2, 0],
+    [0, 0, 2],
+    [0, 0, -2],
+];
+
+/// Lattice points for the polyline `points`, chosen one after the other
+/// as the cheapest to code (`cost` of the difference from `predict`'s
+/// prediction, given the points chosen so far) among those that keep the
+/// two-sided promise: output vertex `k` within `√tol2` of an input segment
+/// beside input vertex `k`, and input vertex `k` within `√tol2` of an
+/// output segment that ends at output vertex `k` (the first point is
+/// `first`, within `√tol2` of the first input vertex).
+///
+/// The promise is about vertex-to-segment distances, so an output vertex
+/// may slide forward along the curve by up to about `T / θ` (θ the turn at
+/// the vertex): the prediction's error along the curve costs less. The
+/// nearest lattice point is always a candidate, so no point costs more
+/// than rounding. `None` if a vertex has no lattice point within `√tol2`.
+/// (Sliding back as well, the vertex then covered by the next segment,
+/// measured no better: 1 % smaller on some files, 3 % larger on others.)
+pub fn cheapest_points(
+    points: &[glam::DVec3],
+    half: f64,
+    tol2: f64,
+    first: [i64; 3],
+    predict: impl Fn(&[[i64; 3]], usize) -> [i64; 3],
+    cost: impl Fn([i64; 3]) -> f64,
+) -> Option<Vec<[i64; 3]>> {
+    use super::check::dist2_to_segment;
+    let n = points.len();
+    let mut g = Vec::with_capacity(n);
+    g.push(first);
+    for k in 1..n {
+        let v = points[k];
+        let before = points[k - 1];
+        let after = points.get(k + 1).copied();
+        let o_prev = bcc_point(g[k - 1], half);
+        let feasible = |q: [i64; 3]| {
+            let x = bcc_point(q, half);
+            (dist2_to_segment(x, before, v) <= tol2
+                || after.is_some_and(|a| dist2_to_segment(x, v, a) <= tol2))
+                && dist2_to_segment(v, o_prev, x) <= tol2
+        };
+        let nearest = bcc_nearest(v, half)?;
+        if bcc_point(nearest, half).distance_squared(v) > tol2 {
+            return None;
+        }
+        let pred = predict(&g, k);
+        let diff = |q: [i64; 3]| [0, 1, 2].map(|a| q[a].wrapping_sub(pred[a]));
+        let mut best = (cost(diff(nearest)), nearest);
+        let mut consider = |q: [i64; 3]| {
+            let c = cost(diff(q));
+            if c < best.0 && feasible(q) {
+                best = (c, q);
+            }
+        };
+        consider(pred);
+        // The place on the input nearest the prediction, and on the way
+        // from there back to the vertex.
+        let p = bcc_point(pred, half);
+        let foot = |a: glam::DVec3, b: glam::DVec3| {
+            let d = b - a;
+            let t = if d.length_squared() > 0.0 {
+                ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            a + d * t
+        };
+        let mut c = foot(before, v);
+        if let Some(a) = after {
+            let c2 = foot(v, a);
+            if c2.distance_squared(p) < c.distance_squared(p) {
+                c = c2;
+            }
+        }
+        for t in [0.0, 0.25, 0.5, 0.75, 1.0] {
+            let Some(centre) = bcc_nearest(c + (v - c) * t, half) else {
+                continue;
+            };
+            consider(centre);
+            for d in BCC_NEIGHBOURS {
+                consider([0, 1, 2].map(|a| centre[a] + d[a]));
+            }
+        }
+        g.push(best.1);
+    }
+    Some(g)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -187,5 +292,94 @@ mod tests {
         assert_eq!(Quantiser::index_toward_zero(-0.76, 0.5), Some(-1));
         assert_eq!(Quantiser::index(f64::NAN, 0.5), None);
         assert_eq!(Quantiser::index(1e30, 1e-9), None);
+    }
+
+    /// Second-order prediction on the lattice (first order for the second
+    /// point), and a cost that grows with the residual.
+    fn second_order(g: &[[i64; 3]], k: usize) -> [i64; 3] {
+        if k >= 2 {
+            [0, 1, 2].map(|a| 2 * g[k - 1][a] - g[k - 2][a])
+        } else {
+            g[k - 1]
+        }
+    }
+    fn residual_cost(d: [i64; 3]) -> f64 {
+        d.iter()
+            .map(|v| (1.0 + v.unsigned_abs() as f64).log2())
+            .sum()
+    }
+    fn total_cost(g: &[[i64; 3]]) -> f64 {
+        (1..g.len())
+            .map(|k| {
+                let p = second_order(g, k);
+                residual_cost([0, 1, 2].map(|a| g[k][a] - p[a]))
+            })
+            .sum()
+    }
+
+    #[test]
+    fn cheapest_points_keep_the_two_sided_promise() {
+        // Random walks with steps from a fifth of the tolerance to twenty
+        // times it, turning by up to 1.5 rad: the chosen points are within
+        // the tolerance of the input both ways (independent checker).
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for trial in 0..300 {
+            let tol: f64 = rng.gen_range(0.01..1.0);
+            let half = 2.0 * tol / 5f64.sqrt() * (1.0 - 1e-9);
+            let n = rng.gen_range(2..60);
+            let mut p = glam::DVec3::new(
+                rng.gen_range(-50.0..50.0),
+                rng.gen_range(-50.0..50.0),
+                rng.gen_range(-50.0..50.0),
+            );
+            let mut dir = glam::DVec3::X;
+            let mut pts = Vec::with_capacity(n);
+            for _ in 0..n {
+                pts.push(p);
+                let turn = glam::DVec3::new(
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                ) * rng.gen_range(0.0..1.5);
+                dir = (dir + turn).normalize();
+                p += dir * tol * rng.gen_range(0.2..20.0);
+            }
+            let first = bcc_nearest(pts[0], half).unwrap();
+            let g =
+                cheapest_points(&pts, half, tol * tol, first, second_order, residual_cost).unwrap();
+            assert_eq!(g.len(), n);
+            assert!(g.iter().all(|k| k[0].rem_euclid(2) == k[1].rem_euclid(2)
+                && k[1].rem_euclid(2) == k[2].rem_euclid(2)));
+            let out: Vec<glam::DVec3> = g.iter().map(|&k| bcc_point(k, half)).collect();
+            let d = crate::metrics::hausdorff(&pts, &out).unwrap();
+            assert!(d <= tol * (1.0 + 1e-12), "trial {trial}: {d} > {tol}");
+        }
+    }
+
+    #[test]
+    fn cheapest_points_slide_along_a_line_for_free() {
+        // A straight line sampled unevenly (steps 3–5 T): rounded, the
+        // uneven steps are second-order residuals along the line; the
+        // promise lets each point slide to where the prediction lands (the
+        // lattice's error across the line stays: measured 0.61 of the
+        // rounded points' bits).
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let tol = 0.1;
+        let half = 2.0 * tol / 5f64.sqrt();
+        let dir = glam::DVec3::new(0.6, -0.48, 0.64).normalize();
+        let mut s = 0.0;
+        let pts: Vec<glam::DVec3> = (0..200)
+            .map(|_| {
+                s += tol * rng.gen_range(3.0..5.0);
+                glam::DVec3::new(1.0, 2.0, 3.0) + dir * s
+            })
+            .collect();
+        let rounded: Vec<[i64; 3]> = pts.iter().map(|&p| bcc_nearest(p, half).unwrap()).collect();
+        let first = rounded[0];
+        let g = cheapest_points(&pts, half, tol * tol, first, second_order, residual_cost).unwrap();
+        let (slid, near) = (total_cost(&g), total_cost(&rounded));
+        assert!(slid < 0.7 * near, "slid {slid} bits, rounded {near}");
+        let out: Vec<glam::DVec3> = g.iter().map(|&k| bcc_point(k, half)).collect();
+        assert!(crate::metrics::hausdorff(&pts, &out).unwrap() <= tol);
     }
 }

@@ -340,6 +340,22 @@ fn l1(a: [i64; 3], b: [i64; 3]) -> i64 {
         .fold(0i64, i64::wrapping_add)
 }
 
+/// Estimated bits of the grid points `g` predicted from `res` (`cost` of
+/// one residual vector).
+pub fn reference_bits(g: &[[i64; 3]], res: &Resolved, cost: impl Fn([i64; 3]) -> u64) -> u64 {
+    let n = g.len();
+    let start = res.start();
+    let mut bits = 8 + cost([0, 1, 2].map(|a| g[0][a].wrapping_sub(start[a])));
+    if res.second.is_some() {
+        bits += 6;
+    }
+    for i in 1..n {
+        let p = res.predict(g[i - 1], i, n);
+        bits += cost([0, 1, 2].map(|a| g[i][a].wrapping_sub(p[a])));
+    }
+    bits
+}
+
 /// The cheapest reference for the grid points `g` (curve `k` of its block,
 /// `grids[r]` the regridded decoded curves before it), with its estimated
 /// cost in bits (`cost` of one residual vector): one of the curves whose
@@ -385,19 +401,7 @@ pub fn best_reference(
         first: (&grids[k - rf.back][..], rf.reversed),
         second: rf.second.map(|(b, rev)| (&grids[k - b][..], rev)),
     };
-    let bits_of = |rf: &Reference| {
-        let res = resolve(rf);
-        let start = res.start();
-        let mut bits = 8 + cost([0, 1, 2].map(|a| g[0][a].wrapping_sub(start[a])));
-        if rf.second.is_some() {
-            bits += 6;
-        }
-        for i in 1..n {
-            let p = res.predict(g[i - 1], i, n);
-            bits += cost([0, 1, 2].map(|a| g[i][a].wrapping_sub(p[a])));
-        }
-        bits
-    };
+    let bits_of = |rf: &Reference| reference_bits(g, &resolve(rf), &cost);
     let mut singles: Vec<(Reference, u64)> =
         short.iter().map(|&(_, rf)| (rf, bits_of(&rf))).collect();
     singles.sort_by_key(|x| (x.1, x.0.back, x.0.reversed));
