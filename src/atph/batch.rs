@@ -11,6 +11,23 @@ pub use crate::pair::HermitePair;
 
 /// [`interpolate`] (or, where `lengths` gives one, [`interpolate_with_length`])
 /// for every pair; a pair that cannot be solved gets its own error.
+///
+/// Each result interpolates its pair, with the prescribed length where given
+/// (here the pair's own arc length on the cylinder curve
+/// `(4 cos t, 4 sin t, 0.2t²)`, `t ∈ [0, 1]`); a bad pair fails alone:
+/// ```
+/// use strandfit::atph::{interpolate_pairs, AtphError, HermitePair};
+/// use strandfit::DVec3;
+///
+/// let (c1, t1) = (DVec3::new(4.0 * 1f64.cos(), 4.0 * 1f64.sin(), 0.2), DVec3::new(-4.0 * 1f64.sin(), 4.0 * 1f64.cos(), 0.4));
+/// let good = HermitePair::new(DVec3::new(4.0, 0.0, 0.0), DVec3::Y, c1, t1);
+/// let bad = HermitePair::new(DVec3::ONE, DVec3::X, DVec3::ONE, DVec3::Y);
+/// let l = 0.5 * 16.16f64.sqrt() + 20.0 * 0.1f64.asinh();
+/// let out = interpolate_pairs(&[good, bad, good], Some(&[None, None, Some(l)]));
+/// assert!((out[0].as_ref().unwrap().position(1.0) - c1).length() < 1e-12);
+/// assert_eq!(out[1], Err(AtphError::Coincident));
+/// assert!((out[2].as_ref().unwrap().length() - l).abs() < 1e-12);
+/// ```
 pub fn interpolate_pairs(
     pairs: &[HermitePair],
     lengths: Option<&[Option<f64>]>,

@@ -69,6 +69,13 @@ impl Bernstein {
     }
 
     /// Monomial coefficients `c_k` of `ρ(t) = Σ c_k tᵏ`.
+    ///
+    /// `(1−t)² + 2·2t(1−t) + 3t² = 1 + 2t`:
+    /// ```
+    /// use strandfit::atph::Bernstein;
+    ///
+    /// assert_eq!(Bernstein::new(&[1.0, 2.0, 3.0]).monomial(), [1.0, 2.0, 0.0, 0.0]);
+    /// ```
     pub fn monomial(&self) -> [f64; 4] {
         let mut c = [0.0; 4];
         for j in 0..=self.degree {
@@ -80,11 +87,26 @@ impl Bernstein {
     }
 
     /// `B_jⁿ` in monomial form (the columns of systems 3.1 and 4.1).
+    ///
+    /// `B₁³(t) = 3t(1 − t)² = 3t − 6t² + 3t³`:
+    /// ```
+    /// use strandfit::atph::Bernstein;
+    ///
+    /// assert_eq!(Bernstein::basis_monomial(3, 1), [0.0, 3.0, -6.0, 3.0]);
+    /// ```
     pub fn basis_monomial(degree: usize, j: usize) -> [f64; 4] {
         MONOMIAL[degree][j]
     }
 
     /// `ρ(t)` by de Casteljau (stable for the Bernstein form).
+    ///
+    /// It agrees with the monomial form `1 + 2t` of Bernstein `1, 2, 3`:
+    /// ```
+    /// use strandfit::atph::Bernstein;
+    ///
+    /// let b = Bernstein::new(&[1.0, 2.0, 3.0]);
+    /// assert!((b.eval(0.3) - 1.6).abs() < 1e-15);
+    /// ```
     pub fn eval(&self, t: f64) -> f64 {
         let mut b = self.coef;
         for r in 1..=self.degree {
@@ -96,6 +118,13 @@ impl Bernstein {
     }
 
     /// `ρ′(t)`.
+    ///
+    /// ```
+    /// use strandfit::atph::Bernstein;
+    ///
+    /// // (1 − 2t)², Bernstein 1, −1, 1: derivative 8t − 4.
+    /// assert!((Bernstein::new(&[1.0, -1.0, 1.0]).derivative(0.75) - 2.0).abs() < 1e-15);
+    /// ```
     pub fn derivative(&self, t: f64) -> f64 {
         let n = self.degree;
         if n == 0 {
@@ -109,11 +138,25 @@ impl Bernstein {
     }
 
     /// `∫₀¹ ρ = Σ ρ_j / (n + 1)` (each `B_jⁿ` integrates to `1/(n+1)`).
+    ///
+    /// ```
+    /// use strandfit::atph::Bernstein;
+    ///
+    /// // 1 + 2t − 3t² + t³ (Bernstein 1, 5/3, 4/3, 1) integrates to 1 + 1 − 1 + 1/4.
+    /// assert!((Bernstein::new(&[1.0, 5.0 / 3.0, 4.0 / 3.0, 1.0]).integral() - 1.25).abs() < 1e-15);
+    /// ```
     pub fn integral(&self) -> f64 {
         self.coefficients().iter().sum::<f64>() / (self.degree + 1) as f64
     }
 
     /// `∫₀^ξ ρ`.
+    ///
+    /// `∫₀^½ (1 + 2t) dt = ¾`:
+    /// ```
+    /// use strandfit::atph::Bernstein;
+    ///
+    /// assert!((Bernstein::new(&[1.0, 2.0, 3.0]).integral_to(0.5) - 0.75).abs() < 1e-15);
+    /// ```
     pub fn integral_to(&self, xi: f64) -> f64 {
         let c = self.monomial();
         let mut s = 0.0;
@@ -127,6 +170,15 @@ impl Bernstein {
 
     /// The paper's sufficient test (Sections 3.2 and 4): all coefficients of
     /// one strict sign bound `ρ` away from zero (`min ρ_j ≤ ρ ≤ max ρ_j`).
+    ///
+    /// Sufficient only: `1, −0.2, 1` is positive on `[0, 1]` but not certified:
+    /// ```
+    /// use strandfit::atph::{Bernstein, Sign};
+    ///
+    /// assert_eq!(Bernstein::new(&[1.0, 2.0, 3.0]).certified_sign(), Some(Sign::Positive));
+    /// assert_eq!(Bernstein::new(&[-1.0, -0.1]).certified_sign(), Some(Sign::Negative));
+    /// assert_eq!(Bernstein::new(&[1.0, -0.2, 1.0]).certified_sign(), None);
+    /// ```
     pub fn certified_sign(&self) -> Option<Sign> {
         let c = self.coefficients();
         if c.iter().all(|&v| v > 0.0) {
@@ -145,6 +197,16 @@ impl Bernstein {
     /// A root of even multiplicity (a touching zero) is found when the
     /// pieces shrink to `2⁻⁴⁰` without settling, and reported as `Vanishes`
     /// (the speed reaches zero to rounding).
+    ///
+    /// `1, −0.2, 1` is `1 − 2.4t + 2.4t²`, positive (minimum `0.4` at `½`);
+    /// `1, −1, 1` is `(1 − 2t)²`, which touches zero:
+    /// ```
+    /// use strandfit::atph::{Bernstein, Sign};
+    ///
+    /// assert_eq!(Bernstein::new(&[1.0, -0.2, 1.0]).sign(), Sign::Positive);
+    /// assert_eq!(Bernstein::new(&[1.0, -1.0, 1.0]).sign(), Sign::Vanishes);
+    /// assert_eq!(Bernstein::new(&[-1.0, 1.5, -1.0]).sign(), Sign::Vanishes); // −1 + 5t − 5t²
+    /// ```
     pub fn sign(&self) -> Sign {
         if let Some(s) = self.certified_sign() {
             return s;
@@ -170,6 +232,15 @@ impl Bernstein {
     /// rounding inside a grid of `16(n+1)` cells (for the arc length
     /// `∫|ρ|`); touching roots are omitted (they do not change the sign, so
     /// `∫|ρ|` is the same).
+    ///
+    /// `(t − ¼)(t − ¾) = t² − t + 3/16` is Bernstein `3/16, −5/16, 3/16`:
+    /// ```
+    /// use strandfit::atph::Bernstein;
+    ///
+    /// let r = Bernstein::new(&[3.0 / 16.0, -5.0 / 16.0, 3.0 / 16.0]).roots();
+    /// assert_eq!(r.len(), 2);
+    /// assert!((r[0] - 0.25).abs() < 1e-15 && (r[1] - 0.75).abs() < 1e-15);
+    /// ```
     pub fn roots(&self) -> Vec<f64> {
         let mut roots = Vec::new();
         let n = 256usize.min(16 * (self.degree + 1));

@@ -32,6 +32,19 @@ pub struct AtphCurve {
 
 impl AtphCurve {
     /// `r(ξ)`, by the closed form (2.8)/(2.10).
+    ///
+    /// Constant latitude `π/4` and speed `ρ = 2π√2` over a full turn of azimuth is
+    /// the helix of radius 1 about the line `x = 0, y = 1`, rising `2π` per turn:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::{FRAC_PI_4, PI, SQRT_2, TAU};
+    ///
+    /// let helix = AtphCurve { start: DVec3::ZERO, tangent: SphericalTangent::new(FRAC_PI_4, 0.0, 0.0, TAU),
+    ///     rho: Bernstein::new(&[TAU * SQRT_2; 3]) };
+    /// assert!((helix.position(0.5) - DVec3::new(0.0, 2.0, PI)).length() < 1e-13);
+    /// assert!((helix.position(1.0) - DVec3::new(0.0, 0.0, TAU)).length() < 1e-13);
+    /// ```
     pub fn position(&self, xi: f64) -> DVec3 {
         let c = self.rho.monomial();
         let v = self.tangent.moment_vectors(xi);
@@ -43,12 +56,36 @@ impl AtphCurve {
     }
 
     /// `r′(ξ) = ρ(ξ) T(ξ)`.
+    ///
+    /// On the helix of radius 1 and pitch `2π` (latitude `π/4`), after a quarter
+    /// turn, `r′ = ρT = (0, 2π, 2π)`:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::{FRAC_PI_4, SQRT_2, TAU};
+    ///
+    /// let helix = AtphCurve { start: DVec3::ZERO, tangent: SphericalTangent::new(FRAC_PI_4, 0.0, 0.0, TAU),
+    ///     rho: Bernstein::new(&[TAU * SQRT_2; 3]) };
+    /// assert!((helix.hodograph(0.25) - DVec3::new(0.0, TAU, TAU)).length() < 1e-13);
+    /// ```
     pub fn hodograph(&self, xi: f64) -> DVec3 {
         self.rho.eval(xi) * self.tangent.at(xi)
     }
 
     /// The unit tangent of the curve as traversed, `sign(ρ) T` (`T` where
     /// `ρ = 0`).
+    ///
+    /// With `ρ < 0` the curve runs against its field:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    ///
+    /// let field = SphericalTangent::new(0.0, 0.0, 0.0, 1.0); // along the equator
+    /// let fwd = AtphCurve { start: DVec3::ZERO, tangent: field, rho: Bernstein::new(&[1.0, 2.0, 1.0]) };
+    /// let back = AtphCurve { rho: Bernstein::new(&[-1.0, -2.0, -1.0]), ..fwd };
+    /// assert!((fwd.unit_tangent(0.0) - DVec3::X).length() < 1e-15);
+    /// assert!((back.unit_tangent(0.0) + DVec3::X).length() < 1e-15);
+    /// ```
     pub fn unit_tangent(&self, xi: f64) -> DVec3 {
         let t = self.tangent.at(xi);
         if self.rho.eval(xi) < 0.0 {
@@ -59,6 +96,17 @@ impl AtphCurve {
     }
 
     /// Curvature `κ(ξ) = ‖T × T′‖ / |ρ|`.
+    ///
+    /// The helix of radius 1 and pitch `2π` (`c = 1`) has `κ = r/(r² + c²) = ½`:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::{FRAC_PI_4, SQRT_2, TAU};
+    ///
+    /// let helix = AtphCurve { start: DVec3::ZERO, tangent: SphericalTangent::new(FRAC_PI_4, 0.0, 0.0, TAU),
+    ///     rho: Bernstein::new(&[TAU * SQRT_2; 3]) };
+    /// assert!((helix.curvature(0.3) - 0.5).abs() < 1e-14);
+    /// ```
     pub fn curvature(&self, xi: f64) -> f64 {
         let t = self.tangent.at(xi);
         t.cross(self.tangent.derivative(xi)).length() / self.rho.eval(xi).abs()
@@ -66,6 +114,20 @@ impl AtphCurve {
 
     /// Torsion `τ(ξ) = det(T, T′, T″) / (ρ ‖T × T′‖²)`; `0` where the curve
     /// is straight (`T′ = 0`: the binormal is undefined).
+    ///
+    /// The right-handed helix of radius 1 and pitch `2π` has `τ = c/(r² + c²) = ½`;
+    /// a curve in the equator plane has `τ = 0`:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::{FRAC_PI_4, SQRT_2, TAU};
+    ///
+    /// let helix = AtphCurve { start: DVec3::ZERO, tangent: SphericalTangent::new(FRAC_PI_4, 0.0, 0.0, TAU),
+    ///     rho: Bernstein::new(&[TAU * SQRT_2; 3]) };
+    /// assert!((helix.torsion(0.3) - 0.5).abs() < 1e-14);
+    /// let flat = AtphCurve { tangent: SphericalTangent::new(0.0, 0.0, 0.0, 1.0), ..helix };
+    /// assert_eq!(flat.torsion(0.3), 0.0);
+    /// ```
     pub fn torsion(&self, xi: f64) -> f64 {
         let t = self.tangent.at(xi);
         let d1 = self.tangent.derivative(xi);
@@ -79,18 +141,50 @@ impl AtphCurve {
     }
 
     /// How `ρ` behaves on `[0, 1]` (exact test; see [`Bernstein::sign`]).
+    ///
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, Sign, SphericalTangent};
+    /// use strandfit::DVec3;
+    ///
+    /// let field = SphericalTangent::new(0.3, 0.2, 0.0, 1.0);
+    /// let c = AtphCurve { start: DVec3::ZERO, tangent: field, rho: Bernstein::new(&[-1.0, -0.5, -2.0]) };
+    /// assert_eq!(c.speed_sign(), Sign::Negative);
+    /// ```
     pub fn speed_sign(&self) -> Sign {
         self.rho.sign()
     }
 
     /// Proposition 1: `ρ ≠ 0` on `[0, 1]`, so the curve has no singular
     /// point (it may run against `T` if `ρ < 0`).
+    ///
+    /// `ρ = (1 − 2ξ)²` (Bernstein `1, −1, 1`) vanishes at `ξ = ½`; Bernstein
+    /// `1, −0.2, 1` has a negative coefficient but stays positive (`ρ(½) = 0.4`):
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    ///
+    /// let field = SphericalTangent::new(0.3, 0.2, 0.0, 1.0);
+    /// let cusp = AtphCurve { start: DVec3::ZERO, tangent: field, rho: Bernstein::new(&[1.0, -1.0, 1.0]) };
+    /// assert!(!cusp.is_regular());
+    /// assert!(AtphCurve { rho: Bernstein::new(&[1.0, -0.2, 1.0]), ..cusp }.is_regular());
+    /// ```
     pub fn is_regular(&self) -> bool {
         self.rho.sign() != Sign::Vanishes
     }
 
     /// Arc length from `0` to `ξ`, `∫₀^ξ |ρ|`, exact between the sign
     /// changes of `ρ`.
+    ///
+    /// `ρ = 1 − 2ξ` changes sign at `½`: `∫₀¹ ρ = 0` but `∫₀¹ |ρ| = ½`:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    ///
+    /// let field = SphericalTangent::new(0.3, 0.2, 0.0, 1.0);
+    /// let c = AtphCurve { start: DVec3::ZERO, tangent: field, rho: Bernstein::new(&[1.0, -1.0]) };
+    /// assert!((c.arc_length_to(1.0) - 0.5).abs() < 1e-15);
+    /// assert!((c.arc_length_to(0.25) - 0.1875).abs() < 1e-15); // ξ − ξ²
+    /// ```
     pub fn arc_length_to(&self, xi: f64) -> f64 {
         let mut s = 0.0;
         let mut lo = 0.0;
@@ -102,12 +196,34 @@ impl AtphCurve {
     }
 
     /// The whole arc length, `∫₀¹ |ρ|` (= `|Σρ_j|/(n+1)` when regular).
+    ///
+    /// One turn of the helix of radius 1 and pitch `2π`: `2π√2`:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::{FRAC_PI_4, SQRT_2, TAU};
+    ///
+    /// let helix = AtphCurve { start: DVec3::ZERO, tangent: SphericalTangent::new(FRAC_PI_4, 0.0, 0.0, TAU),
+    ///     rho: Bernstein::new(&[TAU * SQRT_2; 3]) };
+    /// assert!((helix.length() - TAU * SQRT_2).abs() < 1e-14);
+    /// ```
     pub fn length(&self) -> f64 {
         self.arc_length_to(1.0)
     }
 
     /// The parameter at arc length `s` (clamped to `[0, L]`): bisection on
     /// the nondecreasing `s(ξ)`, 60 halvings (to rounding in `ξ`).
+    ///
+    /// With `ρ = 1 + 2ξ` (Bernstein `1, 3`), `s(ξ) = ξ + ξ²`, so `s = ¾` at `ξ = ½`:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    ///
+    /// let field = SphericalTangent::new(0.3, 0.2, 0.0, 1.0);
+    /// let c = AtphCurve { start: DVec3::ZERO, tangent: field, rho: Bernstein::new(&[1.0, 3.0]) };
+    /// assert!((c.param_at_length(0.75) - 0.5).abs() < 1e-14);
+    /// assert_eq!(c.param_at_length(5.0), 1.0); // clamped
+    /// ```
     pub fn param_at_length(&self, s: f64) -> f64 {
         let total = self.length();
         if !(s > 0.0) {
@@ -121,6 +237,19 @@ impl AtphCurve {
 
     /// `m ≥ 2` points equally spaced in arc length, ends included (in the
     /// parameter when the length is zero).
+    ///
+    /// Quarter turns of the helix of radius 1 and pitch `2π` about `x = 0, y = 1`:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, SQRT_2, TAU};
+    ///
+    /// let helix = AtphCurve { start: DVec3::ZERO, tangent: SphericalTangent::new(FRAC_PI_4, 0.0, 0.0, TAU),
+    ///     rho: Bernstein::new(&[TAU * SQRT_2; 3]) };
+    /// let p = helix.sample(5);
+    /// assert!((p[1] - DVec3::new(1.0, 1.0, FRAC_PI_2)).length() < 1e-12);
+    /// assert!((p[3] - DVec3::new(-1.0, 1.0, 3.0 * FRAC_PI_2)).length() < 1e-12);
+    /// ```
     pub fn sample(&self, m: usize) -> Vec<DVec3> {
         let m = m.max(2);
         let total = self.length();
@@ -143,6 +272,18 @@ impl AtphCurve {
 
     /// The same curve traversed from the other end: `r̃(ξ) = r(1 − ξ)`, with
     /// field `−T(1 − ξ)` and speed `ρ(1 − ξ)` (coefficients reversed).
+    ///
+    /// `r̃(ξ) = r(1 − ξ)`:
+    /// ```
+    /// use strandfit::atph::{AtphCurve, Bernstein, SphericalTangent};
+    /// use strandfit::DVec3;
+    ///
+    /// let c = AtphCurve { start: DVec3::ONE, tangent: SphericalTangent::new(0.3, 0.5, -0.2, 1.2),
+    ///     rho: Bernstein::new(&[1.0, 2.0, 0.5, 1.5]) };
+    /// let r = c.reversed();
+    /// assert!((r.position(0.3) - c.position(0.7)).length() < 1e-14);
+    /// assert!((r.unit_tangent(0.3) + c.unit_tangent(0.7)).length() < 1e-14);
+    /// ```
     pub fn reversed(&self) -> Self {
         let mut c = [0.0; 4];
         let n = self.rho.degree();

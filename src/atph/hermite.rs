@@ -90,6 +90,21 @@ pub fn interpolate(p1: DVec3, t1: DVec3, p2: DVec3, t2: DVec3) -> Result<AtphCur
 /// G1 Hermite interpolation with prescribed arc length `length`
 /// (Section 4): cubic `ρ` for a spatial field, `∫₀¹ ρ = L`. The curve's
 /// length is `L` when `ρ` keeps its sign (check [`AtphCurve::is_regular`]).
+///
+/// The cylinder curve of Section 5, `C(t) = (4 cos t, 4 sin t, 0.2t²)`,
+/// from `t = 0` to `1` with its own arc length
+/// `∫₀¹ √(16 + 0.16t²) dt = ½√16.16 + 20 asinh 0.1`: the curve meets the ends
+/// and, being regular, has the prescribed length:
+/// ```
+/// use strandfit::{atph, DVec3};
+///
+/// let (c0, c1) = (DVec3::new(4.0, 0.0, 0.0), DVec3::new(4.0 * 1f64.cos(), 4.0 * 1f64.sin(), 0.2));
+/// let (t0, t1) = (DVec3::Y, DVec3::new(-4.0 * 1f64.sin(), 4.0 * 1f64.cos(), 0.4));
+/// let l = 0.5 * 16.16f64.sqrt() + 20.0 * 0.1f64.asinh();
+/// let c = atph::interpolate_with_length(c0, t0, c1, t1, l).unwrap();
+/// assert!((c.position(1.0) - c1).length() < 1e-12);
+/// assert!(c.is_regular() && (c.length() - l).abs() < 1e-12);
+/// ```
 pub fn interpolate_with_length(
     p1: DVec3,
     t1: DVec3,
@@ -102,6 +117,17 @@ pub fn interpolate_with_length(
 
 /// Step 1 (Section 3.1): the tangent field of the data, after checking
 /// that they are finite and the tangents nonzero.
+///
+/// The field runs from one (normalised) tangent to the other:
+/// ```
+/// use strandfit::atph::{tangent_field, AtphError};
+/// use strandfit::DVec3;
+///
+/// let f = tangent_field(DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0), DVec3::ONE, DVec3::new(0.0, 1.0, 1.0)).unwrap();
+/// assert!((f.at(0.0) - DVec3::X).length() < 1e-15);
+/// assert!((f.at(1.0) - DVec3::new(0.0, 1.0, 1.0).normalize()).length() < 1e-15);
+/// assert_eq!(tangent_field(DVec3::ZERO, DVec3::ZERO, DVec3::ONE, DVec3::X), Err(AtphError::BadInput));
+/// ```
 pub fn tangent_field(
     p1: DVec3,
     t1: DVec3,
@@ -119,6 +145,15 @@ pub fn tangent_field(
 
 /// The checks on the ends and the length every construction makes first;
 /// returns `|P₂ − P₁|`.
+///
+/// ```
+/// use strandfit::atph::{check_ends, AtphError};
+/// use strandfit::DVec3;
+///
+/// assert_eq!(check_ends(DVec3::ZERO, DVec3::new(3.0, 4.0, 0.0), Some(6.0)), Ok(5.0));
+/// assert_eq!(check_ends(DVec3::ONE, DVec3::ONE, None), Err(AtphError::Coincident));
+/// assert_eq!(check_ends(DVec3::ZERO, DVec3::X, Some(-1.0)), Err(AtphError::BadLength(-1.0)));
+/// ```
 pub fn check_ends(p1: DVec3, p2: DVec3, length: Option<f64>) -> Result<f64, AtphError> {
     let c = (p2 - p1).length();
     if !c.is_finite() {
@@ -146,6 +181,20 @@ pub fn spatial_system(length: Option<f64>) -> &'static str {
 
 /// `ρ` for a given field: `r(0) = p1`, `r(1) = p2`, and `∫ρ = length` if
 /// given (the table in the module docs).
+///
+/// With the field of a quarter turn along the equator, the unique linear `ρ`
+/// to `(1, 1, 0)` is the constant `π/2`: the quarter of the unit circle:
+/// ```
+/// use strandfit::atph::{interpolate_field, SphericalTangent};
+/// use strandfit::DVec3;
+/// use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+///
+/// let field = SphericalTangent::new(0.0, 0.0, 0.0, FRAC_PI_2);
+/// let c = interpolate_field(DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0), field, None).unwrap();
+/// assert!(c.rho.coefficients().iter().all(|r| (r - FRAC_PI_2).abs() < 1e-14));
+/// let mid = DVec3::new(FRAC_PI_4.sin(), 1.0 - FRAC_PI_4.cos(), 0.0);
+/// assert!((c.position(0.5) - mid).length() < 1e-14);
+/// ```
 pub fn interpolate_field(
     p1: DVec3,
     p2: DVec3,

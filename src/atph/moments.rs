@@ -34,6 +34,19 @@ pub struct Moments {
 pub const SERIES_BELOW: f64 = 2.0;
 
 /// `∫₀^ξ tᵏ e^{i(ωt + α)} dt` for `k = 0, 1, 2, 3`.
+///
+/// At `ω = π` (closed form): `M₀ = ∫₀¹ e^{iπt} dt = 2i/π` and
+/// `Re M₁ = ∫₀¹ t cos πt dt = −2/π²`; at `ω = 0` (series): `M_k = 1/(k + 1)`:
+/// ```
+/// use strandfit::atph::moments::trig_moments;
+/// use std::f64::consts::PI;
+///
+/// let m = trig_moments(PI, 0.0, 1.0);
+/// assert!(m.re[0].abs() < 1e-15 && (m.im[0] - 2.0 / PI).abs() < 1e-15);
+/// assert!((m.re[1] + 2.0 / (PI * PI)).abs() < 1e-15);
+/// let m = trig_moments(0.0, 0.0, 1.0);
+/// assert!((0..4).all(|k| (m.re[k] - 1.0 / (k + 1) as f64).abs() < 1e-15 && m.im[k] == 0.0));
+/// ```
 #[inline]
 pub fn trig_moments(omega: f64, alpha: f64, xi: f64) -> Moments {
     if (omega * xi).abs() < SERIES_BELOW {

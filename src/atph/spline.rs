@@ -45,6 +45,21 @@ pub enum SplineError {
 
 impl AtphSpline {
     /// Interpolate `points[i]` with unit tangent `tangents[i]`.
+    ///
+    /// Three points of the unit circle, `π/4` apart, with their tangents: each
+    /// segment is the arc itself (a planar field with constant `ρ`):
+    /// ```
+    /// use strandfit::atph::AtphSpline;
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::FRAC_PI_8;
+    ///
+    /// let a = [0.0, 2.0 * FRAC_PI_8, 4.0 * FRAC_PI_8];
+    /// let p: Vec<DVec3> = a.iter().map(|t| DVec3::new(t.cos(), t.sin(), 0.0)).collect();
+    /// let t: Vec<DVec3> = a.iter().map(|t| DVec3::new(-t.sin(), t.cos(), 0.0)).collect();
+    /// let s = AtphSpline::interpolate(&p, &t).unwrap();
+    /// assert_eq!(s.segments.len(), 2);
+    /// assert!((s.position(0.5) - DVec3::new(FRAC_PI_8.cos(), FRAC_PI_8.sin(), 0.0)).length() < 1e-14);
+    /// ```
     pub fn interpolate(points: &[DVec3], tangents: &[DVec3]) -> Result<Self, SplineError> {
         if points.len() != tangents.len() {
             return Err(SplineError::Mismatch {
@@ -65,6 +80,17 @@ impl AtphSpline {
     }
 
     /// Segment index and local parameter of `u` (clamped to `[0, n]`).
+    ///
+    /// ```
+    /// use strandfit::atph::AtphSpline;
+    /// use strandfit::DVec3;
+    ///
+    /// let p = [DVec3::ZERO, DVec3::X, DVec3::new(2.0, 1.0, 0.0)];
+    /// let t = [DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let s = AtphSpline::interpolate(&p, &t).unwrap();
+    /// assert_eq!(s.locate(1.25), (1, 0.25));
+    /// assert_eq!(s.locate(9.0), (1, 1.0)); // clamped
+    /// ```
     pub fn locate(&self, u: f64) -> (usize, f64) {
         let n = self.segments.len();
         let u = u.clamp(0.0, n as f64);
@@ -73,23 +99,74 @@ impl AtphSpline {
     }
 
     /// The point at `u ∈ [0, n]` (clamped).
+    ///
+    /// The spline passes through its points at the integers:
+    /// ```
+    /// use strandfit::atph::AtphSpline;
+    /// use strandfit::DVec3;
+    ///
+    /// // The cylinder curve of Section 5, (4 cos t, 4 sin t, 0.2t²), at t = 0, ½, 1.
+    /// let c = |t: f64| DVec3::new(4.0 * t.cos(), 4.0 * t.sin(), 0.2 * t * t);
+    /// let d = |t: f64| DVec3::new(-4.0 * t.sin(), 4.0 * t.cos(), 0.4 * t).normalize();
+    /// let (p, t) = ([c(0.0), c(0.5), c(1.0)], [d(0.0), d(0.5), d(1.0)]);
+    /// let s = AtphSpline::interpolate(&p, &t).unwrap();
+    /// assert!((0..3).all(|i| (s.position(i as f64) - p[i]).length() < 1e-12));
+    /// ```
     pub fn position(&self, u: f64) -> DVec3 {
         let (i, xi) = self.locate(u);
         self.segments[i].position(xi)
     }
 
     /// The unit tangent at `u ∈ [0, n]` (clamped).
+    ///
+    /// G1: at the join both segments have the given tangent:
+    /// ```
+    /// use strandfit::atph::AtphSpline;
+    /// use strandfit::DVec3;
+    ///
+    /// // The cylinder curve of Section 5, (4 cos t, 4 sin t, 0.2t²), at t = 0, ½, 1.
+    /// let c = |t: f64| DVec3::new(4.0 * t.cos(), 4.0 * t.sin(), 0.2 * t * t);
+    /// let d = |t: f64| DVec3::new(-4.0 * t.sin(), 4.0 * t.cos(), 0.4 * t).normalize();
+    /// let (p, t) = ([c(0.0), c(0.5), c(1.0)], [d(0.0), d(0.5), d(1.0)]);
+    /// let s = AtphSpline::interpolate(&p, &t).unwrap();
+    /// assert!((s.unit_tangent(1.0) - t[1]).length() < 1e-14);
+    /// assert!((s.segments[0].unit_tangent(1.0) - t[1]).length() < 1e-14);
+    /// ```
     pub fn unit_tangent(&self, u: f64) -> DVec3 {
         let (i, xi) = self.locate(u);
         self.segments[i].unit_tangent(xi)
     }
 
     /// Every segment regular (Proposition 1).
+    ///
+    /// ```
+    /// use strandfit::atph::AtphSpline;
+    /// use strandfit::DVec3;
+    ///
+    /// // The cylinder curve of Section 5, (4 cos t, 4 sin t, 0.2t²), at t = 0, ½, 1.
+    /// let c = |t: f64| DVec3::new(4.0 * t.cos(), 4.0 * t.sin(), 0.2 * t * t);
+    /// let d = |t: f64| DVec3::new(-4.0 * t.sin(), 4.0 * t.cos(), 0.4 * t).normalize();
+    /// let (p, t) = ([c(0.0), c(0.5), c(1.0)], [d(0.0), d(0.5), d(1.0)]);
+    /// let s = AtphSpline::interpolate(&p, &t).unwrap();
+    /// assert!(s.is_regular());
+    /// ```
     pub fn is_regular(&self) -> bool {
         self.segments.iter().all(AtphCurve::is_regular)
     }
 
     /// Total arc length, the sum of the segments'.
+    ///
+    /// A quarter of the unit circle in two arcs has length `π/2`:
+    /// ```
+    /// use strandfit::atph::AtphSpline;
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+    ///
+    /// let a = [0.0, FRAC_PI_4, FRAC_PI_2];
+    /// let p: Vec<DVec3> = a.iter().map(|t| DVec3::new(t.cos(), t.sin(), 0.0)).collect();
+    /// let t: Vec<DVec3> = a.iter().map(|t| DVec3::new(-t.sin(), t.cos(), 0.0)).collect();
+    /// assert!((AtphSpline::interpolate(&p, &t).unwrap().length() - FRAC_PI_2).abs() < 1e-14);
+    /// ```
     pub fn length(&self) -> f64 {
         self.segments.iter().map(AtphCurve::length).sum()
     }

@@ -62,6 +62,16 @@ pub enum FieldKind {
 }
 
 /// `(θ, φ)` of a unit vector; `φ` is `None` at the poles.
+///
+/// ```
+/// use strandfit::atph::tangent::spherical_angles;
+/// use strandfit::DVec3;
+/// use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+///
+/// assert_eq!(spherical_angles(DVec3::Z), (FRAC_PI_2, None)); // a pole: no azimuth
+/// let (theta, phi) = spherical_angles(DVec3::new(1.0, 1.0, 2f64.sqrt()).normalize());
+/// assert!((theta - FRAC_PI_4).abs() < 1e-15 && (phi.unwrap() - FRAC_PI_4).abs() < 1e-15);
+/// ```
 pub fn spherical_angles(t: DVec3) -> (f64, Option<f64>) {
     let h = t.x.hypot(t.y);
     // atan2 keeps θ accurate near the poles, where asin(t_z) loses half the
@@ -72,6 +82,14 @@ pub fn spherical_angles(t: DVec3) -> (f64, Option<f64>) {
 }
 
 /// `x` reduced to `(−π, π]`.
+///
+/// ```
+/// use strandfit::atph::tangent::wrap_angle;
+/// use std::f64::consts::{FRAC_PI_2, PI};
+///
+/// assert!((wrap_angle(3.0 * FRAC_PI_2) + FRAC_PI_2).abs() < 1e-15);
+/// assert_eq!(wrap_angle(-PI), PI);
+/// ```
 pub fn wrap_angle(x: f64) -> f64 {
     let mut r = x.rem_euclid(TAU);
     if r > PI {
@@ -88,6 +106,19 @@ impl SphericalTangent {
 
     /// The field of Section 3.1 from unit tangents `t1`, `t2` and the chord
     /// `P₂ − P₁` (which decides the free choices; see the module docs).
+    ///
+    /// The field runs from `t1` to `t2`; equal tangents off the chord give the
+    /// full latitude circle (`b₁ = 2π`):
+    /// ```
+    /// use strandfit::atph::SphericalTangent;
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::TAU;
+    ///
+    /// let (t1, t2) = (DVec3::new(1.0, 0.0, 1.0).normalize(), DVec3::new(0.0, -1.0, 0.5).normalize());
+    /// let f = SphericalTangent::interpolating(t1, t2, DVec3::new(1.0, -1.0, 1.0));
+    /// assert!((f.at(0.0) - t1).length() < 1e-15 && (f.at(1.0) - t2).length() < 1e-15);
+    /// assert_eq!(SphericalTangent::interpolating(DVec3::X, DVec3::X, DVec3::Y).b1, TAU);
+    /// ```
     pub fn interpolating(t1: DVec3, t2: DVec3, chord: DVec3) -> Self {
         let (theta1, phi1) = spherical_angles(t1);
         let (theta2, phi2) = spherical_angles(t2);
@@ -127,6 +158,16 @@ impl SphericalTangent {
     }
 
     /// `T(ξ)`, Eq. (2.1).
+    ///
+    /// Latitude `π/4`, azimuth `π/2`:
+    /// ```
+    /// use strandfit::atph::SphericalTangent;
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+    ///
+    /// let f = SphericalTangent::new(0.0, FRAC_PI_4, FRAC_PI_2, 0.0);
+    /// assert!((f.at(1.0) - DVec3::new(0.0, 1.0, 1.0).normalize()).length() < 1e-15);
+    /// ```
     #[inline]
     pub fn at(&self, xi: f64) -> DVec3 {
         let (sa, ca) = (self.a1 * xi + self.a0).sin_cos();
@@ -135,6 +176,16 @@ impl SphericalTangent {
     }
 
     /// `T′(ξ)`.
+    ///
+    /// It matches a central difference of [`at`](Self::at):
+    /// ```
+    /// use strandfit::atph::SphericalTangent;
+    ///
+    /// let f = SphericalTangent::new(0.3, 0.7, -0.2, 1.9);
+    /// let h = 1e-5;
+    /// let fd = (f.at(0.4 + h) - f.at(0.4 - h)) / (2.0 * h);
+    /// assert!((f.derivative(0.4) - fd).length() < 1e-9);
+    /// ```
     pub fn derivative(&self, xi: f64) -> DVec3 {
         let (sa, ca) = (self.a1 * xi + self.a0).sin_cos();
         let (sb, cb) = (self.b1 * xi + self.b0).sin_cos();
@@ -142,6 +193,16 @@ impl SphericalTangent {
     }
 
     /// `T″(ξ)`.
+    ///
+    /// It matches a central difference of [`derivative`](Self::derivative):
+    /// ```
+    /// use strandfit::atph::SphericalTangent;
+    ///
+    /// let f = SphericalTangent::new(0.3, 0.7, -0.2, 1.9);
+    /// let h = 1e-5;
+    /// let fd = (f.derivative(0.4 + h) - f.derivative(0.4 - h)) / (2.0 * h);
+    /// assert!((f.second_derivative(0.4) - fd).length() < 1e-8);
+    /// ```
     pub fn second_derivative(&self, xi: f64) -> DVec3 {
         let (a1, b1) = (self.a1, self.b1);
         let (sa, ca) = (a1 * xi + self.a0).sin_cos();
@@ -155,6 +216,18 @@ impl SphericalTangent {
     /// of (2.3), `x = ½(Re M_k(A₁, A₀) + Re M_k(B₁, B₀))`,
     /// `y = ½(Im M_k(A₁, A₀) − Im M_k(B₁, B₀))`, `z = Im M_k(a₁, a₀)`, where
     /// `A = a + b`, `B = a − b` ([`super::moments`]).
+    ///
+    /// A quarter turn along the equator, `T = (cos πt/2, sin πt/2, 0)`:
+    /// `V₀(1) = (2/π, 2/π, 0)` and `V₁(1)ₓ = ∫₀¹ t cos(πt/2) dt = 2/π − 4/π²`:
+    /// ```
+    /// use strandfit::atph::SphericalTangent;
+    /// use strandfit::DVec3;
+    /// use std::f64::consts::{FRAC_PI_2, PI};
+    ///
+    /// let v = SphericalTangent::new(0.0, 0.0, 0.0, FRAC_PI_2).moment_vectors(1.0);
+    /// assert!((v[0] - DVec3::new(2.0 / PI, 2.0 / PI, 0.0)).length() < 1e-15);
+    /// assert!((v[1].x - (2.0 / PI - 4.0 / (PI * PI))).abs() < 1e-15);
+    /// ```
     pub fn moment_vectors(&self, xi: f64) -> [DVec3; 4] {
         let ma = trig_moments(self.a1 + self.b1, self.a0 + self.b0, xi);
         let mb = trig_moments(self.a1 - self.b1, self.a0 - self.b0, xi);
@@ -169,6 +242,16 @@ impl SphericalTangent {
     }
 
     /// Whether the field is constant, planar, or spans space.
+    ///
+    /// ```
+    /// use strandfit::atph::{FieldKind, SphericalTangent};
+    /// use strandfit::DVec3;
+    ///
+    /// assert_eq!(SphericalTangent::new(0.0, 0.0, 0.0, 1.0).kind(), FieldKind::Planar(DVec3::Z)); // equator
+    /// assert_eq!(SphericalTangent::new(0.2, 0.5, 0.0, 0.0).kind(), FieldKind::Planar(DVec3::Y)); // meridian
+    /// assert_eq!(SphericalTangent::new(0.2, 0.0, 0.3, 0.0).kind(), FieldKind::Constant);
+    /// assert_eq!(SphericalTangent::new(0.2, 0.5, 0.0, 1.0).kind(), FieldKind::Spatial);
+    /// ```
     pub fn kind(&self) -> FieldKind {
         let a_still = self.a1.abs() <= PLANAR_TOL;
         if a_still && (self.b1.abs() <= PLANAR_TOL || self.a0.cos().abs() <= POLE_TOL) {
@@ -185,6 +268,15 @@ impl SphericalTangent {
 
     /// The field traversed backwards, `T̃(ξ) = −T(1 − ξ)`: latitude
     /// `−θ(1 − ξ)`, azimuth `φ(1 − ξ) + π`.
+    ///
+    /// `T̃(ξ) = −T(1 − ξ)`:
+    /// ```
+    /// use strandfit::atph::SphericalTangent;
+    ///
+    /// let f = SphericalTangent::new(0.3, 0.7, -0.2, 1.9);
+    /// let r = f.reversed();
+    /// assert!((r.at(0.25) + f.at(0.75)).length() < 1e-15);
+    /// ```
     pub fn reversed(&self) -> Self {
         SphericalTangent {
             a0: -(self.a0 + self.a1),
