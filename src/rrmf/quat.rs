@@ -58,6 +58,13 @@ impl Quat {
     }
 
     /// `[s, vx, vy, vz]`.
+    ///
+    /// The inverse of [`from_array`](Self::from_array):
+    /// ```
+    /// use strandfit::rrmf::Quat;
+    ///
+    /// assert_eq!(Quat::from_array([1.0, 2.0, 3.0, 4.0]).to_array(), [1.0, 2.0, 3.0, 4.0]);
+    /// ```
     pub fn to_array(self) -> [f64; 4] {
         [self.s, self.v.x, self.v.y, self.v.z]
     }
@@ -68,12 +75,31 @@ impl Quat {
     }
 
     /// `e^{𝐮φ} = cos φ + 𝐮 sin φ` (`𝐮` a unit vector).
+    ///
+    /// `e^{𝐤π/4}` turns `𝐢` by `π/2` about `𝐤` (the sandwich turns by twice the angle):
+    /// ```
+    /// use strandfit::rrmf::Quat;
+    /// use strandfit::DVec3;
+    ///
+    /// let q = Quat::exp(DVec3::Z, std::f64::consts::FRAC_PI_4);
+    /// assert!((q.norm() - 1.0).abs() < 1e-15);
+    /// assert!((q.sandwich(DVec3::X) - DVec3::Y).length() < 1e-15);
+    /// ```
     pub fn exp(axis: DVec3, phi: f64) -> Self {
         let (s, c) = phi.sin_cos();
         Quat { s: c, v: axis * s }
     }
 
     /// The conjugate `s − 𝐯`.
+    ///
+    /// `𝒜𝒜* = |𝒜|²`, a real number:
+    /// ```
+    /// use strandfit::rrmf::Quat;
+    /// use strandfit::DVec3;
+    ///
+    /// let a = Quat::from_array([1.0, 2.0, 3.0, 4.0]);
+    /// assert_eq!(a * a.conj(), Quat::new(30.0, DVec3::ZERO));
+    /// ```
     pub fn conj(self) -> Self {
         Quat {
             s: self.s,
@@ -82,22 +108,57 @@ impl Quat {
     }
 
     /// `𝒜𝒜* = |𝒜|²`.
+    ///
+    /// ```
+    /// use strandfit::rrmf::Quat;
+    ///
+    /// assert_eq!(Quat::from_array([1.0, 2.0, 3.0, 4.0]).norm2(), 30.0);
+    /// ```
     pub fn norm2(self) -> f64 {
         self.s * self.s + self.v.length_squared()
     }
 
     /// `|q| = √(s² + |𝐯|²)`.
+    ///
+    /// The norm is multiplicative, `|𝒜ℬ| = |𝒜||ℬ|`:
+    /// ```
+    /// use strandfit::rrmf::Quat;
+    ///
+    /// let (a, b) = (Quat::from_array([1.0, 2.0, 3.0, 4.0]), Quat::from_array([0.5, -1.0, 0.0, 2.0]));
+    /// assert!(((a * b).norm() - a.norm() * b.norm()).abs() < 1e-14);
+    /// assert!((a.norm() - 30f64.sqrt()).abs() < 1e-15);
+    /// ```
     pub fn norm(self) -> f64 {
         self.norm2().sqrt()
     }
 
     /// All four components are finite.
+    ///
+    /// ```
+    /// use strandfit::rrmf::Quat;
+    ///
+    /// assert!(Quat::ONE.is_finite());
+    /// assert!(!Quat::from_array([1.0, f64::NAN, 0.0, 0.0]).is_finite());
+    /// ```
     pub fn is_finite(self) -> bool {
         self.s.is_finite() && self.v.is_finite()
     }
 
     /// `𝒜 𝐮 𝒜*` for a pure vector `𝐮`: `|𝒜|²` times `𝐮` rotated by the unit
     /// quaternion `𝒜/|𝒜|` (Eq. 2.1), written out (no quaternion products).
+    ///
+    /// `1 + 𝐤` has `|𝒜|² = 2` and turns by `π/2` about `𝐤`; the result matches
+    /// the quaternion product `𝒜𝐮𝒜*`:
+    /// ```
+    /// use strandfit::rrmf::Quat;
+    /// use strandfit::DVec3;
+    ///
+    /// let a = Quat::new(1.0, DVec3::Z);
+    /// assert!((a.sandwich(DVec3::X) - 2.0 * DVec3::Y).length() < 1e-15);
+    /// let b = Quat::from_array([0.3, 1.0, -0.2, 0.4]);
+    /// let u = DVec3::new(0.5, -1.0, 2.0);
+    /// assert!((b.sandwich(u) - (b * Quat::pure(u) * b.conj()).v).length() < 1e-15);
+    /// ```
     pub fn sandwich(self, u: DVec3) -> DVec3 {
         let (a, w) = (self.s, self.v);
         // (a² − |𝐰|²) 𝐮 + 2 (𝐰·𝐮) 𝐰 + 2a (𝐰 × 𝐮)
@@ -105,6 +166,16 @@ impl Quat {
     }
 
     /// `𝒜 ⋆ ℬ = ½(𝒜 𝐢 ℬ* + ℬ 𝐢 𝒜*)` (Definition 2.11).
+    ///
+    /// `𝒜 ⋆ 𝒜 = 𝒜𝐢𝒜*`, and `⋆` is symmetric:
+    /// ```
+    /// use strandfit::rrmf::Quat;
+    /// use strandfit::DVec3;
+    ///
+    /// let (a, b) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// assert!((a.star(a) - a.sandwich(DVec3::X)).length() < 1e-15);
+    /// assert!((a.star(b) - b.star(a)).length() < 1e-15);
+    /// ```
     pub fn star(self, b: Quat) -> DVec3 {
         let x = self * Quat::pure(I) * b.conj();
         let y = b * Quat::pure(I) * self.conj();
@@ -112,6 +183,15 @@ impl Quat {
     }
 
     /// `𝒜 □ ℬ = ½(𝒜ℬ* − ℬ𝒜*)` (Definition 2.11).
+    ///
+    /// `𝒜 □ ℬ = vect(𝒜ℬ*)` (`ℬ𝒜*` is its conjugate), antisymmetric:
+    /// ```
+    /// use strandfit::rrmf::Quat;
+    ///
+    /// let (a, b) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// assert!((a.square(b) - (a * b.conj()).v).length() < 1e-15);
+    /// assert!((a.square(b) + b.square(a)).length() < 1e-15);
+    /// ```
     pub fn square(self, b: Quat) -> DVec3 {
         let x = self * b.conj();
         let y = b * self.conj();
@@ -184,11 +264,27 @@ impl Neg for Quat {
 
 /// The unit bisector `𝐛(𝐯, 𝐰)` of Definition 2.13, `None` when `𝐯/|𝐯| +
 /// 𝐰/|𝐰| = 0` (or an input is zero).
+///
+/// ```
+/// use strandfit::rrmf::quat::bisector;
+/// use strandfit::DVec3;
+///
+/// assert!((bisector(DVec3::X, 3.0 * DVec3::Y).unwrap() - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-15);
+/// assert_eq!(bisector(DVec3::X, -DVec3::X), None);
+/// ```
 pub fn bisector(v: DVec3, w: DVec3) -> Option<DVec3> {
     (v.try_normalize()? + w.try_normalize()?).try_normalize()
 }
 
 /// `𝐧(𝐯, 𝐰) = −(𝐯 × 𝐰)/|𝐯 × 𝐰|` (Definition 2.13), `None` when parallel.
+///
+/// ```
+/// use strandfit::rrmf::quat::neg_cross;
+/// use strandfit::DVec3;
+///
+/// assert_eq!(neg_cross(DVec3::X, 2.0 * DVec3::Y), Some(-DVec3::Z));
+/// assert_eq!(neg_cross(DVec3::X, -DVec3::X), None);
+/// ```
 pub fn neg_cross(v: DVec3, w: DVec3) -> Option<DVec3> {
     (-v.cross(w)).try_normalize()
 }
@@ -202,6 +298,17 @@ pub fn neg_cross(v: DVec3, w: DVec3) -> Option<DVec3> {
 /// and `𝒬` the shortest rotation from `−𝐢` to `𝐯/|𝐯|`, well conditioned
 /// there (at `𝐯 = −|𝐯|𝐢` it is `√|𝐯| 𝐣`, the special case with `𝛅₁^⊥ = 𝐣`).
 /// `None` for `𝐯 = 0` or non-finite `𝐯`.
+///
+/// `𝒜𝐢𝒜* = 𝐯`, for a general `𝐯` and for the special case `𝐯 ∥ −𝐢`:
+/// ```
+/// use strandfit::rrmf::quat::sqrt_wrt_i;
+/// use strandfit::DVec3;
+///
+/// for v in [DVec3::new(1.0, 2.0, 3.0), DVec3::new(-2.0, 0.0, 0.0)] {
+///     assert!((sqrt_wrt_i(v).unwrap().sandwich(DVec3::X) - v).length() < 1e-14);
+/// }
+/// assert_eq!(sqrt_wrt_i(DVec3::ZERO), None);
+/// ```
 pub fn sqrt_wrt_i(v: DVec3) -> Option<Quat> {
     let len = v.length();
     if !(len > 0.0) || !len.is_finite() {

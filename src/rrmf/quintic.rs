@@ -25,6 +25,13 @@ pub struct PhQuintic {
 }
 
 /// `B₀², B₁², B₂²` at `t`.
+///
+/// A partition of unity: at `t = ¼`, `(9, 6, 1)/16`:
+/// ```
+/// use strandfit::rrmf::quintic::bernstein2;
+///
+/// assert_eq!(bernstein2(0.25), [0.5625, 0.375, 0.0625]);
+/// ```
 #[inline]
 pub fn bernstein2(t: f64) -> [f64; 3] {
     let u = 1.0 - t;
@@ -57,6 +64,17 @@ impl PhQuintic {
     }
 
     /// `𝒜(t)`.
+    ///
+    /// At `t = ½`: `(𝒜₀ + 2𝒜₁ + 𝒜₂)/4`:
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let [a0, a1, a2] = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, [a0, a1, a2]);
+    /// let want = (a0 + a1 * 2.0 + a2) * 0.25;
+    /// assert!((c.pre_image_at(0.5) - want).norm() < 1e-15);
+    /// ```
     pub fn pre_image_at(&self, t: f64) -> Quat {
         let b = bernstein2(t);
         let [a0, a1, a2] = self.pre_image;
@@ -64,12 +82,35 @@ impl PhQuintic {
     }
 
     /// `𝒜′(t) = 2(1 − t)(𝒜₁ − 𝒜₀) + 2t(𝒜₂ − 𝒜₁)`.
+    ///
+    /// It matches a central difference of [`pre_image_at`](Self::pre_image_at):
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, pre);
+    /// let h = 1e-5;
+    /// let fd = (c.pre_image_at(0.3 + h) - c.pre_image_at(0.3 - h)) * (0.5 / h);
+    /// assert!((c.pre_image_derivative(0.3) - fd).norm() < 1e-9);
+    /// ```
     pub fn pre_image_derivative(&self, t: f64) -> Quat {
         let [a0, a1, a2] = self.pre_image;
         (a1 - a0) * (2.0 * (1.0 - t)) + (a2 - a1) * (2.0 * t)
     }
 
     /// `𝐡₀ … 𝐡₄` (Eq. 2.8), with `𝐡ᵢ` in the ⋆ notation of (3.2).
+    ///
+    /// The end control points are the end hodographs:
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, pre);
+    /// let h = c.hodograph_control_points();
+    /// assert!((h[0] - c.hodograph(0.0)).length() < 1e-15 && (h[4] - c.hodograph(1.0)).length() < 1e-15);
+    /// ```
     pub fn hodograph_control_points(&self) -> [DVec3; 5] {
         let [a0, a1, a2] = self.pre_image;
         [
@@ -83,6 +124,18 @@ impl PhQuintic {
     }
 
     /// `w₀ … w₄` (Eq. 2.12): `σ = |𝒜|² = Σ wᵢ Bᵢ⁴`.
+    ///
+    /// `σ(t) = Σ wᵢ Bᵢ⁴(t)`; at `t = ½` the weights are `(1, 4, 6, 4, 1)/16`:
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, pre);
+    /// let w = c.speed_weights();
+    /// let mid = (w[0] + 4.0 * w[1] + 6.0 * w[2] + 4.0 * w[3] + w[4]) / 16.0;
+    /// assert!((mid - c.speed(0.5)).abs() < 1e-15);
+    /// ```
     pub fn speed_weights(&self) -> [f64; 5] {
         let [a0, a1, a2] = self.pre_image;
         let dot = |a: Quat, b: Quat| a.s * b.s + a.v.dot(b.v);
@@ -96,6 +149,19 @@ impl PhQuintic {
     }
 
     /// `𝐫₀ … 𝐫₅` (Eq. 2.10).
+    ///
+    /// They start at `𝐫₀` and end at `𝐫(1)`:
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ONE, pre);
+    /// let r = c.control_points();
+    /// assert_eq!(r[0], DVec3::ONE);
+    /// assert!((r[5] - c.position(1.0)).length() < 1e-15);
+    /// assert!((r[1] - r[0] - c.hodograph(0.0) / 5.0).length() < 1e-15);
+    /// ```
     pub fn control_points(&self) -> [DVec3; 6] {
         let h = self.hodograph_control_points();
         let mut r = [self.start; 6];
@@ -106,21 +172,65 @@ impl PhQuintic {
     }
 
     /// `𝐫(t)`.
+    ///
+    /// Its derivative (here a central difference) is the hodograph `𝒜𝐢𝒜*`:
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ONE, pre);
+    /// let h = 1e-5;
+    /// let fd = (c.position(0.4 + h) - c.position(0.4 - h)) / (2.0 * h);
+    /// assert!((fd - c.hodograph(0.4)).length() < 1e-9);
+    /// ```
     pub fn position(&self, t: f64) -> DVec3 {
         de_casteljau(self.control_points(), t)
     }
 
     /// `𝐫′(t) = 𝒜(t) 𝐢 𝒜*(t)`.
+    ///
+    /// Pythagorean hodograph: `|𝐫′(t)|` is the polynomial `|𝒜(t)|²`:
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, pre);
+    /// assert!((c.hodograph(0.7).length() - c.pre_image_at(0.7).norm2()).abs() < 1e-15);
+    /// ```
     pub fn hodograph(&self, t: f64) -> DVec3 {
         self.pre_image_at(t).sandwich(I)
     }
 
     /// `σ(t) = |𝐫′(t)| = |𝒜(t)|²`.
+    ///
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, pre);
+    /// assert!((c.speed(0.2) - c.hodograph(0.2).length()).abs() < 1e-15);
+    /// assert!((c.speed(0.0) - 1.14).abs() < 1e-15); // |𝒜₀|²
+    /// ```
     pub fn speed(&self, t: f64) -> f64 {
         self.pre_image_at(t).norm2()
     }
 
     /// `s(t) = ∫₀ᵗ σ`, exact (a quintic in Bernstein form).
+    ///
+    /// `s′ = σ` (here a central difference), and `s(1)` is the length:
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, pre);
+    /// let h = 1e-5;
+    /// assert!(((c.arc_length_to(0.6 + h) - c.arc_length_to(0.6 - h)) / (2.0 * h) - c.speed(0.6)).abs() < 1e-9);
+    /// assert!((c.arc_length_to(1.0) - c.length()).abs() < 1e-15);
+    /// ```
     pub fn arc_length_to(&self, t: f64) -> f64 {
         let w = self.speed_weights();
         let mut s = [0.0; 6];
@@ -131,17 +241,50 @@ impl PhQuintic {
     }
 
     /// Total arc length `s(1)`, exact.
+    ///
+    /// Boole's rule is exact for the quartic `σ`:
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, pre);
+    /// let s = |t| c.speed(t);
+    /// let boole = (7.0 * s(0.0) + 32.0 * s(0.25) + 12.0 * s(0.5) + 32.0 * s(0.75) + 7.0 * s(1.0)) / 90.0;
+    /// assert!((c.length() - boole).abs() < 1e-14);
+    /// ```
     pub fn length(&self) -> f64 {
         self.speed_weights().iter().sum::<f64>() / 5.0
     }
 
     /// The tangent indicatrix `𝐭(t) = 𝒜𝐢𝒜*/|𝒜|²` (Eq. 2.11).
+    ///
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, pre);
+    /// assert!((c.tangent(0.3) - c.hodograph(0.3).normalize()).length() < 1e-15);
+    /// ```
     pub fn tangent(&self, t: f64) -> DVec3 {
         let a = self.pre_image_at(t);
         a.sandwich(I) / a.norm2()
     }
 
     /// The Euler–Rodrigues frame `(𝐞₁, 𝐞₂, 𝐞₃)` at `t`.
+    ///
+    /// Orthonormal and right-handed, led by the tangent:
+    /// ```
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let pre = [[1.0, 0.2, -0.3, 0.1], [0.8, 0.5, 0.1, -0.2], [0.6, 0.1, 0.4, 0.3]].map(Quat::from_array);
+    /// let c = PhQuintic::new(DVec3::ZERO, pre);
+    /// let [e1, e2, e3] = c.euler_rodrigues_frame(0.3);
+    /// assert!((e1 - c.tangent(0.3)).length() < 1e-15);
+    /// assert!(e1.dot(e2).abs() < 1e-15 && (e1.cross(e2) - e3).length() < 1e-15);
+    /// ```
     pub fn euler_rodrigues_frame(&self, t: f64) -> [DVec3; 3] {
         let a = self.pre_image_at(t);
         let n = a.norm2();
@@ -150,6 +293,18 @@ impl PhQuintic {
 
     /// `|𝒜₁𝐢𝒜₁* − vect(𝒜₂𝐢𝒜₀*)|` relative to `|𝒜₁|²`: zero for class I
     /// RRMF quintics (Eq. 2.17).
+    ///
+    /// `𝒜₁ = √(vect(𝒜₂𝐢𝒜₀*))` makes a class I quintic (Eq. 2.17):
+    /// ```
+    /// use strandfit::rrmf::quat::sqrt_wrt_i;
+    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::DVec3;
+    ///
+    /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// let a1 = sqrt_wrt_i((a2 * Quat::pure(DVec3::X) * a0.conj()).v).unwrap();
+    /// assert!(PhQuintic::new(DVec3::ZERO, [a0, a1, a2]).class_one_residual() < 1e-15);
+    /// assert!(PhQuintic::new(DVec3::ZERO, [a0, Quat::ONE, a2]).class_one_residual() > 0.1);
+    /// ```
     pub fn class_one_residual(&self) -> f64 {
         let [a0, a1, a2] = self.pre_image;
         (a1.sandwich(I) - (a2 * Quat::pure(I) * a0.conj()).v).length()
