@@ -157,6 +157,19 @@ fn g_functional(cfg: &Config) -> f64 {
 /// `u_i`, `u_f` (unit), in world coordinates: what the spline's tangent
 /// selection (5.4) tests through condition (4.30) at `φ₂ = 2π/3`. `None`
 /// for parallel tangents or a vanishing `𝐈_γ`.
+///
+/// At the solved `φ₂` of [`interpolate_local`] it is the chord direction `𝚫𝐮`
+/// (here the data of its example):
+/// ```
+/// use strandfit::rrmf::local::unit_displacement;
+/// use strandfit::rrmf::interpolate_local;
+/// use strandfit::DVec3;
+///
+/// let (p_f, u_f) = (DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.5, 0.5, -0.5f64.sqrt()));
+/// let sol = interpolate_local(DVec3::ZERO, [DVec3::X, DVec3::Y, DVec3::Z], p_f, u_f).unwrap();
+/// let s = unit_displacement(DVec3::X, u_f, sol.phi2).unwrap();
+/// assert!((s - p_f.normalize()).length() < 1e-9);
+/// ```
 pub fn unit_displacement(u_i: DVec3, u_f: DVec3, phi2: f64) -> Option<DVec3> {
     // Any rotation taking u_i to 𝐢 will do: the construction is covariant
     // under rotations about 𝐢 (Remark 3.6).
@@ -170,6 +183,22 @@ pub fn unit_displacement(u_i: DVec3, u_f: DVec3, phi2: f64) -> Option<DVec3> {
 }
 
 /// Solve the local problem (module docs).
+///
+/// From the origin with frame `(x, y, z)` to `(1, 1, 0)` with tangent `x`
+/// turned by `π/2` about the chord (so that `𝐮ᵢ·𝚫𝐮 = 𝚫𝐮·𝐮_f`, (4.1)): the
+/// quintic meets the data, and its frame starts as given and is rotation
+/// minimising:
+/// ```
+/// use strandfit::rrmf::interpolate_local;
+/// use strandfit::DVec3;
+///
+/// let frame = [DVec3::X, DVec3::Y, DVec3::Z];
+/// let (p_f, u_f) = (DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.5, 0.5, -0.5f64.sqrt()));
+/// let c = interpolate_local(DVec3::ZERO, frame, p_f, u_f).unwrap().curve;
+/// assert!((c.curve.position(1.0) - p_f).length() < 1e-12 && (c.curve.tangent(1.0) - u_f).length() < 1e-12);
+/// assert!((0..3).all(|k| (c.frame(0.0)[k] - frame[k]).length() < 1e-12));
+/// assert!(c.rmf_residual(0.5) < 1e-12);
+/// ```
 pub fn interpolate_local(
     p_i: DVec3,
     frame: [DVec3; 3],

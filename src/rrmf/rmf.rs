@@ -330,6 +330,22 @@ pub struct RrmfQuintic {
 impl RrmfQuintic {
     /// Find `𝒲` for `curve` (module docs). `NotRrmf` when the best of the four
     /// root pairings leaves a relative residual above `1e-8` in (2.5).
+    ///
+    /// A class I quintic (`𝒜₁ = √(vect(𝒜₂𝐢𝒜₀*))`) has its rational RMF, starting
+    /// as the Euler–Rodrigues frame; a generic PH quintic has none:
+    /// ```
+    /// use strandfit::rrmf::quat::sqrt_wrt_i;
+    /// use strandfit::rrmf::{PhQuintic, Quat, RmfError, RrmfQuintic};
+    /// use strandfit::DVec3;
+    ///
+    /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// let a1 = sqrt_wrt_i((a2 * Quat::pure(DVec3::X) * a0.conj()).v).unwrap();
+    /// let r = RrmfQuintic::new(PhQuintic::new(DVec3::ZERO, [a0, a1, a2])).unwrap();
+    /// assert!((0..=4).all(|k| r.rmf_residual(k as f64 / 4.0) < 1e-12));
+    /// assert!((r.frame(0.0)[1] - r.curve.euler_rodrigues_frame(0.0)[1]).length() < 1e-14);
+    /// let generic = PhQuintic::new(DVec3::ZERO, [a0, Quat::ONE, a2]);
+    /// assert!(matches!(RrmfQuintic::new(generic), Err(RmfError::NotRrmf(_))));
+    /// ```
     pub fn new(curve: PhQuintic) -> Result<Self, RmfError> {
         // σ = |𝒜|² in monomial form from its Bernstein weights (2.12).
         let wts = curve.speed_weights();
@@ -429,6 +445,20 @@ impl RrmfQuintic {
     }
 
     /// `𝒲(t)`.
+    ///
+    /// `𝒲 = a + 𝐢b` (it commutes with `𝐢`), scaled so that `𝒲(0) = 1`:
+    /// ```
+    /// use strandfit::rrmf::quat::sqrt_wrt_i;
+    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::DVec3;
+    ///
+    /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// let a1 = sqrt_wrt_i((a2 * Quat::pure(DVec3::X) * a0.conj()).v).unwrap();
+    /// let r = RrmfQuintic::new(PhQuintic::new(DVec3::ZERO, [a0, a1, a2])).unwrap();
+    /// assert!((r.w_at(0.0) - Quat::ONE).norm() < 1e-15);
+    /// let w = r.w_at(0.6);
+    /// assert!(w.v.y == 0.0 && w.v.z == 0.0);
+    /// ```
     pub fn w_at(&self, t: f64) -> Quat {
         let b = bernstein2(t);
         self.w[0] * b[0] + self.w[1] * b[1] + self.w[2] * b[2]
@@ -439,11 +469,38 @@ impl RrmfQuintic {
     }
 
     /// `ℬ(t) = 𝒜(t)𝒲(t)`.
+    ///
+    /// `ℬ = 𝒜𝒲`, so `|ℬ|² = |𝒜|²|𝒲|²`:
+    /// ```
+    /// use strandfit::rrmf::quat::sqrt_wrt_i;
+    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::DVec3;
+    ///
+    /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// let a1 = sqrt_wrt_i((a2 * Quat::pure(DVec3::X) * a0.conj()).v).unwrap();
+    /// let r = RrmfQuintic::new(PhQuintic::new(DVec3::ZERO, [a0, a1, a2])).unwrap();
+    /// let want = r.curve.pre_image_at(0.6).norm2() * r.w_at(0.6).norm2();
+    /// assert!((r.b_at(0.6).norm2() - want).abs() < 1e-14 * want);
+    /// ```
     pub fn b_at(&self, t: f64) -> Quat {
         self.curve.pre_image_at(t) * self.w_at(t)
     }
 
     /// The RMF `(𝐟₁, 𝐟₂, 𝐟₃)` at `t`.
+    ///
+    /// Orthonormal, right-handed, led by the curve's tangent:
+    /// ```
+    /// use strandfit::rrmf::quat::sqrt_wrt_i;
+    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::DVec3;
+    ///
+    /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// let a1 = sqrt_wrt_i((a2 * Quat::pure(DVec3::X) * a0.conj()).v).unwrap();
+    /// let r = RrmfQuintic::new(PhQuintic::new(DVec3::ZERO, [a0, a1, a2])).unwrap();
+    /// let [f1, f2, f3] = r.frame(0.6);
+    /// assert!((f1 - r.curve.tangent(0.6)).length() < 1e-14);
+    /// assert!(f1.dot(f2).abs() < 1e-14 && (f1.cross(f2) - f3).length() < 1e-14);
+    /// ```
     pub fn frame(&self, t: f64) -> [DVec3; 3] {
         let b = self.b_at(t);
         let n = b.norm2();
@@ -453,6 +510,22 @@ impl RrmfQuintic {
     /// The rate at which the Euler–Rodrigues frame turns about the tangent,
     /// `2 scal(𝒜′𝐢𝒜*)/|𝒜|²` per unit parameter: what `𝒲` cancels, hence
     /// the scale of the rounding left in `𝐟₂′·𝐟₃`.
+    ///
+    /// In magnitude it is `|𝐞₂′·𝐞₃|`, the Euler–Rodrigues frame's turning rate
+    /// about the tangent (here by a central difference):
+    /// ```
+    /// use strandfit::rrmf::quat::sqrt_wrt_i;
+    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::DVec3;
+    ///
+    /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// let a1 = sqrt_wrt_i((a2 * Quat::pure(DVec3::X) * a0.conj()).v).unwrap();
+    /// let r = RrmfQuintic::new(PhQuintic::new(DVec3::ZERO, [a0, a1, a2])).unwrap();
+    /// let (t, h) = (0.6, 1e-5);
+    /// let e = |t| r.curve.euler_rodrigues_frame(t);
+    /// let de2 = (e(t + h)[1] - e(t - h)[1]) / (2.0 * h);
+    /// assert!((de2.dot(e(t)[2]).abs() - r.erf_twist_rate(t).abs()).abs() < 1e-8);
+    /// ```
     pub fn erf_twist_rate(&self, t: f64) -> f64 {
         let a = self.curve.pre_image_at(t);
         let da = self.curve.pre_image_derivative(t);
@@ -465,6 +538,18 @@ impl RrmfQuintic {
     /// rule cancels to get it (`ℬ = 𝒜𝒲`; it exceeds both `|𝐟₁′|` and the
     /// Euler–Rodrigues twist rate that `𝒲` cancels) where the frame turns
     /// fast, absolute where it turns slowly.
+    ///
+    /// Zero (to rounding) along a class I quintic: `𝐟₂′·𝐟₃ = 0`:
+    /// ```
+    /// use strandfit::rrmf::quat::sqrt_wrt_i;
+    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::DVec3;
+    ///
+    /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// let a1 = sqrt_wrt_i((a2 * Quat::pure(DVec3::X) * a0.conj()).v).unwrap();
+    /// let r = RrmfQuintic::new(PhQuintic::new(DVec3::ZERO, [a0, a1, a2])).unwrap();
+    /// assert!((0..=10).all(|k| r.rmf_residual(k as f64 / 10.0) < 1e-12));
+    /// ```
     pub fn rmf_residual(&self, t: f64) -> f64 {
         let f = self.frame(t);
         let df = self.frame_derivative(t);
@@ -476,6 +561,20 @@ impl RrmfQuintic {
     }
 
     /// `(𝐟₁, 𝐟₂, 𝐟₃)′(t)`, exactly (quotient rule on the rational form).
+    ///
+    /// It matches a central difference of [`frame`](Self::frame):
+    /// ```
+    /// use strandfit::rrmf::quat::sqrt_wrt_i;
+    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::DVec3;
+    ///
+    /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
+    /// let a1 = sqrt_wrt_i((a2 * Quat::pure(DVec3::X) * a0.conj()).v).unwrap();
+    /// let r = RrmfQuintic::new(PhQuintic::new(DVec3::ZERO, [a0, a1, a2])).unwrap();
+    /// let h = 1e-5;
+    /// let (df, plus, minus) = (r.frame_derivative(0.6), r.frame(0.6 + h), r.frame(0.6 - h));
+    /// assert!((0..3).all(|k| ((plus[k] - minus[k]) / (2.0 * h) - df[k]).length() < 1e-8));
+    /// ```
     pub fn frame_derivative(&self, t: f64) -> [DVec3; 3] {
         let b = self.b_at(t);
         let db = self.curve.pre_image_derivative(t) * self.w_at(t)

@@ -115,6 +115,16 @@ pub struct RrmfSpline {
 /// MinAJ2 reference derivatives (Debski 2020, as Section 5.2 prints them)
 /// for chord-length parameters `u_k = u_{k−1} + |𝐩_k − 𝐩_{k−1}|`; not
 /// normalised. Needs at least three points (two: the chord).
+///
+/// Two points give the chord; on a line every reference runs along it:
+/// ```
+/// use strandfit::rrmf::minaj2_references;
+/// use strandfit::DVec3;
+///
+/// assert_eq!(minaj2_references(&[DVec3::ZERO, DVec3::new(0.0, 3.0, 4.0)]), vec![DVec3::new(0.0, 0.6, 0.8); 2]);
+/// let line: Vec<DVec3> = [0.0, 1.0, 3.0, 4.0].iter().map(|&x| DVec3::new(x, 0.0, 0.0)).collect();
+/// assert!(minaj2_references(&line).iter().all(|r| r.x > 0.0 && r.cross(DVec3::X).length() < 1e-14));
+/// ```
 pub fn minaj2_references(points: &[DVec3]) -> Vec<DVec3> {
     let n = points.len();
     if n < 2 {
@@ -146,6 +156,19 @@ pub fn minaj2_references(points: &[DVec3]) -> Vec<DVec3> {
 
 /// Algorithm 1: the point `𝐩_m` and tangent `𝐮_m = 𝚫𝐮` inserted between
 /// `p_i` (tangent `u_i`) and `p_f`, with parameter `c ∈ (0, 1]`.
+///
+/// The inserted tangent is the chord direction, and the point lies on the line
+/// from `p_i` along the bisector of `u_i` and the chord:
+/// ```
+/// use strandfit::rrmf::quat::bisector;
+/// use strandfit::rrmf::spline::insert_point;
+/// use strandfit::DVec3;
+///
+/// let (p_i, p_f, u_i) = (DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0), DVec3::new(-1.0, 1.0, 0.0).normalize());
+/// let (p_m, u_m) = insert_point(p_i, p_f, u_i, 0.25).unwrap();
+/// assert_eq!(u_m, DVec3::X);
+/// assert!(p_m.normalize().cross(bisector(u_i, DVec3::X).unwrap()).length() < 1e-14);
+/// ```
 pub fn insert_point(p_i: DVec3, p_f: DVec3, u_i: DVec3, c: f64) -> Option<(DVec3, DVec3)> {
     let p_c = (1.0 - c) * p_i + c * p_f;
     let du = (p_f - p_i).try_normalize()?;
@@ -245,6 +268,21 @@ impl RrmfSpline {
     /// (`(𝐮₀, 𝐯₀, 𝐰₀)`, orthonormal and right-handed), with reference
     /// tangents `references` (one per point, any length) and Algorithm 1's
     /// parameter `c`.
+    ///
+    /// Example 5.5 of the paper: the stream `(0, 0, 0), (−5, 5, 2), (2, 2, 0)`
+    /// turns back by `τ = 0.8599π` on its first segment, so Algorithm 1 inserts a
+    /// point, printed as `(−2.29636, 8.60499, 2.18027)` for `c = 1/8`:
+    /// ```
+    /// use strandfit::rrmf::{default_frame, minaj2_references, RrmfSpline};
+    /// use strandfit::DVec3;
+    ///
+    /// let p = [DVec3::ZERO, DVec3::new(-5.0, 5.0, 2.0), DVec3::new(2.0, 2.0, 0.0)];
+    /// let r = minaj2_references(&p);
+    /// let s = RrmfSpline::build(&p, &r, default_frame(r[0]).unwrap(), 0.125).unwrap();
+    /// assert_eq!(s.inserted.len(), 1);
+    /// assert!((s.inserted[0].point - DVec3::new(-2.29636, 8.60499, 2.18027)).length() < 1e-5);
+    /// assert!((s.inserted[0].tau / std::f64::consts::PI - 0.8599).abs() < 1e-4);
+    /// ```
     pub fn build(
         points: &[DVec3],
         references: &[DVec3],
@@ -328,6 +366,20 @@ impl RrmfSpline {
 
     /// Segment index and local parameter of the global (chord-length)
     /// parameter `u`, clamped to `[0, u_N]`.
+    ///
+    /// Knots are cumulative chord lengths:
+    /// ```
+    /// use strandfit::rrmf::{default_frame, minaj2_references, RrmfSpline};
+    /// use strandfit::DVec3;
+    ///
+    /// let p: Vec<DVec3> = (0..4).map(|k| { let a = 0.6 * k as f64; DVec3::new(a.cos(), a.sin(), 0.3 * a) }).collect();
+    /// let r = minaj2_references(&p);
+    /// let s = RrmfSpline::build(&p, &r, default_frame(r[0]).unwrap(), 0.125).unwrap();
+    /// assert!((s.knots[1] - p[0].distance(p[1])).abs() < 1e-15);
+    /// let (i, t) = s.locate(s.knots[1] + 0.25 * (s.knots[2] - s.knots[1]));
+    /// assert_eq!(i, 1);
+    /// assert!((t - 0.25).abs() < 1e-14);
+    /// ```
     pub fn locate(&self, u: f64) -> (usize, f64) {
         let n = self.segments.len();
         let last = self.knots[n];
@@ -338,12 +390,41 @@ impl RrmfSpline {
     }
 
     /// The point at global parameter `u` (clamped to `[0, u_N]`).
+    ///
+    /// The motion passes through the data points at the knots:
+    /// ```
+    /// use strandfit::rrmf::{default_frame, minaj2_references, RrmfSpline};
+    /// use strandfit::DVec3;
+    ///
+    /// let p: Vec<DVec3> = (0..4).map(|k| { let a = 0.6 * k as f64; DVec3::new(a.cos(), a.sin(), 0.3 * a) }).collect();
+    /// let r = minaj2_references(&p);
+    /// let s = RrmfSpline::build(&p, &r, default_frame(r[0]).unwrap(), 0.125).unwrap();
+    /// assert!(s.inserted.is_empty());
+    /// assert!((0..4).all(|k| (s.position(s.knots[k]) - p[k]).length() < 1e-12));
+    /// ```
     pub fn position(&self, u: f64) -> DVec3 {
         let (i, t) = self.locate(u);
         self.segments[i].curve.curve.position(t)
     }
 
     /// The rotation-minimising frame at `u` (clamped).
+    ///
+    /// It starts as the given frame, is continuous at the knots, and its first
+    /// vector is the unit tangent:
+    /// ```
+    /// use strandfit::rrmf::{default_frame, minaj2_references, RrmfSpline};
+    /// use strandfit::DVec3;
+    ///
+    /// let p: Vec<DVec3> = (0..4).map(|k| { let a = 0.6 * k as f64; DVec3::new(a.cos(), a.sin(), 0.3 * a) }).collect();
+    /// let r = minaj2_references(&p);
+    /// let f0 = default_frame(r[0]).unwrap();
+    /// let s = RrmfSpline::build(&p, &r, f0, 0.125).unwrap();
+    /// assert!((0..3).all(|k| (s.frame(0.0)[k] - f0[k]).length() < 1e-12));
+    /// let (u, h) = (s.knots[1], 1e-9);
+    /// assert!((0..3).all(|k| (s.frame(u - h)[k] - s.frame(u + h)[k]).length() < 1e-6));
+    /// let fd = (s.position(0.5 + 1e-6) - s.position(0.5 - 1e-6)).normalize();
+    /// assert!((s.frame(0.5)[0] - fd).length() < 1e-8);
+    /// ```
     pub fn frame(&self, u: f64) -> [DVec3; 3] {
         let (i, t) = self.locate(u);
         self.segments[i].curve.frame(t)
@@ -351,6 +432,19 @@ impl RrmfSpline {
 
     /// `m ≥ 2` samples `(position, 𝐟₁, 𝐟₂, 𝐟₃)` equally spaced in the global
     /// parameter, ends included.
+    ///
+    /// Ends included, frames orthonormal:
+    /// ```
+    /// use strandfit::rrmf::{default_frame, minaj2_references, RrmfSpline};
+    /// use strandfit::DVec3;
+    ///
+    /// let p: Vec<DVec3> = (0..4).map(|k| { let a = 0.6 * k as f64; DVec3::new(a.cos(), a.sin(), 0.3 * a) }).collect();
+    /// let r = minaj2_references(&p);
+    /// let s = RrmfSpline::build(&p, &r, default_frame(r[0]).unwrap(), 0.125).unwrap();
+    /// let out = s.sample(9);
+    /// assert!((out[0].0 - p[0]).length() < 1e-12 && (out[8].0 - p[3]).length() < 1e-12);
+    /// assert!(out.iter().all(|(_, [f1, f2, f3])| f1.dot(*f2).abs() < 1e-12 && (f1.cross(*f2) - *f3).length() < 1e-12));
+    /// ```
     pub fn sample(&self, m: usize) -> Vec<(DVec3, [DVec3; 3])> {
         let m = m.max(2);
         let last = *self.knots.last().unwrap_or(&0.0);
@@ -365,6 +459,15 @@ impl RrmfSpline {
 
 /// The checks on a point stream every motion starts with: at least two
 /// points, all finite, no point repeated next to itself.
+///
+/// ```
+/// use strandfit::rrmf::{validate_points, MotionError};
+/// use strandfit::DVec3;
+///
+/// assert_eq!(validate_points(&[DVec3::ZERO, DVec3::X]), Ok(()));
+/// assert_eq!(validate_points(&[DVec3::ZERO, DVec3::X, DVec3::X]), Err(MotionError::Repeated(1)));
+/// assert_eq!(validate_points(&[DVec3::ZERO]), Err(MotionError::TooFew(1)));
+/// ```
 pub fn validate_points(points: &[DVec3]) -> Result<(), MotionError> {
     if points.len() < 2 {
         return Err(MotionError::TooFew(points.len()));
@@ -380,6 +483,16 @@ pub fn validate_points(points: &[DVec3]) -> Result<(), MotionError> {
 
 /// The default initial frame: `𝐮₀` along `first_reference`, `𝐯₀` any unit
 /// normal, `𝐰₀ = 𝐮₀ × 𝐯₀`.
+///
+/// ```
+/// use strandfit::rrmf::default_frame;
+/// use strandfit::DVec3;
+///
+/// let [u, v, w] = default_frame(DVec3::new(0.0, 3.0, 4.0)).unwrap();
+/// assert!((u - DVec3::new(0.0, 0.6, 0.8)).length() < 1e-15);
+/// assert!(u.dot(v).abs() < 1e-15 && (v.length() - 1.0).abs() < 1e-15 && (u.cross(v) - w).length() < 1e-15);
+/// assert_eq!(default_frame(DVec3::ZERO), None);
+/// ```
 pub fn default_frame(first_reference: DVec3) -> Option<[DVec3; 3]> {
     let u = first_reference.try_normalize()?;
     let v = u.any_orthonormal_vector();
