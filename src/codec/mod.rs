@@ -21,7 +21,7 @@
 //! gone ([`quantise`] holds the steps). Curves too rough for arcs store
 //! their points on a body-centred cubic lattice of covering radius `T`,
 //! predicted from their own last steps or from a neighbour's
-//! ([`reference`]): the quantise-and-delta baseline's representation on a
+//! ([`reference`](mod@reference)): the quantise-and-delta baseline's representation on a
 //! thinner lattice, so no curve costs more than that. Each point is the
 //! lattice point cheapest to code against its prediction among those that
 //! keep the two-sided promise ([`quantise::cheapest_points`]: it may slide

@@ -332,7 +332,8 @@ impl HelixElement {
         self.frame(self.length)
     }
 
-    /// Parameters are finite and consistent (`κ ≥ 0`, `L ≥ 0`).
+    /// Every parameter is finite (signs are not checked: a negative `κ` or
+    /// `L` passes).
     ///
     /// ```
     /// use strandfit::{DVec3, HelixElement};

@@ -263,15 +263,18 @@ impl PiecewiseHelix {
             .unzip()
     }
 
-    /// Points every `step` of arc length (plus the end point).
+    /// Points equally spaced in arc length at most `step` apart, both ends
+    /// included: `⌈L/step⌉ + 1` of them (`L/(⌈L/step⌉)` apart, so the last
+    /// gap is never a short remainder).
     ///
     /// ```
     /// use strandfit::{DVec3, HelixElement, PiecewiseHelix};
     ///
-    /// let chain = PiecewiseHelix::new(vec![HelixElement::straight(DVec3::ZERO, DVec3::X, 3.0)]);
+    /// let chain = PiecewiseHelix::new(vec![HelixElement::straight(DVec3::ZERO, DVec3::X, 2.5)]);
     /// let p = chain.sample_step(1.0);
-    /// assert_eq!(p.len(), 4);
-    /// assert!((p[2] - 2.0 * DVec3::X).length() < 1e-15);
+    /// assert_eq!(p.len(), 4); // ⌈2.5⌉ + 1, spaced 2.5/3
+    /// assert!((p[1] - DVec3::X * (2.5 / 3.0)).length() < 1e-15);
+    /// assert!((p[3] - DVec3::X * 2.5).length() < 1e-15);
     /// ```
     pub fn sample_step(&self, step: f64) -> Vec<DVec3> {
         if !(step > 0.0) || self.elements.is_empty() {
