@@ -32,6 +32,18 @@ fn unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
 /// how many were deleted. For a signal handler or a panic hook: the process
 /// is about to end without running destructors, and must leave nothing
 /// behind. Committed outputs and the files they replace are untouched.
+///
+/// ```
+/// use std::io::Write;
+/// use strandfit::io::{remove_unfinished_outputs, AtomicFile};
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-unfinished-{}.txt", std::process::id()));
+/// let mut out = AtomicFile::create(&path).unwrap();
+/// out.write_all(b"half").unwrap();
+/// assert_eq!(remove_unfinished_outputs(), 1); // the temporary, gone
+/// assert!(!path.exists());
+/// assert!(out.commit().is_err()); // nothing left to rename
+/// ```
 pub fn remove_unfinished_outputs() -> usize {
     unfinished()
         .drain(..)
@@ -99,6 +111,15 @@ pub struct AtomicFile {
 impl AtomicFile {
     /// A temporary file in the directory of `target` (so that the final
     /// rename stays on one file system).
+    ///
+    /// A directory is not replaced:
+    ///
+    /// ```
+    /// use strandfit::io::AtomicFile;
+    ///
+    /// let err = AtomicFile::create(&std::env::temp_dir()).err().unwrap();
+    /// assert!(err.reason.starts_with("the output is a directory"));
+    /// ```
     pub fn create(target: &Path) -> Result<Self, IoError> {
         let destination = resolve_target(target)?;
         let dir = match destination.parent() {
@@ -143,6 +164,21 @@ impl AtomicFile {
     }
 
     /// Flush, sync and rename over the target.
+    ///
+    /// The target appears, whole, only at the commit:
+    ///
+    /// ```
+    /// use std::io::Write;
+    /// use strandfit::io::AtomicFile;
+    ///
+    /// let path = std::env::temp_dir().join(format!("strandfit-doc-commit-{}.txt", std::process::id()));
+    /// let mut out = AtomicFile::create(&path).unwrap();
+    /// out.write_all(b"all or nothing").unwrap();
+    /// assert!(!path.exists());
+    /// out.commit().unwrap();
+    /// assert_eq!(std::fs::read_to_string(&path).unwrap(), "all or nothing");
+    /// std::fs::remove_file(&path).unwrap();
+    /// ```
     pub fn commit(mut self) -> Result<(), IoError> {
         let Some(writer) = self.writer.take() else {
             return Err(IoError::new(&self.target, "output already committed"));

@@ -120,6 +120,20 @@ fn is_identity(m: &[[f64; 4]; 4]) -> bool {
 
 impl SourceMeta {
     /// The serialisable form of `m`, with the input's file name if given.
+    ///
+    /// The file's name is kept, not its folder; the affine is stored row by
+    /// row:
+    ///
+    /// ```
+    /// use std::path::Path;
+    /// use strandfit::io::{container::SourceMeta, Format, Metadata};
+    ///
+    /// let mut meta = Metadata::new(Format::Trk);
+    /// meta.vox_to_world.w_axis.x = 90.0; // the x translation
+    /// let source = SourceMeta::from_metadata(&meta, Some(Path::new("/data/sub-01/af.trk")));
+    /// assert_eq!((source.format.as_str(), source.file.as_deref()), ("trk", Some("af.trk")));
+    /// assert_eq!(source.vox_to_world[0], [1.0, 0.0, 0.0, 90.0]);
+    /// ```
     pub fn from_metadata(m: &Metadata, file: Option<&Path>) -> Self {
         SourceMeta {
             format: m.format.extension().to_string(),
@@ -141,6 +155,18 @@ impl SourceMeta {
 
     /// Back to [`Metadata`] for a writer: per-point data are gone; an
     /// unknown format name becomes JSON.
+    ///
+    /// ```
+    /// use strandfit::io::{container::SourceMeta, Format, Metadata};
+    ///
+    /// let mut meta = Metadata::new(Format::Trk);
+    /// meta.voxel_size = Some([2.0, 2.0, 2.5]);
+    /// meta.curve_data_names = vec!["weight".into()];
+    /// let mut source = SourceMeta::from_metadata(&meta, None);
+    /// assert_eq!(source.to_metadata(), meta);
+    /// source.format = "nii".into();
+    /// assert_eq!(source.to_metadata().format, Format::Json);
+    /// ```
     pub fn to_metadata(&self) -> Metadata {
         let mut m = Metadata::new(Format::from_name(&self.format).unwrap_or(Format::Json));
         m.vox_to_world = DMat4::from_cols_array_2d(&self.vox_to_world).transpose();
@@ -201,6 +227,27 @@ fn coarse_shift(k_quant: i64, angle_exp: i8) -> i32 {
 
 impl QuantChain {
     /// Quantise `c` on the grids `2^len_exp` and `2^angle_exp`.
+    ///
+    /// Lengths on the grid `2⁻⁴`, angles on `2⁻¹⁰`; `τL` of an element
+    /// turning by half a radian on a grid twice as coarse:
+    ///
+    /// ```
+    /// use strandfit::io::container::QuantChain;
+    /// use strandfit::helix::{ChainParams, ElementParams};
+    /// use strandfit::DVec3;
+    ///
+    /// let element = ElementParams { length: 1.0, curvature: 0.5, torsion: 0.25, twist: 0.0 };
+    /// let chain = ChainParams {
+    ///     start: DVec3::new(1.0, 2.0, 3.0),
+    ///     tangent: DVec3::X,
+    ///     normal: DVec3::Y,
+    ///     elements: vec![element; 3],
+    /// };
+    /// let q = QuantChain::quantize(&chain, -4, -10);
+    /// assert_eq!(q.start, [16, 32, 48]);
+    /// assert_eq!(q.frame, [0, 0, 0]); // the start frame is the axes
+    /// assert_eq!(q.elements[0], [16, 512, 128, 0]); // L, κL, τL, twist
+    /// ```
     pub fn quantize(c: &ChainParams, len_exp: i8, angle_exp: i8) -> Self {
         let dl = 2f64.powi(len_exp as i32);
         let da = 2f64.powi(angle_exp as i32);
@@ -235,6 +282,28 @@ impl QuantChain {
     }
 
     /// The chain these integers stand for.
+    ///
+    /// ```
+    /// use strandfit::io::container::QuantChain;
+    /// use strandfit::helix::{ChainParams, ElementParams};
+    /// use strandfit::DVec3;
+    ///
+    /// let element = ElementParams { length: 1.0, curvature: 0.5, torsion: 0.25, twist: 0.0 };
+    /// let chain = ChainParams {
+    ///     start: DVec3::new(1.0, 2.0, 3.0),
+    ///     tangent: DVec3::X,
+    ///     normal: DVec3::Y,
+    ///     elements: vec![element; 3],
+    /// };
+    /// let mut bent = chain.clone();
+    /// bent.elements[1].length = 1.01; // off the length grid 2⁻⁴
+    /// let back = QuantChain::quantize(&bent, -4, -10).dequantize();
+    /// assert_eq!(back.start, chain.start);
+    /// assert!(back.tangent.distance(DVec3::X) < 1e-12);
+    /// let e = back.elements[1];
+    /// assert_eq!(e.length, 1.0);
+    /// assert!((e.curvature * e.length - 0.505).abs() < 1e-3); // the turning angle κL is kept
+    /// ```
     pub fn dequantize(&self) -> ChainParams {
         let dl = 2f64.powi(self.len_exp as i32);
         let da = 2f64.powi(self.angle_exp as i32);
@@ -421,6 +490,23 @@ fn encode(out: &mut [Vec<u8>; STREAMS], c: &StoredCurve, storage: Storage) -> Re
 
 /// Bytes `c` takes in a block before deflate (its record in all streams),
 /// to compare ways of storing a curve.
+///
+/// A two-point verbatim curve: kind, id, source points and point count
+/// (a byte each), then 2 × 3 coordinates as `f32` or `f64`:
+///
+/// ```
+/// use strandfit::io::container::{encoded_size, Shape, Storage, StoredCurve};
+/// use strandfit::DVec3;
+///
+/// let curve = StoredCurve {
+///     id: None,
+///     source_points: 2,
+///     curve_data: vec![],
+///     shape: Shape::Points(vec![DVec3::ZERO, DVec3::X]),
+/// };
+/// assert_eq!(encoded_size(&curve, Storage::F32), Ok(4 + 6 * 4));
+/// assert_eq!(encoded_size(&curve, Storage::F64), Ok(4 + 6 * 8));
+/// ```
 pub fn encoded_size(c: &StoredCurve, storage: Storage) -> Result<usize, String> {
     let mut out: [Vec<u8>; STREAMS] = Default::default();
     encode(&mut out, c, storage)?;
@@ -709,6 +795,25 @@ pub struct ContainerWriter {
 
 impl ContainerWriter {
     /// Create a container at `path` with `header`.
+    ///
+    /// ```
+    /// use strandfit::io::container::{is_container, ContainerWriter, Header, SourceMeta, Storage};
+    /// use strandfit::io::{Format, Metadata};
+    ///
+    /// let path = std::env::temp_dir().join(format!("strandfit-doc-sfh-create-{}.sfh", std::process::id()));
+    /// let header = Header {
+    ///     storage: Storage::F32,
+    ///     tolerance: None,
+    ///     mode: "doc".into(),
+    ///     source: SourceMeta::from_metadata(&Metadata::new(Format::Tck), None),
+    ///     dropped_point_data: vec![],
+    ///     written_by: "doc".into(),
+    /// };
+    /// let bytes = ContainerWriter::create(&path, header).unwrap().finish().unwrap();
+    /// assert!(is_container(&path));
+    /// assert_eq!(std::fs::metadata(&path).unwrap().len(), bytes);
+    /// std::fs::remove_file(&path).unwrap();
+    /// ```
     pub fn create(path: &Path, header: Header) -> Result<Self, IoError> {
         let mut out = AtomicFile::create(path)?;
         let json = serde_json::to_vec(&header)
@@ -732,6 +837,31 @@ impl ContainerWriter {
     }
 
     /// Append one curve.
+    ///
+    /// A curve whose per-curve values do not match the header's names is
+    /// refused, and the writer goes on:
+    ///
+    /// ```
+    /// use strandfit::io::container::{ContainerWriter, Header, Shape, SourceMeta, Storage, StoredCurve};
+    /// use strandfit::io::{Format, Metadata};
+    ///
+    /// let path = std::env::temp_dir().join(format!("strandfit-doc-sfh-write-{}.sfh", std::process::id()));
+    /// let header = Header {
+    ///     storage: Storage::F32,
+    ///     tolerance: None,
+    ///     mode: "doc".into(),
+    ///     source: SourceMeta::from_metadata(&Metadata::new(Format::Tck), None),
+    ///     dropped_point_data: vec![],
+    ///     written_by: "doc".into(),
+    /// };
+    /// let mut w = ContainerWriter::create(&path, header).unwrap();
+    /// let curve = StoredCurve { id: None, source_points: 0, curve_data: vec![1.0], shape: Shape::Empty };
+    /// let err = w.write(&curve).unwrap_err();
+    /// assert_eq!(err.reason, "1 per-curve values where the header names 0");
+    /// w.write(&StoredCurve { curve_data: vec![], ..curve }).unwrap();
+    /// w.finish().unwrap();
+    /// std::fs::remove_file(&path).unwrap();
+    /// ```
     pub fn write(&mut self, c: &StoredCurve) -> Result<(), IoError> {
         let err = |r: String| IoError::new(self.out.target(), r).curve(self.curves);
         if c.curve_data.len() != self.header.source.curve_data_names.len() {
@@ -809,6 +939,31 @@ impl ContainerWriter {
     }
 
     /// Complete and commit the file; returns its size in bytes.
+    ///
+    /// ```
+    /// use strandfit::io::container::{ContainerReader, ContainerWriter, Header, Shape, SourceMeta, Storage, StoredCurve};
+    /// use strandfit::io::{Format, Metadata};
+    /// use strandfit::DVec3;
+    ///
+    /// let path = std::env::temp_dir().join(format!("strandfit-doc-sfh-finish-{}.sfh", std::process::id()));
+    /// let header = Header {
+    ///     storage: Storage::F32,
+    ///     tolerance: None,
+    ///     mode: "doc".into(),
+    ///     source: SourceMeta::from_metadata(&Metadata::new(Format::Tck), None),
+    ///     dropped_point_data: vec![],
+    ///     written_by: "doc".into(),
+    /// };
+    /// let mut w = ContainerWriter::create(&path, header).unwrap();
+    /// for k in 0..3 {
+    ///     let shape = Shape::Points(vec![DVec3::ZERO, DVec3::splat(k as f64)]);
+    ///     w.write(&StoredCurve { id: None, source_points: 2, curve_data: vec![], shape }).unwrap();
+    /// }
+    /// let bytes = w.finish().unwrap();
+    /// assert_eq!(std::fs::metadata(&path).unwrap().len(), bytes);
+    /// assert_eq!(ContainerReader::open(&path).unwrap().count(), 3);
+    /// std::fs::remove_file(&path).unwrap();
+    /// ```
     pub fn finish(mut self) -> Result<u64, IoError> {
         self.flush_block()?;
         let mut end = Vec::with_capacity(16);
@@ -840,6 +995,16 @@ pub struct ContainerReader {
 
 impl ContainerReader {
     /// Open a container and read its header.
+    ///
+    /// ```
+    /// use strandfit::io::container::ContainerReader;
+    ///
+    /// let path = std::env::temp_dir().join(format!("strandfit-doc-sfh-open-{}.sfh", std::process::id()));
+    /// std::fs::write(&path, b"mrtrix tracks\n").unwrap();
+    /// let err = ContainerReader::open(&path).err().unwrap();
+    /// std::fs::remove_file(&path).unwrap();
+    /// assert_eq!(err.reason, "not a strandfit container (wrong magic number)");
+    /// ```
     pub fn open(path: &Path) -> Result<Self, IoError> {
         let mut src = ByteSource::open(path)?;
         let magic = src.array::<8>("the magic number")?;
@@ -1046,6 +1211,17 @@ impl Iterator for ContainerReader {
 }
 
 /// Is `path` a container (by its magic number)?
+///
+/// ```
+/// use strandfit::io::container::{is_container, MAGIC};
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-is-container-{}.sfh", std::process::id()));
+/// std::fs::write(&path, MAGIC).unwrap();
+/// assert!(is_container(&path)); // by the magic number alone
+/// std::fs::write(&path, &MAGIC[..7]).unwrap();
+/// assert!(!is_container(&path));
+/// std::fs::remove_file(&path).unwrap();
+/// ```
 pub fn is_container(path: &Path) -> bool {
     let mut b = [0u8; 8];
     std::fs::File::open(path)

@@ -51,12 +51,28 @@ impl Format {
     }
 
     /// By name or extension, case-insensitive (`"tck"`, `"TRK"`, …).
+    ///
+    /// ```
+    /// use strandfit::io::Format;
+    ///
+    /// assert_eq!(Format::from_name("TRK"), Some(Format::Trk));
+    /// assert_eq!(Format::from_name("nii"), None);
+    /// ```
     pub fn from_name(name: &str) -> Option<Format> {
         let n = name.to_ascii_lowercase();
         Format::ALL.into_iter().find(|f| f.extension() == n)
     }
 
     /// By the extension of `path`.
+    ///
+    /// ```
+    /// use std::path::Path;
+    /// use strandfit::io::Format;
+    ///
+    /// assert_eq!(Format::from_path(Path::new("run/bundle.Tck")).unwrap(), Format::Tck);
+    /// let err = Format::from_path(Path::new("bundle.nii")).unwrap_err();
+    /// assert!(err.reason.starts_with("cannot tell the format from the extension \"nii\""));
+    /// ```
     pub fn from_path(path: &Path) -> Result<Format, IoError> {
         let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
         Format::from_name(ext).ok_or_else(|| {
@@ -102,6 +118,14 @@ impl Format {
 
 impl Format {
     /// Does a writer of this format keep per-point values named `name`?
+    ///
+    /// ```
+    /// use strandfit::io::Format;
+    ///
+    /// assert!(Format::Trk.keeps_point_data("fa"));
+    /// assert!(!Format::Tck.keeps_point_data("fa"));
+    /// assert!(Format::Hair.keeps_point_data("thickness") && !Format::Hair.keeps_point_data("fa"));
+    /// ```
     pub fn keeps_point_data(self, name: &str) -> bool {
         match self {
             Format::Tck => false,
@@ -116,12 +140,30 @@ impl Format {
     }
 
     /// Does a writer of this format keep per-curve values?
+    ///
+    /// ```
+    /// use strandfit::io::Format;
+    ///
+    /// let keep: Vec<Format> = Format::ALL.into_iter().filter(|f| f.keeps_curve_data()).collect();
+    /// assert_eq!(keep, [Format::Trk, Format::Trx, Format::Vtk, Format::Json]);
+    /// ```
     pub fn keeps_curve_data(self) -> bool {
         matches!(self, Format::Trk | Format::Trx | Format::Vtk | Format::Json)
     }
 
     /// What of `meta`'s per-point and per-curve data a writer of this
     /// format drops, one line each (empty when it keeps everything).
+    ///
+    /// ```
+    /// use strandfit::io::{Format, Metadata};
+    ///
+    /// let mut meta = Metadata::new(Format::Trk);
+    /// meta.point_data_names = vec!["fa".into()];
+    /// meta.curve_data_names = vec!["length".into()];
+    /// assert!(Format::Trx.losses(&meta).is_empty());
+    /// let lost = Format::Csv.losses(&meta); // keeps per-point values only
+    /// assert_eq!(lost, ["per-curve data `length` (a csv file has no place for them)"]);
+    /// ```
     pub fn losses(self, meta: &Metadata) -> Vec<String> {
         data_losses(
             meta,
@@ -134,6 +176,15 @@ impl Format {
 
 /// What of `meta`'s data a destination drops that keeps per-point values
 /// for which `keeps_point` holds, and per-curve values if `keeps_curve`.
+///
+/// ```
+/// use strandfit::io::{data_losses, Format, Metadata};
+///
+/// let mut meta = Metadata::new(Format::Vtk);
+/// meta.point_data_names = vec!["fa".into(), "md".into()];
+/// let lost = data_losses(&meta, |name| name == "fa", true, "viewer");
+/// assert_eq!(lost, ["per-point data `md` (a viewer file has no place for them)"]);
+/// ```
 pub fn data_losses(
     meta: &Metadata,
     keeps_point: impl Fn(&str) -> bool,
@@ -166,6 +217,15 @@ pub fn data_losses(
 /// What the reader of `meta`'s source saw but does not carry (TRX groups
 /// and data per group, VTK colour scalars and lookup tables, …), one line
 /// each.
+///
+/// ```
+/// use strandfit::io::{source_losses, Format, Metadata};
+///
+/// let mut meta = Metadata::new(Format::Trx);
+/// meta.extra.push(("groups.dropped".into(), "2 groups".into()));
+/// meta.extra.push(("title".into(), "kept".into()));
+/// assert_eq!(source_losses(&meta), ["2 groups (found in the trx source, not read)"]);
+/// ```
 pub fn source_losses(meta: &Metadata) -> Vec<String> {
     meta.extra
         .iter()

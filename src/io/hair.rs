@@ -73,6 +73,19 @@ pub struct HairReader {
 }
 
 /// Open a `.hair` file for streaming its strands as curves.
+///
+/// A file that is not one is an error naming the file and the place:
+///
+/// ```
+/// use strandfit::io::hair;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-hair-open-{}.hair", std::process::id()));
+/// std::fs::write(&path, "HAIR").unwrap();
+/// let err = hair::open(&path).err().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!((err.path, err.at.as_deref()), (path, Some("byte 4")));
+/// assert!(err.reason.starts_with("file truncated"));
+/// ```
 pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     Ok(Box::new(HairReader::open(path)?))
 }
@@ -308,6 +321,27 @@ impl CurveReader for HairReader {
 // Writer
 
 /// Create a `.hair` file (see the module docs for what is kept).
+///
+/// A strand's thickness is kept; other per-point values are dropped:
+///
+/// ```
+/// use strandfit::io::{hair, Curve, CurveReader, Format, Metadata};
+/// use strandfit::DVec3;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-hair-create-{}.hair", std::process::id()));
+/// let mut meta = Metadata::new(Format::Json);
+/// meta.point_data_names = vec!["thickness".into(), "fa".into()];
+/// let points = vec![DVec3::ZERO, DVec3::Y, DVec3::new(0.0, 2.0, 0.5)];
+/// let data = vec![0.1, 9.0, 0.2, 9.0, 0.3, 9.0]; // (thickness, fa) per point
+/// let mut w = hair::create(&path, &meta).unwrap();
+/// w.write_curve(&Curve { point_data: data, ..Curve::from_points(points.clone()) }).unwrap();
+/// w.finish().unwrap();
+/// let reader = hair::open(&path).unwrap();
+/// assert_eq!(reader.metadata().point_data_names, ["thickness"]);
+/// let curves: Vec<Curve> = reader.collect::<Result<_, _>>().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!((&curves[0].points, &curves[0].point_data), (&points, &vec![0.1f32, 0.2, 0.3]));
+/// ```
 pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     Ok(Box::new(HairWriter::new(path, meta)?))
 }

@@ -35,8 +35,7 @@ pub struct CurveStats {
     pub step_mean: f64,
     /// Axis-aligned bounding box of all points (`None` if there are none).
     pub bbox: Option<[[f64; 3]; 2]>,
-    /// Curves without points, and with a single point (or only repeats of
-    /// one point).
+    /// Curves without points.
     #[serde(rename = "empty_curve_count")]
     pub empty_curves: u64,
     /// Curves of a single (possibly repeated) point.
@@ -75,6 +74,17 @@ impl Default for CurveStats {
 
 impl CurveStats {
     /// Count one curve.
+    ///
+    /// ```
+    /// use strandfit::io::{inspect::CurveStats, Curve};
+    /// use strandfit::DVec3;
+    ///
+    /// let mut stats = CurveStats::default();
+    /// stats.add(&Curve::from_points(vec![DVec3::ZERO, DVec3::X, DVec3::X, DVec3::new(1.0, 2.0, 0.0)]));
+    /// assert_eq!((stats.curves, stats.points, stats.repeated_points), (1, 4, 1));
+    /// assert!((stats.length_total - 3.0).abs() < 1e-12);
+    /// assert_eq!(stats.bbox, Some([[0.0, 0.0, 0.0], [1.0, 2.0, 0.0]]));
+    /// ```
     pub fn add(&mut self, c: &Curve) {
         let n = c.points.len();
         self.curves += 1;
@@ -108,6 +118,19 @@ impl CurveStats {
     }
 
     /// Complete the order statistics.
+    ///
+    /// ```
+    /// use strandfit::io::{inspect::CurveStats, Curve};
+    /// use strandfit::DVec3;
+    ///
+    /// let mut stats = CurveStats::default();
+    /// for n in [2, 5, 3] {
+    ///     stats.add(&Curve::from_points((0..n).map(|i| DVec3::new(i as f64, 0.0, 0.0)).collect()));
+    /// }
+    /// stats.finish();
+    /// assert_eq!((stats.points_min, stats.points_median, stats.points_max), (2, 3, 5));
+    /// assert!((stats.step_mean - 1.0).abs() < 1e-12); // 7 unit steps
+    /// ```
     pub fn finish(&mut self) {
         if self.curves == 0 {
             self.length_min = 0.0;

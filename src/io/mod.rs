@@ -198,6 +198,15 @@ pub const MAX_COORDINATE: f64 = f32::MAX as f64;
 
 /// Why a point cannot be used (a non-finite coordinate, or one beyond
 /// [`MAX_COORDINATE`]), or `None` when it can.
+///
+/// ```
+/// use strandfit::{io::point_problem, DVec3};
+///
+/// assert_eq!(point_problem(DVec3::new(1.0, 2.0, 3.0)), None);
+/// let why = point_problem(DVec3::new(0.0, f64::NAN, 0.0)).unwrap();
+/// assert!(why.starts_with("coordinate y is NaN"));
+/// assert!(point_problem(DVec3::new(1e39, 0.0, 0.0)).is_some()); // beyond f32
+/// ```
 pub fn point_problem(p: DVec3) -> Option<String> {
     let a = p.to_array();
     if let Some(k) = a.iter().position(|x| !x.is_finite()) {
@@ -223,6 +232,15 @@ pub fn point_problem(p: DVec3) -> Option<String> {
 }
 
 /// Why `points` cannot be used, naming the first bad point, or `None`.
+///
+/// ```
+/// use strandfit::{io::curve_problem, DVec3};
+///
+/// let mut points = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+/// assert_eq!(curve_problem(&points), None);
+/// points[2].z = f64::INFINITY;
+/// assert!(curve_problem(&points).unwrap().starts_with("point 2: coordinate z"));
+/// ```
 pub fn curve_problem(points: &[DVec3]) -> Option<String> {
     points
         .iter()
@@ -336,12 +354,44 @@ pub(crate) fn fuse<T>(
 /// Open `path` for reading as `format` (or by its extension, see
 /// [`Format::from_path`]). A curve with a point that cannot be used (see
 /// [`point_problem`]) is an error naming the file, the curve and the point.
+///
+/// ```
+/// use strandfit::io::{create_writer, open_reader, Curve, CurveReader, Format, Metadata};
+/// use strandfit::DVec3;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-open-{}.csv", std::process::id()));
+/// let mut w = create_writer(&path, None, &Metadata::new(Format::Csv)).unwrap();
+/// w.write_curve(&Curve::from_points(vec![DVec3::ZERO, DVec3::new(1.5, 0.0, -2.0)])).unwrap();
+/// w.finish().unwrap();
+/// let reader = open_reader(&path, None).unwrap(); // CSV, by the extension
+/// assert_eq!(reader.metadata().format, Format::Csv);
+/// let curves: Vec<Curve> = reader.collect::<Result<_, _>>().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(curves.len(), 1);
+/// assert_eq!(curves[0].points[1], DVec3::new(1.5, 0.0, -2.0));
+/// ```
 pub fn open_reader(path: &Path, format: Option<Format>) -> Result<Box<dyn CurveReader>, IoError> {
     open_reader_with(path, format, BadCurves::Fail)
 }
 
 /// [`open_reader`], with a choice of what to do with curves holding
 /// unusable points.
+///
+/// A JSON curve with a point beyond float32's range, skipped and listed:
+///
+/// ```
+/// use strandfit::io::{open_reader_with, BadCurves, CurveReader};
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-skip-{}.json", std::process::id()));
+/// std::fs::write(&path, r#"{"curves":[{"points":[[0,0,0],[1,0,0]]},
+///                          {"points":[[0,0,0],[1e300,1e300,0]]}]}"#).unwrap();
+/// let mut reader = open_reader_with(&path, None, BadCurves::Skip).unwrap();
+/// let kept: Vec<_> = reader.by_ref().collect::<Result<_, _>>().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(kept.len(), 1);
+/// assert_eq!(reader.skipped().len(), 1);
+/// assert_eq!(reader.skipped()[0].index, 1);
+/// ```
 pub fn open_reader_with(
     path: &Path,
     format: Option<Format>,
@@ -366,6 +416,22 @@ pub fn open_reader_with(
 /// writer of the same format as `meta.format` reproduces the source's
 /// header, another format gets what it can express (and drops the rest, as
 /// its documentation says).
+///
+/// A `.tck` file keeps the points (as float32) and drops the rest.
+///
+/// ```
+/// use strandfit::io::{create_writer, read_all, Curve, Format, Metadata};
+/// use strandfit::DVec3;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-create-{}.tck", std::process::id()));
+/// let mut w = create_writer(&path, None, &Metadata::new(Format::Json)).unwrap();
+/// w.write_curve(&Curve::from_points(vec![DVec3::ZERO, DVec3::new(0.1, 0.2, 0.3)])).unwrap();
+/// w.finish().unwrap();
+/// let (meta, curves) = read_all(&path, None).unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(meta.format, Format::Tck);
+/// assert!(curves[0].points[1].distance(DVec3::new(0.1, 0.2, 0.3)) < 1e-7);
+/// ```
 pub fn create_writer(
     path: &Path,
     format: Option<Format>,
@@ -379,6 +445,17 @@ pub fn create_writer(
 }
 
 /// Read a whole file into memory (for tests and small inputs).
+///
+/// ```
+/// use strandfit::io::read_all;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-read-all-{}.csv", std::process::id()));
+/// std::fs::write(&path, "curve,x,y,z\na,0,0,0\na,1,0,0\nb,0,1,0\nb,0,2,0\nb,0,3,0\n").unwrap();
+/// let (_, curves) = read_all(&path, None).unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(curves.iter().map(|c| c.points.len()).collect::<Vec<_>>(), [2, 3]);
+/// assert_eq!(curves[1].id.as_deref(), Some("b"));
+/// ```
 pub fn read_all(path: &Path, format: Option<Format>) -> Result<(Metadata, Vec<Curve>), IoError> {
     let reader = open_reader(path, format)?;
     let meta = reader.metadata().clone();

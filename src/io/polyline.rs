@@ -58,6 +58,19 @@ struct JsonCurve {
 }
 
 /// Open a JSON polyline file (read whole; see the module docs).
+///
+/// A file that is not one is an error naming the file and the place:
+///
+/// ```
+/// use strandfit::io::polyline::open_json;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-open-json-{}.json", std::process::id()));
+/// std::fs::write(&path, r#"{"curves": [{"points": [[0, 0]]}]}"#).unwrap(); // two coordinates
+/// let err = open_json(&path).err().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert!(err.reason.starts_with("not a polyline JSON document"));
+/// assert!(err.at.unwrap().starts_with("line 1, column"));
+/// ```
 pub fn open_json(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     let text = std::fs::read_to_string(path).map_err(|e| IoError::os(path, "cannot read", e))?;
     let doc: JsonDoc = serde_json::from_str(&text).map_err(|e| {
@@ -178,6 +191,29 @@ struct JsonWriter {
 }
 
 /// Create a JSON polyline writer.
+///
+/// Curve names and per-curve values are kept:
+///
+/// ```
+/// use strandfit::io::polyline::{create_json, open_json};
+/// use strandfit::io::{Curve, Format, Metadata};
+/// use strandfit::DVec3;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-create-json-{}.json", std::process::id()));
+/// let mut meta = Metadata::new(Format::Json);
+/// meta.curve_data_names = vec!["length".into()];
+/// let curve = Curve {
+///     id: Some("arc".into()),
+///     curve_data: vec![1.5],
+///     ..Curve::from_points(vec![DVec3::ZERO, DVec3::new(0.5, 0.25, 1.0)])
+/// };
+/// let mut w = create_json(&path, &meta).unwrap();
+/// w.write_curve(&curve).unwrap();
+/// w.finish().unwrap();
+/// let back: Vec<Curve> = open_json(&path).unwrap().collect::<Result<_, _>>().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(back, [curve]);
+/// ```
 pub fn create_json(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     let mut out = AtomicFile::create(path)?;
     let head = match &meta.units {
@@ -304,6 +340,19 @@ struct CsvReader {
 }
 
 /// Open a CSV polyline file (streamed; see the module docs).
+///
+/// A file that is not one is an error naming the file and the line:
+///
+/// ```
+/// use strandfit::io::polyline::open_csv;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-open-csv-{}.csv", std::process::id()));
+/// std::fs::write(&path, "id,x,y\n").unwrap();
+/// let err = open_csv(&path).err().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(err.at.as_deref(), Some("line 1"));
+/// assert_eq!(err.reason, "the header must start with `curve,x,y,z`, found `id,x,y`");
+/// ```
 pub fn open_csv(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     let mut src = ByteSource::open(path)?;
     let header = src
@@ -461,6 +510,24 @@ struct CsvWriter {
 
 /// Create a CSV polyline writer (per-point data become extra columns; per-
 /// curve data are dropped, CSV has no place for them).
+///
+/// ```
+/// use strandfit::io::polyline::create_csv;
+/// use strandfit::io::{Curve, Format, Metadata};
+/// use strandfit::DVec3;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-create-csv-{}.csv", std::process::id()));
+/// let mut meta = Metadata::new(Format::Trk);
+/// meta.point_data_names = vec!["fa".into()];
+/// let curve = Curve { point_data: vec![0.5, 0.75], ..Curve::from_points(vec![DVec3::ZERO, DVec3::Z]) };
+/// let mut w = create_csv(&path, &meta).unwrap();
+/// w.write_curve(&curve).unwrap();
+/// w.finish().unwrap();
+/// let text = std::fs::read_to_string(&path).unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(text.lines().count(), 3); // the header, then a row per point
+/// assert!(text.starts_with("curve,x,y,z,fa\n"));
+/// ```
 pub fn create_csv(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     let mut out = AtomicFile::create(path)?;
     let mut head = String::from("curve,x,y,z");

@@ -68,6 +68,17 @@ pub const SKETCH_EXTENSIONS: &[&str] = &["json", "csv", "txt", "svg"];
 
 /// Read a 2D sketch, choosing the format by the extension of `path` (see the
 /// module docs). Points are in the file's own coordinates.
+///
+/// ```
+/// use strandfit::io::sketch::read_sketch;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-read-sketch-{}.txt", std::process::id()));
+/// std::fs::write(&path, "x y\n0 0\n1 0.5 # a comment\n\n2 2\n").unwrap();
+/// let points = read_sketch(&path).unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(points.len(), 3);
+/// assert_eq!((points[1].x, points[1].y), (1.0, 0.5));
+/// ```
 pub fn read_sketch(path: &Path) -> Result<Vec<DVec2>, IoError> {
     let ext = path
         .extension()
@@ -94,6 +105,19 @@ pub fn read_sketch(path: &Path) -> Result<Vec<DVec2>, IoError> {
 
 /// Parse a JSON sketch (`[[x, y], …]` or `{"points": [[x, y], …]}`); `path`
 /// only names the source in errors.
+///
+/// Repeated points are dropped; a 3D point is an error naming it:
+///
+/// ```
+/// use std::path::Path;
+/// use strandfit::io::sketch::parse_sketch_json;
+///
+/// let here = Path::new("stroke.json");
+/// let points = parse_sketch_json(r#"{"points": [[0, 0], [0, 0], [1, 1], [2, 0]]}"#, here).unwrap();
+/// assert_eq!(points.len(), 3);
+/// let err = parse_sketch_json("[[0, 0], [1, 1, 1]]", here).unwrap_err();
+/// assert_eq!(err.at.as_deref(), Some("point 1"));
+/// ```
 pub fn parse_sketch_json(text: &str, path: &Path) -> Result<Vec<DVec2>, IoError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let doc: serde_json::Value = serde_json::from_str(text).map_err(|e| {
@@ -150,6 +174,17 @@ pub fn parse_sketch_json(text: &str, path: &Path) -> Result<Vec<DVec2>, IoError>
 
 /// Parse a CSV/text sketch (one `x,y` per line; see the module docs); `path`
 /// only names the source in errors.
+///
+/// ```
+/// use std::path::Path;
+/// use strandfit::io::sketch::parse_sketch_csv;
+///
+/// let here = Path::new("stroke.csv");
+/// let points = parse_sketch_csv("x;y\n0;0\n1;2\n3;1\n", here).unwrap();
+/// assert_eq!((points.len(), points[2].x, points[2].y), (3, 3.0, 1.0));
+/// let err = parse_sketch_csv("0,0\n1,1\n1,x\n", here).unwrap_err();
+/// assert_eq!((err.at.as_deref(), err.reason.as_str()), (Some("line 3"), "`x` is not a number"));
+/// ```
 pub fn parse_sketch_csv(text: &str, path: &Path) -> Result<Vec<DVec2>, IoError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut out = Vec::new();
@@ -197,6 +232,18 @@ pub fn parse_sketch_csv(text: &str, path: &Path) -> Result<Vec<DVec2>, IoError> 
 /// Parse an SVG sketch (the first `<path>`'s `d`, else the first
 /// `<polyline>`/`<polygon>`'s `points`; see the module docs); `path` only
 /// names the source in errors.
+///
+/// A closed path repeats its start point:
+///
+/// ```
+/// use std::path::Path;
+/// use strandfit::io::sketch::parse_sketch_svg;
+///
+/// let svg = r#"<svg xmlns="http://www.w3.org/2000/svg"><path d="M 0 0 h 10 v 10 Z"/></svg>"#;
+/// let points = parse_sketch_svg(svg, Path::new("stroke.svg")).unwrap();
+/// let xy: Vec<(f64, f64)> = points.iter().map(|p| (p.x, p.y)).collect();
+/// assert_eq!(xy, [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 0.0)]);
+/// ```
 pub fn parse_sketch_svg(text: &str, path: &Path) -> Result<Vec<DVec2>, IoError> {
     let elements = scan_elements(text).map_err(|(at, reason)| {
         IoError::new(path, reason).at(format!("line {}", line_of(text, at)))
@@ -909,6 +956,21 @@ const PIECE_COLOURS: [&str; 3] = ["#d62728", "#1f77b4", "#2ca02c"];
 /// diagonal (the sketch's twice that). Coordinates are written as given (no
 /// y flip), so for an SVG sketch the preview overlays the original drawing;
 /// reading the preview back with [`read_sketch`] gives the sketch again.
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::io::sketch::{read_sketch, write_preview_svg};
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-preview-{}.svg", std::process::id()));
+/// let sketch = [DVec2::ZERO, DVec2::new(1.0, 0.5), DVec2::new(2.0, 2.0)];
+/// let fit = vec![DVec2::ZERO, DVec2::new(1.1, 0.4), DVec2::new(2.0, 2.0)];
+/// write_preview_svg(&path, &sketch, &[fit], &[DVec2::new(1.1, 0.4)]).unwrap();
+/// let svg = std::fs::read_to_string(&path).unwrap();
+/// assert_eq!(svg.matches("<polyline").count(), 2); // the sketch, one piece
+/// assert_eq!(svg.matches("<circle").count(), 1);
+/// assert_eq!(read_sketch(&path).unwrap(), sketch);
+/// std::fs::remove_file(&path).unwrap();
+/// ```
 pub fn write_preview_svg(
     path: &Path,
     sketch: &[DVec2],

@@ -143,6 +143,19 @@ fn snippet(s: &str) -> String {
 
 /// Open a `.tck` file: the header is read and checked now, the streamlines
 /// as the iterator is driven.
+///
+/// A file that is not one is an error naming the file and the place:
+///
+/// ```
+/// use strandfit::io::tck;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-tck-open-{}.tck", std::process::id()));
+/// std::fs::write(&path, "not a tck\n").unwrap();
+/// let err = tck::open(&path).err().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!((err.path, err.at.as_deref()), (path, Some("byte 0")));
+/// assert!(err.reason.starts_with("not an MRtrix .tck file"));
+/// ```
 pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     Ok(Box::new(TckReader::open(path)?))
 }
@@ -451,6 +464,20 @@ impl CurveReader for TckReader {
 /// Create a `.tck` writer. A `.tck` source's header lines and datatype are
 /// kept; other sources get a minimal Float32LE header. Points are written as
 /// given (world space, RAS+ mm); per-point and per-curve values are dropped.
+///
+/// ```
+/// use strandfit::io::{tck, Curve, Format, Metadata};
+/// use strandfit::DVec3;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-tck-create-{}.tck", std::process::id()));
+/// let mut w = tck::create(&path, &Metadata::new(Format::Csv)).unwrap();
+/// w.write_curve(&Curve::from_points(vec![DVec3::ZERO, DVec3::new(1.0, 2.0, 3.5)])).unwrap();
+/// w.finish().unwrap();
+/// assert!(std::fs::read(&path).unwrap().starts_with(b"mrtrix tracks\n"));
+/// let curves: Vec<Curve> = tck::open(&path).unwrap().collect::<Result<_, _>>().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(curves[0].points, [DVec3::ZERO, DVec3::new(1.0, 2.0, 3.5)]);
+/// ```
 pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     let mut dtype = DataType::DEFAULT;
     let mut head = format!("{MAGIC}\n");

@@ -562,6 +562,19 @@ impl EntryReader {
 
 /// Open a TRX zip archive or folder: the header, entry list and offsets are
 /// read and checked now, the streamlines as the iterator is driven.
+///
+/// A file that is not one is an error naming the file and the place:
+///
+/// ```
+/// use strandfit::io::trx;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-trx-open-{}.trx", std::process::id()));
+/// std::fs::write(&path, "PK").unwrap();
+/// let err = trx::open(&path).err().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!((err.path, err.at.as_deref()), (path, None));
+/// assert!(err.reason.starts_with("not a TRX file"));
+/// ```
 pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     Ok(Box::new(TrxReader::open(path)?))
 }
@@ -1169,6 +1182,26 @@ fn plan_arrays(
 
 /// Create a TRX writer (a stored zip). A TRX source's dtypes are kept (see
 /// the module documentation); other sources get float32 throughout.
+///
+/// Per-point values travel with the points:
+///
+/// ```
+/// use strandfit::io::{trx, Curve, CurveReader, Format, Metadata};
+/// use strandfit::DVec3;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-trx-create-{}.trx", std::process::id()));
+/// let mut meta = Metadata::new(Format::Tck);
+/// meta.point_data_names = vec!["fa".into()];
+/// let curve = Curve { point_data: vec![0.25, 0.5], ..Curve::from_points(vec![DVec3::ZERO, DVec3::X]) };
+/// let mut w = trx::create(&path, &meta).unwrap();
+/// w.write_curve(&curve).unwrap();
+/// w.finish().unwrap();
+/// let reader = trx::open(&path).unwrap();
+/// assert_eq!(reader.metadata().point_data_names, ["fa"]);
+/// let curves: Vec<Curve> = reader.collect::<Result<_, _>>().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!((curves[0].points[1], &curves[0].point_data[..]), (DVec3::X, &[0.25f32, 0.5][..]));
+/// ```
 pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     let from_trx = meta.format == Format::Trx;
     let recorded = |key: &str| -> Option<String> {

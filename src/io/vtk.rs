@@ -827,6 +827,19 @@ pub struct VtkReader {
 }
 
 /// Open a VTK legacy POLYDATA file for streaming its `LINES` as curves.
+///
+/// A file that is not one is an error naming the file and the place:
+///
+/// ```
+/// use strandfit::io::vtk;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-vtk-open-{}.vtk", std::process::id()));
+/// std::fs::write(&path, "# vtk DataFile Version 3.0\n").unwrap();
+/// let err = vtk::open(&path).err().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!((err.path, err.at.as_deref()), (path, Some("line 2")));
+/// assert!(err.reason.starts_with("file truncated"));
+/// ```
 pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     Ok(Box::new(VtkReader::open(path)?))
 }
@@ -1551,6 +1564,27 @@ fn read_field(src: &mut Src, s: &mut Scan, assoc: Assoc) -> Result<(), IoError> 
 // Writer
 
 /// Create a VTK legacy POLYDATA file (see the module docs for the layout).
+///
+/// Per-curve values travel with the curves:
+///
+/// ```
+/// use strandfit::io::{vtk, Curve, Format, Metadata};
+/// use strandfit::DVec3;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-vtk-create-{}.vtk", std::process::id()));
+/// let mut meta = Metadata::new(Format::Json);
+/// meta.curve_data_names = vec!["weight".into()];
+/// let mut w = vtk::create(&path, &meta).unwrap();
+/// for k in 0..3 {
+///     let points = vec![DVec3::ZERO, DVec3::splat(k as f64 + 1.0)];
+///     w.write_curve(&Curve { curve_data: vec![k as f32], ..Curve::from_points(points) }).unwrap();
+/// }
+/// w.finish().unwrap();
+/// let curves: Vec<Curve> = vtk::open(&path).unwrap().collect::<Result<_, _>>().unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(curves.len(), 3);
+/// assert_eq!((curves[2].points[1], curves[2].curve_data[0]), (DVec3::splat(3.0), 2.0));
+/// ```
 pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     Ok(Box::new(VtkWriter::new(path, meta)?))
 }

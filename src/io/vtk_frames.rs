@@ -21,6 +21,22 @@ pub struct FramedPath {
 }
 
 /// Write `paths` to `target` (see the module docs).
+///
+/// ```
+/// use strandfit::io::vtk_frames::{write_framed_paths, FramedPath};
+/// use strandfit::DVec3;
+///
+/// let path = std::env::temp_dir().join(format!("strandfit-doc-frames-{}.vtk", std::process::id()));
+/// let frame = [DVec3::X, DVec3::Y, DVec3::Z];
+/// let line = FramedPath { points: vec![DVec3::ZERO, DVec3::X], frames: vec![frame; 2] };
+/// write_framed_paths(&path, "frames", &[line]).unwrap();
+/// let text = std::fs::read_to_string(&path).unwrap();
+/// std::fs::remove_file(&path).unwrap();
+/// assert!(text.contains("POINTS 2 double\n") && text.contains("LINES 1 3\n"));
+/// let short = FramedPath { points: vec![DVec3::ZERO, DVec3::X], frames: vec![frame] };
+/// let err = write_framed_paths(&path, "frames", &[short]).unwrap_err();
+/// assert_eq!(err.reason, "path 0: 2 points but 1 frames");
+/// ```
 pub fn write_framed_paths(target: &Path, title: &str, paths: &[FramedPath]) -> Result<(), IoError> {
     let total: usize = paths.iter().map(|p| p.points.len()).sum();
     let io = |e: std::io::Error| IoError::new(target, format!("cannot write: {e}"));
