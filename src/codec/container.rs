@@ -36,10 +36,15 @@ use crate::io::{AtomicFile, IoError};
 
 /// The container format version this module reads and writes.
 pub const VERSION: u16 = 3;
-/// The revision of the codec's model (what the geometry streams mean). A
-/// decoder reads only its own: a stream coded by another model would
-/// decode to other curves, so it is refused by name instead.
-pub const MODEL: u8 = 6;
+/// The revision of the codec's model (what the geometry streams mean),
+/// written by this build. A stream coded by another model would decode to
+/// other curves, so a decoder reads only the models it knows
+/// ([`READ_MODELS`]) and refuses the others by name.
+pub const MODEL: u8 = 7;
+/// The models this build decodes: 7, and 6 (whose screw prediction took
+/// its rotation from the last two step pairs' frames; [`CodecParams::model`]
+/// carries the difference).
+pub const READ_MODELS: [u8; 2] = [6, 7];
 const END_MAGIC: [u8; 4] = *b"SFHE";
 const END_LEN: u64 = 12;
 /// Curves per block: the entropy models learn within a block, so larger
@@ -99,6 +104,7 @@ impl CodecHeader {
         CodecParams {
             tolerance: self.tolerance,
             steps: self.steps,
+            model: self.model,
         }
     }
 
@@ -795,9 +801,9 @@ impl CodecReader {
         };
         let header = CodecHeader::from_bytes(&raw)
             .map_err(|e| err(format!("unreadable header: {e}")).at("header"))?;
-        if header.model != MODEL {
+        if !READ_MODELS.contains(&header.model) {
             return Err(err(format!(
-                "codec model {} (written by strandfit {}); this build reads model {MODEL}",
+                "codec model {} (written by strandfit {}); this build reads models {READ_MODELS:?}",
                 header.model, header.written_by
             )));
         }

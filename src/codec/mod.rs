@@ -90,6 +90,9 @@ pub struct CodecParams {
     pub tolerance: f64,
     /// Quantisation steps, as multiples of `T`.
     pub steps: Steps,
+    /// The model revision the stream is coded by ([`container::MODEL`] for
+    /// new streams; a container's header says which for old ones).
+    pub model: u8,
 }
 
 impl CodecParams {
@@ -98,6 +101,7 @@ impl CodecParams {
         CodecParams {
             tolerance,
             steps: Steps::default(),
+            model: container::MODEL,
         }
     }
 
@@ -320,7 +324,7 @@ fn estimated_bits(code: &CurveCode) -> u64 {
         CurveCode::Points { grid, helix, .. } => {
             let mut bits = 8;
             for k in 1..grid.len() {
-                let p = own_prediction(grid, k, *helix);
+                let p = own_prediction(grid, k, *helix, HELIX_PAIRS);
                 bits += lattice_bits([0, 1, 2].map(|a| grid[k][a] - p[a]));
             }
             bits
@@ -452,12 +456,30 @@ fn residual_context(d: [i64; 3]) -> usize {
     (64 - m.leading_zeros() as usize).min(RESIDUAL_CONTEXTS - 1)
 }
 
+/// Step pairs the screw prediction's rotation is fitted to (model 7): the
+/// lattice's error in each step is up to `T` in steps of a few `T`, so one
+/// pair's rotation is noisy; fitted to five (fewer near the start), the
+/// hair at 0.1 mm codes 6 % smaller (three pairs: 4 %, eight: 5 %; curls
+/// change pitch and radius along a strand, so longer is not better).
+const HELIX_PAIRS: usize = 5;
+
+/// The step pairs of [`helix_prediction`] under codec `model` (0: model 6's
+/// rotation from the frames of the last two pairs).
+fn helix_pairs(model: u8) -> usize {
+    if model >= 7 {
+        HELIX_PAIRS
+    } else {
+        0
+    }
+}
+
 /// Prediction of grid point `k ≥ 1` from the curve's own previous points:
 /// second order (first order for the second point), or with `helix` the
-/// screw continuation of the last three steps.
-fn own_prediction(g: &[[i64; 3]], k: usize, helix: bool) -> [i64; 3] {
+/// screw continuation of the last steps ([`helix_prediction`] with
+/// `pairs`).
+fn own_prediction(g: &[[i64; 3]], k: usize, helix: bool, pairs: usize) -> [i64; 3] {
     if helix && k >= 4 {
-        if let Some(p) = helix_prediction(g, k) {
+        if let Some(p) = helix_prediction(g, k, pairs) {
             return p;
         }
     }
@@ -468,15 +490,26 @@ fn own_prediction(g: &[[i64; 3]], k: usize, helix: bool) -> [i64; 3] {
     }
 }
 
-/// The last step `d₂ = g[k−1] − g[k−2]` turned by the rotation that took
-/// the step pair `(d₀, d₁)` to `(d₁, d₂)`: on a helix sampled at equal arc
-/// lengths every step is the one before it screwed by the same rotation,
-/// so this is exact there (up to the lattice), where second-order
-/// prediction misses by the curvature. Coarsely sampled curls (hair) are
-/// where it pays; the encoder chooses per curve. `None` where the steps
+/// The last step `g[k−1] − g[k−2]` turned by the rotation that takes each
+/// step to the next: on a helix sampled at equal arc lengths every step is
+/// the one before it screwed by the same rotation, so this is exact there
+/// (up to the lattice), where second-order prediction misses by the
+/// curvature. Coarsely sampled curls (hair) are where it pays; the encoder
+/// chooses per curve. With `pairs ≥ 2` (and `k ≥ 5`) the rotation is the
+/// least-squares one over the last `min(pairs, k − 3)` step pairs
+/// ([`predict::best_rotation`]), which averages the lattice's error;
+/// otherwise, or where that is undefined, the one that took the pair
+/// `(d₀, d₁)` to `(d₁, d₂)` of the last three steps. `None` where the steps
 /// are (nearly) collinear and the rotation is undefined.
-fn helix_prediction(g: &[[i64; 3]], k: usize) -> Option<[i64; 3]> {
+fn helix_prediction(g: &[[i64; 3]], k: usize, pairs: usize) -> Option<[i64; 3]> {
     let v = |i: usize| DVec3::new(g[i][0] as f64, g[i][1] as f64, g[i][2] as f64);
+    if pairs >= 2 && k >= 5 {
+        let pairs = pairs.min(k - 3);
+        let d: Vec<DVec3> = (k - pairs - 2..k - 1).map(|i| v(i + 1) - v(i)).collect();
+        if let Some(r) = predict::best_rotation(&d[..pairs], &d[1..]) {
+            return quantise::bcc_nearest(v(k - 1) + r * d[pairs], 1.0);
+        }
+    }
     let (d0, d1, d2) = (
         v(k - 3) - v(k - 4),
         v(k - 2) - v(k - 3),
@@ -510,6 +543,7 @@ fn slid_points(
     bits: u64,
     tolerance: f64,
     half: f64,
+    pairs: usize,
     neighbours: &mut Neighbours,
 ) -> Vec<[i64; 3]> {
     let tol = encoder::acceptance_tolerance(tolerance, points);
@@ -519,7 +553,7 @@ fn slid_points(
             half,
             tol * tol,
             g[0],
-            |g: &[[i64; 3]], k| own_prediction(g, k, helix),
+            |g: &[[i64; 3]], k| own_prediction(g, k, helix, pairs),
             smooth_lattice_bits,
         )
         .filter(|c| {
@@ -527,7 +561,7 @@ fn slid_points(
             let residuals = |c: &[[i64; 3]]| {
                 (1..c.len())
                     .map(|k| {
-                        let p = own_prediction(c, k, helix);
+                        let p = own_prediction(c, k, helix, pairs);
                         lattice_bits([0, 1, 2].map(|a| c[k][a].wrapping_sub(p[a])))
                     })
                     .sum::<u64>()
@@ -565,6 +599,7 @@ fn choose(
     opt: CurveOptions,
     tolerance: f64,
     half: f64,
+    pairs: usize,
     neighbours: &mut Neighbours,
     prev: &Previous,
 ) -> (CurveCode, usize) {
@@ -578,7 +613,7 @@ fn choose(
             own_start
                 + (1..g.len())
                     .map(|k| {
-                        let p = own_prediction(&g, k, helix);
+                        let p = own_prediction(&g, k, helix, pairs);
                         lattice_bits([0, 1, 2].map(|a| g[k][a].wrapping_sub(p[a])))
                     })
                     .sum::<u64>()
@@ -612,7 +647,7 @@ fn choose(
             // static cost; weighed by it, the fornix at 0.1 mm went from 2
             // to 19 points curves and grew 0.7 %).
             let g = slid_points(
-                points, g, reference, helix, bits, tolerance, half, neighbours,
+                points, g, reference, helix, bits, tolerance, half, pairs, neighbours,
             );
             let n = g.len();
             neighbours.push_lattice(g.clone());
@@ -882,6 +917,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
             opt,
             params.tolerance,
             half,
+            helix_pairs(params.model),
             &mut neighbours,
             &prev,
         );
@@ -956,7 +992,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                         enc.set_tag(11);
                         let mut ctx = RESIDUAL_CONTEXTS - 1;
                         for k in 1..grid.len() {
-                            let pred = own_prediction(grid, k, *helix);
+                            let pred = own_prediction(grid, k, *helix, helix_pairs(params.model));
                             let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
                             put_lattice(
                                 &mut enc,
@@ -1171,7 +1207,7 @@ pub fn decode_block(
                     g.push([0, 1, 2].map(|a| prev.point_start[a].wrapping_add(d[a])));
                     let mut ctx = RESIDUAL_CONTEXTS - 1;
                     for k in 1..n {
-                        let pred = own_prediction(&g, k, helix);
+                        let pred = own_prediction(&g, k, helix, helix_pairs(params.model));
                         let d = get_lattice(
                             &mut dec,
                             &mut m.residual_parity[ctx],

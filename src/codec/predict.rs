@@ -304,6 +304,109 @@ pub fn corner_tangent(u: DVec3, c: f64, h: DVec3) -> DVec3 {
     (u * co + h / hl * s).normalize()
 }
 
+/// The rotation that best takes each `from[i]` to `to[i]` in least squares
+/// (`min Σ |R·from[i] − to[i]|²`), by Horn's unit quaternion: the
+/// eigenvector of the largest eigenvalue of the symmetric 4 × 4 matrix `N`
+/// built from `M = Σ from[i] to[i]ᵀ` (Horn 1987, J. Opt. Soc. Am. A 4,
+/// eq. 4.4 ff.), found by cyclic Jacobi rotations. Only `+ − × ÷ √` are
+/// used, a fixed number of sweeps at most, so the decoder reproduces the
+/// encoder's rotation bit for bit. `None` where the largest eigenvalue is
+/// not separated from the next (the steps do not fix a rotation: collinear
+/// or zero).
+pub fn best_rotation(from: &[DVec3], to: &[DVec3]) -> Option<glam::DMat3> {
+    let mut m = [[0.0f64; 3]; 3];
+    for (a, b) in from.iter().zip(to) {
+        let (a, b) = (a.to_array(), b.to_array());
+        for r in 0..3 {
+            for c in 0..3 {
+                m[r][c] += a[r] * b[c];
+            }
+        }
+    }
+    let [[sxx, sxy, sxz], [syx, syy, syz], [szx, szy, szz]] = m;
+    let mut n = [
+        [sxx + syy + szz, syz - szy, szx - sxz, sxy - syx],
+        [syz - szy, sxx - syy - szz, sxy + syx, szx + sxz],
+        [szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy],
+        [sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz],
+    ];
+    let mut v = [[0.0f64; 4]; 4];
+    for (k, row) in v.iter_mut().enumerate() {
+        row[k] = 1.0;
+    }
+    let scale: f64 = n.iter().flatten().map(|x| x * x).sum();
+    if !(scale > 0.0 && scale.is_finite()) {
+        return None;
+    }
+    for _sweep in 0..12 {
+        let off: f64 = (0..4)
+            .flat_map(|p| (p + 1..4).map(move |q| (p, q)))
+            .map(|(p, q)| n[p][q] * n[p][q])
+            .sum();
+        if off <= 1e-30 * scale {
+            break;
+        }
+        for p in 0..4 {
+            for q in p + 1..4 {
+                if n[p][q] == 0.0 {
+                    continue;
+                }
+                // Zero n[p][q] by a plane rotation (c, s) in (p, q).
+                let theta = (n[q][q] - n[p][p]) / (2.0 * n[p][q]);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                for k in 0..4 {
+                    let (kp, kq) = (n[k][p], n[k][q]);
+                    n[k][p] = c * kp - s * kq;
+                    n[k][q] = s * kp + c * kq;
+                }
+                for k in 0..4 {
+                    let (pk, qk) = (n[p][k], n[q][k]);
+                    n[p][k] = c * pk - s * qk;
+                    n[q][k] = s * pk + c * qk;
+                }
+                for row in v.iter_mut() {
+                    let (kp, kq) = (row[p], row[q]);
+                    row[p] = c * kp - s * kq;
+                    row[q] = s * kp + c * kq;
+                }
+            }
+        }
+    }
+    let mut order = [0usize, 1, 2, 3];
+    order.sort_by(|&a, &b| n[b][b].total_cmp(&n[a][a]));
+    let (l1, l2) = (n[order[0]][order[0]], n[order[1]][order[1]]);
+    if !(l1 - l2 > 1e-9 * scale.sqrt()) {
+        return None;
+    }
+    let k = order[0];
+    let (w, x, y, z) = (v[0][k], v[1][k], v[2][k], v[3][k]);
+    let q2 = w * w + x * x + y * y + z * z;
+    if !(q2 > 0.0) {
+        return None;
+    }
+    let (w, x, y, z) = (w, x, y, z);
+    let s = 2.0 / q2;
+    Some(glam::DMat3::from_cols(
+        DVec3::new(
+            1.0 - s * (y * y + z * z),
+            s * (x * y + w * z),
+            s * (x * z - w * y),
+        ),
+        DVec3::new(
+            s * (x * y - w * z),
+            1.0 - s * (x * x + z * z),
+            s * (y * z + w * x),
+        ),
+        DVec3::new(
+            s * (x * z + w * y),
+            s * (y * z - w * x),
+            1.0 - s * (x * x + y * y),
+        ),
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -375,5 +478,45 @@ mod tests {
         let arc = Arc::new(DVec3::ZERO, t, DVec3::new(2.0, 0.0, 0.0)).unwrap();
         let mid = arc.point_at(0.5 * arc.length);
         assert!((mid - DVec3::new(1.0, 0.2, 0.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn best_rotation_recovers_a_rotation_from_noisy_pairs() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..200 {
+            let axis = DVec3::new(
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+            )
+            .normalize();
+            let r = glam::DMat3::from_axis_angle(axis, rng.gen_range(-3.0..3.0));
+            let from: Vec<DVec3> = (0..3)
+                .map(|_| {
+                    DVec3::new(
+                        rng.gen_range(-1.0..1.0),
+                        rng.gen_range(-1.0..1.0),
+                        rng.gen_range(-1.0..1.0),
+                    )
+                })
+                .collect();
+            let to: Vec<DVec3> = from.iter().map(|&a| r * a).collect();
+            let got = best_rotation(&from, &to).unwrap();
+            for (a, b) in from.iter().zip(&to) {
+                assert!((got * *a - *b).length() < 1e-9, "{got:?} vs {r:?}");
+            }
+            assert!((got.determinant() - 1.0).abs() < 1e-12);
+            // Planar pairs (the steps of a circle) fix the rotation too.
+            let planar: Vec<DVec3> = (0..3)
+                .map(|k| DVec3::new((k as f64).cos(), (k as f64).sin(), 0.0))
+                .collect();
+            let turned: Vec<DVec3> = planar.iter().map(|&a| r * a).collect();
+            let got = best_rotation(&planar, &turned).unwrap();
+            assert!((got * DVec3::Z - r * DVec3::Z).length() < 1e-9);
+        }
+        // Collinear pairs do not.
+        let line = [DVec3::X, DVec3::X * 2.0];
+        assert!(best_rotation(&line, &line).is_none());
     }
 }

@@ -263,8 +263,8 @@ fn helix_prediction_continues_a_helix_where_second_order_misses() {
     // by the curvature, r·(2 − 2 cos δ) ≈ 500 units.
     let g = helix_lattice(40, 5_000.0, 1_500.0, 0.45);
     for k in 4..g.len() {
-        let screw = own_prediction(&g, k, true);
-        let linear = own_prediction(&g, k, false);
+        let screw = own_prediction(&g, k, true, HELIX_PAIRS);
+        let linear = own_prediction(&g, k, false, HELIX_PAIRS);
         let miss = |p: [i64; 3]| (0..3).map(|a| (g[k][a] - p[a]).abs()).max().unwrap();
         assert!(
             miss(screw) <= 6,
@@ -279,7 +279,52 @@ fn helix_prediction_continues_a_helix_where_second_order_misses() {
     }
     // Collinear steps have no rotation: second order stands in.
     let line: Vec<[i64; 3]> = (0..8).map(|k| [2 * k, 4 * k, 6 * k]).collect();
-    assert_eq!(own_prediction(&line, 5, true), [10, 20, 30]);
+    assert_eq!(own_prediction(&line, 5, true, HELIX_PAIRS), [10, 20, 30]);
+}
+
+#[test]
+fn model_7_screw_fits_more_step_pairs_and_model_6_streams_still_decode() {
+    // A curl with its pitch and radius drifting, sampled coarsely, with
+    // noise of a tenth of the tolerance: coded as screw-predicted points.
+    let tol = 0.1;
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let curl: Vec<DVec3> = (0..150)
+        .map(|k| {
+            let a = k as f64 * 0.8;
+            let r = 2.0 + 0.004 * k as f64;
+            DVec3::new(r * a.cos(), r * a.sin(), (0.5 + 0.002 * k as f64) * a)
+                + DVec3::new(
+                    rng.gen_range(-0.01..0.01),
+                    rng.gen_range(-0.01..0.01),
+                    rng.gen_range(-0.01..0.01),
+                )
+        })
+        .collect();
+    let curves = [curl.clone()];
+    let new = CodecParams::new(tol);
+    let old = CodecParams { model: 6, ..new };
+    let (b7, b6) = (
+        encode_block(&curves, &new).unwrap(),
+        encode_block(&curves, &old).unwrap(),
+    );
+    assert_eq!((b7.kinds[0], b6.kinds[0]), (1, 1), "points curves");
+    // Each model decodes its own stream within the tolerance.
+    for (b, p) in [(&b7, &new), (&b6, &old)] {
+        let back = decode_block(&b.bytes, 1, p).unwrap();
+        let d = hausdorff(&curl, &back[0]).unwrap();
+        assert!(d <= tol, "model {}: {d}", p.model);
+    }
+    // The fitted rotation averages the lattice's error: fewer bytes.
+    assert!(
+        b7.bytes.len() < b6.bytes.len(),
+        "model 7 {} B, model 6 {} B",
+        b7.bytes.len(),
+        b6.bytes.len()
+    );
+    // The model matters: a model-6 stream read as model 7 is other curves.
+    if let Ok(back) = decode_block(&b6.bytes, 1, &new) {
+        assert!(hausdorff(&curl, &back[0]).unwrap() > tol);
+    }
 }
 
 #[test]
