@@ -13,7 +13,7 @@
 //! the chain against the *input* polyline — not against the spline, so the
 //! smoothing error is inside the tolerance, not added to it.
 //!
-//! The check samples the chain at arc step `h` with `κ_max h²/8 ≤ T/64`: a
+//! The check samples the chain at arc step `h` with `κ_max h²/8 ≈ T/64`: a
 //! curve of curvature at most `κ` is within its sagitta `κh²/8` of its
 //! chords, so `d(chain, input) ≤ d(samples, input) + T/64` for either
 //! distance, and the test is `d(samples, input) ≤ T − sagitta`. The
@@ -301,8 +301,25 @@ fn inverted(chain: &PiecewiseHelix, spline: &BezierSpline) -> bool {
         .any(|(e, w)| (e.end_point() - e.start).dot(w[1] - w[0]) <= 0.0)
 }
 
-/// Chain samples at an arc step whose sagitta is at most `tol/64`, and
-/// that sagitta.
+/// Chain samples at an arc step whose sagitta is about `tol/64`, and that
+/// sagitta (the one of the step taken, which may exceed `tol/64` a little:
+/// `⌈L/h⌉` points for the step `h` of sagitta `tol/64` make `⌈L/h⌉ − 1`
+/// steps, each a little longer than `h`; between `2N + 1` and `256N + 1`
+/// points for `N` elements).
+///
+/// ```
+/// use strandfit::{chain_samples, DVec3, HermitePair, PiecewiseHelix};
+///
+/// // A quarter circle of radius 1 about (0, 1, 0) as one element.
+/// let pair = HermitePair::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y);
+/// let chain = PiecewiseHelix::new(vec![pair.interpolate(1e-9).unwrap().element]);
+/// let (samples, sagitta) = chain_samples(&chain, 1e-3);
+/// assert_eq!(samples.len(), 141); // ⌈(π/2)/h⌉ for h = √(T/8κ) = 0.0112
+/// let step = std::f64::consts::FRAC_PI_2 / 140.0;
+/// assert!((sagitta - step * step / 8.0).abs() < 1e-15); // κ = 1
+/// assert!(sagitta < 1.01 * 1e-3 / 64.0);
+/// assert!(samples.iter().all(|p| (p.distance(DVec3::Y) - 1.0).abs() < 1e-12));
+/// ```
 pub fn chain_samples(chain: &PiecewiseHelix, tol: f64) -> (Vec<DVec3>, f64) {
     let kappa = chain
         .elements()
@@ -324,6 +341,22 @@ pub fn chain_samples(chain: &PiecewiseHelix, tol: f64) -> (Vec<DVec3>, f64) {
 /// `d(chain, input) ≤ tol`, conservatively: the chain is replaced by
 /// samples whose chords are within their sagitta of it, and the test is run
 /// at `tol − sagitta` (see the module docs).
+///
+/// ```
+/// use strandfit::chain_within;
+/// use std::f64::consts::PI;
+/// use strandfit::{DVec3, Distance, HermitePair, PiecewiseHelix};
+///
+/// // A quarter circle of radius 1 about (0, 1, 0) as one element, and
+/// // points on the circle of radius 1.01.
+/// let pair = HermitePair::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y);
+/// let chain = PiecewiseHelix::new(vec![pair.interpolate(1e-9).unwrap().element]);
+/// let input: Vec<DVec3> = (0..=10)
+///     .map(|k| DVec3::Y + 1.01 * DVec3::new((k as f64 * 0.05 * PI).sin(), -(k as f64 * 0.05 * PI).cos(), 0.0))
+///     .collect();
+/// assert!(chain_within(&chain, &input, 0.011, Distance::Ordered));
+/// assert!(!chain_within(&chain, &input, 0.009, Distance::Ordered));
+/// ```
 pub fn chain_within(chain: &PiecewiseHelix, input: &[DVec3], tol: f64, d: Distance) -> bool {
     let (s, sag) = chain_samples(chain, tol);
     tol > sag
@@ -337,6 +370,22 @@ pub fn chain_within(chain: &PiecewiseHelix, input: &[DVec3], tol: f64, d: Distan
 /// Upper bound on `d(chain, input)`, to 1e-6 relative plus the sampling
 /// sagitta; `scale` (the tolerance, or the expected distance) sets the
 /// sampling.
+///
+/// ```
+/// use strandfit::chain_frechet;
+/// use std::f64::consts::PI;
+/// use strandfit::{DVec3, Distance, HermitePair, PiecewiseHelix};
+///
+/// // A quarter circle of radius 1 about (0, 1, 0) as one element, and
+/// // points on the circle of radius 1.01.
+/// let pair = HermitePair::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y);
+/// let chain = PiecewiseHelix::new(vec![pair.interpolate(1e-9).unwrap().element]);
+/// let input: Vec<DVec3> = (0..=10)
+///     .map(|k| DVec3::Y + 1.01 * DVec3::new((k as f64 * 0.05 * PI).sin(), -(k as f64 * 0.05 * PI).cos(), 0.0))
+///     .collect();
+/// let d = chain_frechet(&chain, &input, 0.01, Distance::Frechet);
+/// assert!(d >= 0.01 && d < 0.01 + 1e-3);
+/// ```
 pub fn chain_frechet(chain: &PiecewiseHelix, input: &[DVec3], scale: f64, d: Distance) -> f64 {
     let (s, sag) = chain_samples(chain, scale.max(1e-300));
     match d {

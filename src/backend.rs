@@ -115,6 +115,15 @@ impl Backend {
 
     /// Open the backend the user chose. `auto` never fails: without an
     /// adapter it uses the CPU ([`Backend::open_explained`] says why).
+    ///
+    /// ```
+    /// use strandfit::{Backend, BackendChoice, PrecisionChoice};
+    ///
+    /// let backend = Backend::open(BackendChoice::Cpu, PrecisionChoice::Auto).unwrap();
+    /// assert!(matches!(backend, Backend::Cpu));
+    /// // `auto` never fails: the GPU where one opens, else the CPU.
+    /// assert!(Backend::open(BackendChoice::Auto, PrecisionChoice::Auto).is_ok());
+    /// ```
     pub fn open(choice: BackendChoice, precision: PrecisionChoice) -> Result<Backend, GpuError> {
         Backend::open_explained(choice, precision).map(|(b, _)| b)
     }
@@ -122,6 +131,13 @@ impl Backend {
     /// [`Backend::open`], with a sentence saying which backend was chosen
     /// and, for `auto`, why (for a program to show its user; the library
     /// prints nothing).
+    ///
+    /// ```
+    /// use strandfit::{Backend, BackendChoice, PrecisionChoice};
+    ///
+    /// let (_, why) = Backend::open_explained(BackendChoice::Cpu, PrecisionChoice::Auto).unwrap();
+    /// assert_eq!(why, "backend cpu");
+    /// ```
     pub fn open_explained(
         choice: BackendChoice,
         precision: PrecisionChoice,
@@ -167,6 +183,12 @@ impl Backend {
     }
 
     /// `cpu`, or `gpu <adapter> (<precision>)`.
+    ///
+    /// ```
+    /// use strandfit::Backend;
+    ///
+    /// assert!(Backend::Cpu.describe().starts_with("cpu (f64, "));
+    /// ```
     pub fn describe(&self) -> String {
         match self {
             Backend::Cpu => format!("cpu (f64, {} threads)", rayon::current_num_threads()),
@@ -176,6 +198,19 @@ impl Backend {
 
     /// Ghosh short helices for a batch of pairs (order kept; one bad pair
     /// never stops the others).
+    ///
+    /// A quarter circle of radius 1, and a pair with coincident ends:
+    ///
+    /// ```
+    /// use strandfit::{Backend, DVec3, HermitePair, ParamCurve3};
+    ///
+    /// let arc = HermitePair::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y);
+    /// let bad = HermitePair::new(DVec3::ONE, DVec3::X, DVec3::ONE, DVec3::Y);
+    /// let out = Backend::Cpu.interpolate(&[arc, bad], 1e-9).unwrap();
+    /// let helix = out[0].as_ref().unwrap();
+    /// assert!((helix.element.arc_length() - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
+    /// assert!(out[1].is_err());
+    /// ```
     pub fn interpolate(
         &self,
         pairs: &[HermitePair],
@@ -276,6 +311,17 @@ impl Backend {
     /// `n + 1` points with unit tangents equally spaced in arc length on
     /// every spline — [`BezierSpline::sample_equal_arclen`] — order kept.
     /// `n ≥ 1` (the CLI checks; `n = 0` gives the two ends).
+    ///
+    /// ```
+    /// use strandfit::{Backend, BezierSpline, DVec3};
+    ///
+    /// // A straight segment of length 3, sampled at 4 points.
+    /// let line = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::X, 2.0 * DVec3::X, 3.0 * DVec3::X]).unwrap();
+    /// let samples = Backend::Cpu.sample(&[line], 3).unwrap();
+    /// let xs: Vec<f64> = samples[0].points.iter().map(|p| p.x).collect();
+    /// assert!(xs.iter().zip([0.0, 1.0, 2.0, 3.0]).all(|(x, e)| (x - e).abs() < 1e-6));
+    /// assert!(samples[0].tangents.iter().all(|t| t.distance(DVec3::X) < 1e-9));
+    /// ```
     pub fn sample(&self, splines: &[BezierSpline], n: usize) -> Result<Vec<Samples>, GpuError> {
         self.sample_timed(splines, n, &mut Timings::default())
     }
@@ -311,6 +357,20 @@ impl Backend {
     /// `m` points (and unit tangents) of every chain equally spaced in arc
     /// length, ends included — [`PiecewiseHelix::sample`] — order kept.
     /// Empty chains give no samples.
+    ///
+    /// ```
+    /// use strandfit::{Backend, DVec3, HermitePair, PiecewiseHelix};
+    ///
+    /// // A half circle of radius 1 as two quarter-circle helices.
+    /// let q1 = HermitePair::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y).interpolate(1e-9).unwrap();
+    /// let q2 = HermitePair::new(DVec3::new(1.0, 1.0, 0.0), DVec3::Y, DVec3::new(0.0, 2.0, 0.0), -DVec3::X).interpolate(1e-9).unwrap();
+    /// let chain = PiecewiseHelix::new(vec![q1.element, q2.element]);
+    /// let out = Backend::Cpu.evaluate(&[chain, PiecewiseHelix::new(vec![])], 5).unwrap();
+    /// assert_eq!(out[0].points.len(), 5);
+    /// assert!(out[0].points.iter().all(|p| (p.distance(DVec3::Y) - 1.0).abs() < 1e-9));
+    /// assert!(out[0].tangents[2].distance(DVec3::Y) < 1e-9); // the middle
+    /// assert!(out[1].points.is_empty());
+    /// ```
     pub fn evaluate(&self, chains: &[PiecewiseHelix], m: usize) -> Result<Vec<Samples>, GpuError> {
         self.evaluate_timed(chains, m, &mut Timings::default())
     }
@@ -346,6 +406,21 @@ impl Backend {
     /// End point and frame of every Euler spiral after `steps` steps of the
     /// fourth-order scheme of [`crate::euler::frenet`] (order kept; a bad
     /// problem gets its own error).
+    ///
+    /// A circle of radius 1, half way round, and a problem with a NaN:
+    ///
+    /// ```
+    /// use std::f64::consts::PI;
+    /// use strandfit::{Backend, DVec3, FrenetProblem};
+    ///
+    /// let half = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.0, 0.0, 0.0, PI);
+    /// let bad = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, f64::NAN, 0.0, 0.0, 0.0, PI);
+    /// let out = Backend::Cpu.integrate(&[half, bad], 64).unwrap();
+    /// let end = out[0].as_ref().unwrap();
+    /// assert!(end.point.distance(DVec3::new(0.0, 2.0, 0.0)) < 1e-8); // fourth order
+    /// assert!(end.frame[0].distance(-DVec3::X) < 1e-9);
+    /// assert!(out[1].is_err());
+    /// ```
     pub fn integrate(
         &self,
         problems: &[FrenetProblem],
@@ -369,6 +444,18 @@ impl Backend {
 
     /// `m` points and unit tangents of every Euler spiral, equally spaced
     /// in arc length (ends included), `steps_per_interval` steps apart.
+    ///
+    /// ```
+    /// use std::f64::consts::PI;
+    /// use strandfit::{Backend, DVec3, FrenetProblem};
+    ///
+    /// let half = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.0, 0.0, 0.0, PI);
+    /// let out = Backend::Cpu.integrate_samples(&[half], 3, 16).unwrap();
+    /// let s = out[0].as_ref().unwrap();
+    /// assert_eq!(s.points.len(), 3);
+    /// assert!(s.points[1].distance(DVec3::new(1.0, 1.0, 0.0)) < 1e-7); // a quarter round
+    /// assert!(s.tangents[1].distance(DVec3::Y) < 1e-9);
+    /// ```
     pub fn integrate_samples(
         &self,
         problems: &[FrenetProblem],
@@ -399,6 +486,22 @@ impl Backend {
     /// prescribed arc length where `lengths` gives one; a pair that cannot
     /// be solved gets its own error. GPU: spatial solves in one kernel run
     /// (planar and straight cases on the host, see [`crate::kernels::atph_hermite`]).
+    ///
+    /// With and without a prescribed length:
+    ///
+    /// ```
+    /// use strandfit::atph::HermitePair;
+    /// use strandfit::{Backend, DVec3};
+    ///
+    /// // Two points of the cylinder curve (4 cos t, 4 sin t, 0.2t²), t = 0 and 1.
+    /// let (c1, t1) = (DVec3::new(4.0 * 1f64.cos(), 4.0 * 1f64.sin(), 0.2), DVec3::new(-4.0 * 1f64.sin(), 4.0 * 1f64.cos(), 0.4));
+    /// let pair = HermitePair::new(DVec3::new(4.0, 0.0, 0.0), DVec3::Y, c1, t1);
+    /// let l = 0.5 * 16.16f64.sqrt() + 20.0 * 0.1f64.asinh(); // its arc length on the cylinder
+    /// let out = Backend::Cpu.interpolate_atph(&[pair, pair], Some(&[None, Some(l)])).unwrap();
+    /// let (free, fixed) = (out[0].as_ref().unwrap(), out[1].as_ref().unwrap());
+    /// assert!(free.position(1.0).distance(pair.p1) < 1e-12);
+    /// assert!((fixed.length() - l).abs() < 1e-12);
+    /// ```
     pub fn interpolate_atph(
         &self,
         pairs: &[crate::atph::HermitePair],

@@ -147,6 +147,15 @@ pub fn compress_polylines(
 /// Decode a container made by [`compress_polylines`] (or the bytes of any
 /// version-3 `.sfh` file): all curves as positions and offsets, as
 /// decoded (no resampling).
+///
+/// Bytes that are not a container are an error:
+///
+/// ```
+/// use strandfit::{decompress_polylines, BatchError};
+///
+/// let err = decompress_polylines(b"not a container").unwrap_err();
+/// assert!(matches!(err, BatchError::Io(_)));
+/// ```
 pub fn decompress_polylines(bytes: &[u8]) -> Result<(Vec<DVec3>, Vec<usize>), BatchError> {
     let mut reader = CodecReader::from_bytes(bytes.to_vec())?;
     let n = reader.curve_count();

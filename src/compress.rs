@@ -93,6 +93,23 @@ pub struct CurveOutcome {
 }
 
 /// Compress one polyline.
+///
+/// ```
+/// use strandfit::io::container::{Shape, Storage};
+/// use strandfit::{compress_curve, CompressOptions, DVec3, ElementCount};
+///
+/// let helix: Vec<DVec3> = (0..100)
+///     .map(|k| { let s = k as f64 * 0.1; DVec3::new(3.0 * s.cos(), 3.0 * s.sin(), 0.8 * s) })
+///     .collect();
+/// let opts = CompressOptions::new(ElementCount::Tolerance(0.05), Storage::Compact);
+/// let out = compress_curve(&helix, &opts);
+/// assert!(out.within && out.frechet <= 0.05);
+/// assert!(matches!(out.shape, Shape::Quantized(_)) && out.elements < 20);
+/// // One point cannot be fitted: stored as it is, and said so.
+/// let one = compress_curve(&[DVec3::ONE], &opts);
+/// assert_eq!((one.shape, one.elements), (Shape::Points(vec![DVec3::ONE]), 0));
+/// assert!(one.verbatim.is_some());
+/// ```
 pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome {
     let tol = opts.tolerance();
     // Points are stored as f32 unless the container is f64: exact for

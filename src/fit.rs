@@ -83,6 +83,24 @@ pub struct FitScratch {
 }
 
 /// Steps 2–3 on given break points and tangents (tangents need not be unit).
+///
+/// Points already co-helical (on one circle) stay where they are:
+///
+/// ```
+/// use std::f64::consts::FRAC_PI_2;
+/// use strandfit::helix::Relaxation;
+/// use strandfit::{fit_points, DVec3, FitError, ParamCurve3};
+///
+/// // Points and tangents on a quarter circle of radius 1.
+/// let angles = [0.0, 0.5, 1.0, FRAC_PI_2];
+/// let points: Vec<DVec3> = angles.iter().map(|&a| DVec3::new(a.sin(), 1.0 - a.cos(), 0.0)).collect();
+/// let tangents: Vec<DVec3> = angles.iter().map(|&a| DVec3::new(a.cos(), a.sin(), 0.0)).collect();
+/// let chain = fit_points(&points, &tangents, Relaxation::Tridiagonal, 1e-9).unwrap();
+/// assert_eq!(chain.len(), 3);
+/// assert!((chain.arc_length() - FRAC_PI_2).abs() < 1e-9);
+/// let err = fit_points(&points, &tangents[..3], Relaxation::Tridiagonal, 1e-9).unwrap_err();
+/// assert_eq!(err, FitError::CountMismatch { points: 4, tangents: 3 });
+/// ```
 pub fn fit_points(
     points: &[DVec3],
     tangents: &[DVec3],
@@ -96,11 +114,34 @@ pub fn fit_points(
 }
 
 /// Fit a spline with `opts.elements` helices.
+///
+/// ```
+/// use strandfit::{fit_spline, BezierSpline, DVec3, FitError, FitOptions, ParamCurve3};
+///
+/// let line = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::X, 2.0 * DVec3::X, 3.0 * DVec3::X]).unwrap();
+/// let chain = fit_spline(&line, &FitOptions::new(3)).unwrap();
+/// assert!((chain.arc_length() - 3.0).abs() < 1e-9);
+/// assert!(chain.elements().iter().all(|e| e.curvature.abs() < 1e-9)); // straight elements
+/// assert_eq!(fit_spline(&line, &FitOptions::new(0)).unwrap_err(), FitError::NoElements);
+/// ```
 pub fn fit_spline(spline: &BezierSpline, opts: &FitOptions) -> Result<PiecewiseHelix, FitError> {
     fit_spline_with(spline, opts, &mut FitScratch::default())
 }
 
 /// [`fit_spline`] with caller-provided buffers.
+///
+/// One set of buffers for many fits, same results:
+///
+/// ```
+/// use strandfit::{fit_spline, fit_spline_with, BezierSpline, DVec3, FitOptions, FitScratch};
+///
+/// let mut scratch = FitScratch::default();
+/// let opts = FitOptions::new(6);
+/// for z in [0.5, 1.0, 2.0] {
+///     let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::X, DVec3::new(2.0, 1.0, z), DVec3::new(3.0, 0.0, z)]).unwrap();
+///     assert_eq!(fit_spline_with(&s, &opts, &mut scratch).unwrap(), fit_spline(&s, &opts).unwrap());
+/// }
+/// ```
 pub fn fit_spline_with(
     spline: &BezierSpline,
     opts: &FitOptions,
@@ -114,6 +155,20 @@ pub fn fit_spline_with(
 }
 
 /// Fit many splines in parallel (rayon); results in input order.
+///
+/// ```
+/// use strandfit::{fit_splines, BezierSpline, DVec3, FitOptions, ParamCurve3};
+///
+/// let splines: Vec<BezierSpline> = [1.0, 2.0, 4.0]
+///     .map(|x| BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::Y, DVec3::new(x, 1.0, 1.0), DVec3::new(x, 0.0, 1.0)]).unwrap())
+///     .to_vec();
+/// let chains = fit_splines(&splines, &FitOptions::new(8));
+/// assert_eq!(chains.len(), 3);
+/// for (chain, spline) in chains.iter().zip(&splines) {
+///     let chain = chain.as_ref().unwrap(); // in input order: its own spline's length
+///     assert!((chain.length() - spline.arc_length()).abs() < 1e-2 * spline.arc_length());
+/// }
+/// ```
 pub fn fit_splines(
     splines: &[BezierSpline],
     opts: &FitOptions,
@@ -184,6 +239,20 @@ fn relax_scratch(scratch: &mut FitScratch, relaxation: Relaxation) -> Result<(),
 
 /// Steps 1–2 for one spline: the `N` Hermite pairs of the relaxed points
 /// (appended to `out`), ready for Ghosh interpolation on any backend.
+///
+/// The pairs chain up, each starting where the last ended, and every pair
+/// is co-helical, `⟨p₁ − p₀, t₁ − t₀⟩ = 0`:
+///
+/// ```
+/// use strandfit::{relaxed_pairs, BezierSpline, DVec3, FitOptions, FitScratch};
+///
+/// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::X, DVec3::new(2.0, 1.0, 1.0), DVec3::new(3.0, 0.0, 1.0)]).unwrap();
+/// let mut pairs = Vec::new();
+/// relaxed_pairs(&s, &FitOptions::new(5), &mut FitScratch::default(), &mut pairs).unwrap();
+/// assert_eq!(pairs.len(), 5);
+/// assert!(pairs.windows(2).all(|w| w[0].p1 == w[1].p0));
+/// assert!(pairs.iter().all(|p| p.chord().dot(p.t1 - p.t0).abs() < 1e-12));
+/// ```
 pub fn relaxed_pairs(
     spline: &BezierSpline,
     opts: &FitOptions,

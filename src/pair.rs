@@ -53,6 +53,15 @@ impl HermitePair {
 
     /// All four vectors are finite.
     #[inline]
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HermitePair};
+    ///
+    /// let mut pair = HermitePair::new(DVec3::ZERO, DVec3::X, DVec3::ONE, DVec3::Y);
+    /// assert!(pair.is_finite());
+    /// pair.t1.z = f64::NAN;
+    /// assert!(!pair.is_finite());
+    /// ```
     pub fn is_finite(&self) -> bool {
         self.p0.is_finite() && self.t0.is_finite() && self.p1.is_finite() && self.t1.is_finite()
     }
