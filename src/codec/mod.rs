@@ -504,9 +504,13 @@ fn own_prediction(g: &[[i64; 3]], k: usize, helix: bool, pairs: usize) -> [i64; 
 fn helix_prediction(g: &[[i64; 3]], k: usize, pairs: usize) -> Option<[i64; 3]> {
     let v = |i: usize| DVec3::new(g[i][0] as f64, g[i][1] as f64, g[i][2] as f64);
     if pairs >= 2 && k >= 5 {
-        let pairs = pairs.min(k - 3);
-        let d: Vec<DVec3> = (k - pairs - 2..k - 1).map(|i| v(i + 1) - v(i)).collect();
-        if let Some(r) = predict::best_rotation(&d[..pairs], &d[1..]) {
+        let pairs = pairs.min(k - 3).min(HELIX_PAIRS);
+        let mut d = [DVec3::ZERO; HELIX_PAIRS + 1];
+        for (j, dj) in d.iter_mut().take(pairs + 1).enumerate() {
+            let i = k - pairs - 2 + j;
+            *dj = v(i + 1) - v(i);
+        }
+        if let Some(r) = predict::best_rotation(&d[..pairs], &d[1..=pairs]) {
             return quantise::bcc_nearest(v(k - 1) + r * d[pairs], 1.0);
         }
     }
