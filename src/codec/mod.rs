@@ -537,7 +537,8 @@ fn helix_prediction(g: &[[i64; 3]], k: usize, pairs: usize) -> Option<[i64; 3]> 
 /// A points curve's lattice points `g` (rounded, estimated at `bits`)
 /// slid along the curve to where they are cheapest against the chosen
 /// prediction ([`quantise::cheapest_points`]), where that is estimated
-/// cheaper; `neighbours` does not hold the curve yet.
+/// cheaper than `bits` (of which `own_start_bits` is the start's, without a
+/// reference); `neighbours` does not hold the curve yet.
 #[allow(clippy::too_many_arguments)]
 fn slid_points(
     points: &[DVec3],
@@ -545,12 +546,14 @@ fn slid_points(
     reference: Option<reference::Reference>,
     helix: bool,
     bits: u64,
+    own_start_bits: u64,
     tolerance: f64,
     half: f64,
     pairs: usize,
     neighbours: &mut Neighbours,
 ) -> Vec<[i64; 3]> {
     let tol = encoder::acceptance_tolerance(tolerance, points);
+    // The start stays: the residuals' estimates decide.
     let slid = match reference {
         None => quantise::cheapest_points(
             points,
@@ -559,19 +562,9 @@ fn slid_points(
             g[0],
             |g: &[[i64; 3]], k| own_prediction(g, k, helix, pairs),
             smooth_lattice_bits,
+            lattice_bits,
         )
-        .filter(|c| {
-            // The start is the same: the residuals decide.
-            let residuals = |c: &[[i64; 3]]| {
-                (1..c.len())
-                    .map(|k| {
-                        let p = own_prediction(c, k, helix, pairs);
-                        lattice_bits([0, 1, 2].map(|a| c[k][a].wrapping_sub(p[a])))
-                    })
-                    .sum::<u64>()
-            };
-            residuals(c) < residuals(&g)
-        }),
+        .filter(|(_, residuals)| *residuals < bits - own_start_bits),
         Some(rf) => {
             let grids = neighbours.window();
             let at_back = |b: usize| &grids[grids.len() - b][..];
@@ -580,6 +573,8 @@ fn slid_points(
                 second: rf.second.map(|(b, rev)| (at_back(b), rev)),
             };
             let n = g.len();
+            // The estimate's part before the residuals (a one-point curve's).
+            let start_bits = reference::reference_bits(&g[..1], &res, lattice_bits);
             quantise::cheapest_points(
                 points,
                 half,
@@ -587,11 +582,12 @@ fn slid_points(
                 g[0],
                 |g: &[[i64; 3]], k| res.predict(g[k - 1], k, n),
                 smooth_lattice_bits,
+                lattice_bits,
             )
-            .filter(|c| reference::reference_bits(c, &res, lattice_bits) < bits)
+            .filter(|(_, residuals)| *residuals < bits - start_bits)
         }
     };
-    slid.unwrap_or(g)
+    slid.map_or(g, |(c, _)| c)
 }
 
 /// Chooses one curve's code given the block so far: arcs, or points with
@@ -632,26 +628,26 @@ fn choose(
             .as_ref()
             .is_some_and(|(a, _)| 2 * estimated_bits(a) < own);
         if arcs_far_cheaper {
-            return (g, None, helix, own);
+            return (g, None, helix, own, own_start);
         }
         match reference::best_reference(&g, neighbours.window(), lattice_bits) {
-            Some((rf, bits)) if bits < own => (g, Some(rf), false, bits),
-            _ => (g, None, helix, own),
+            Some((rf, bits)) if bits < own => (g, Some(rf), false, bits, 0),
+            _ => (g, None, helix, own, own_start),
         }
     });
     match (opt.arcs, pts) {
-        (Some((a, decoded)), Some((_, _, _, bits))) if estimated_bits(&a) < bits => {
+        (Some((a, decoded)), Some((_, _, _, bits, _))) if estimated_bits(&a) < bits => {
             let n = decoded.len();
             neighbours.push_points(decoded);
             (a, n)
         }
-        (_, Some((g, reference, helix, bits))) => {
+        (_, Some((g, reference, helix, bits, start_bits))) => {
             // Arcs and points are weighed by the rounded points' estimate:
             // the slid points' is optimistic (they were chosen by the same
             // static cost; weighed by it, the fornix at 0.1 mm went from 2
             // to 19 points curves and grew 0.7 %).
             let g = slid_points(
-                points, g, reference, helix, bits, tolerance, half, pairs, neighbours,
+                points, g, reference, helix, bits, start_bits, tolerance, half, pairs, neighbours,
             );
             let n = g.len();
             neighbours.push_lattice(g.clone());

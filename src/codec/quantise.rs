@@ -181,7 +181,9 @@ const BCC_NEIGHBOURS: [[i64; 3]; 14] = [
 /// may slide forward along the curve by up to about `T / θ` (θ the turn at
 /// the vertex): the prediction's error along the curve costs less. The
 /// nearest lattice point is always a candidate, so no point costs more
-/// than rounding. `None` if a vertex has no lattice point within `√tol2`.
+/// than rounding. Returns the points and the sum of `rate` over their
+/// residuals (the prediction's own, so a caller need not predict again);
+/// `None` if a vertex has no lattice point within `√tol2`.
 /// (Sliding back as well, the vertex then covered by the next segment,
 /// measured no better: 1 % smaller on some files, 3 % larger on others.)
 pub fn cheapest_points(
@@ -191,11 +193,13 @@ pub fn cheapest_points(
     first: [i64; 3],
     predict: impl Fn(&[[i64; 3]], usize) -> [i64; 3],
     cost: impl Fn([i64; 3]) -> f64,
-) -> Option<Vec<[i64; 3]>> {
+    rate: impl Fn([i64; 3]) -> u64,
+) -> Option<(Vec<[i64; 3]>, u64)> {
     use super::check::dist2_to_segment;
     let n = points.len();
     let mut g = Vec::with_capacity(n);
     g.push(first);
+    let mut total = 0;
     for k in 1..n {
         let v = points[k];
         let before = points[k - 1];
@@ -250,8 +254,9 @@ pub fn cheapest_points(
             }
         }
         g.push(best.1);
+        total += rate(diff(best.1));
     }
-    Some(g)
+    Some((g, total))
 }
 
 #[cfg(test)]
@@ -345,8 +350,17 @@ mod tests {
                 p += dir * tol * rng.gen_range(0.2..20.0);
             }
             let first = bcc_nearest(pts[0], half).unwrap();
-            let g =
-                cheapest_points(&pts, half, tol * tol, first, second_order, residual_cost).unwrap();
+            let g = cheapest_points(
+                &pts,
+                half,
+                tol * tol,
+                first,
+                second_order,
+                residual_cost,
+                |_| 0,
+            )
+            .unwrap()
+            .0;
             assert_eq!(g.len(), n);
             assert!(g.iter().all(|k| k[0].rem_euclid(2) == k[1].rem_euclid(2)
                 && k[1].rem_euclid(2) == k[2].rem_euclid(2)));
@@ -376,7 +390,17 @@ mod tests {
             .collect();
         let rounded: Vec<[i64; 3]> = pts.iter().map(|&p| bcc_nearest(p, half).unwrap()).collect();
         let first = rounded[0];
-        let g = cheapest_points(&pts, half, tol * tol, first, second_order, residual_cost).unwrap();
+        let g = cheapest_points(
+            &pts,
+            half,
+            tol * tol,
+            first,
+            second_order,
+            residual_cost,
+            |_| 0,
+        )
+        .unwrap()
+        .0;
         let (slid, near) = (total_cost(&g), total_cost(&rounded));
         assert!(slid < 0.7 * near, "slid {slid} bits, rounded {near}");
         let out: Vec<glam::DVec3> = g.iter().map(|&k| bcc_point(k, half)).collect();
