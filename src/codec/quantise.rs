@@ -313,6 +313,20 @@ mod tests {
             .map(|v| (1.0 + v.unsigned_abs() as f64).log2())
             .sum()
     }
+    /// The points chosen against second-order prediction.
+    fn slid(pts: &[glam::DVec3], half: f64, tol: f64, first: [i64; 3]) -> Vec<[i64; 3]> {
+        cheapest_points(
+            pts,
+            half,
+            tol * tol,
+            first,
+            second_order,
+            residual_cost,
+            |_| 0,
+        )
+        .unwrap()
+        .0
+    }
     fn total_cost(g: &[[i64; 3]]) -> f64 {
         (1..g.len())
             .map(|k| {
@@ -350,17 +364,7 @@ mod tests {
                 p += dir * tol * rng.gen_range(0.2..20.0);
             }
             let first = bcc_nearest(pts[0], half).unwrap();
-            let g = cheapest_points(
-                &pts,
-                half,
-                tol * tol,
-                first,
-                second_order,
-                residual_cost,
-                |_| 0,
-            )
-            .unwrap()
-            .0;
+            let g = slid(&pts, half, tol, first);
             assert_eq!(g.len(), n);
             assert!(g.iter().all(|k| k[0].rem_euclid(2) == k[1].rem_euclid(2)
                 && k[1].rem_euclid(2) == k[2].rem_euclid(2)));
@@ -390,17 +394,7 @@ mod tests {
             .collect();
         let rounded: Vec<[i64; 3]> = pts.iter().map(|&p| bcc_nearest(p, half).unwrap()).collect();
         let first = rounded[0];
-        let g = cheapest_points(
-            &pts,
-            half,
-            tol * tol,
-            first,
-            second_order,
-            residual_cost,
-            |_| 0,
-        )
-        .unwrap()
-        .0;
+        let g = slid(&pts, half, tol, first);
         let (slid, near) = (total_cost(&g), total_cost(&rounded));
         assert!(slid < 0.7 * near, "slid {slid} bits, rounded {near}");
         let out: Vec<glam::DVec3> = g.iter().map(|&k| bcc_point(k, half)).collect();
