@@ -7,8 +7,11 @@
 //!
 //! Tolerances. The solve's error is `ε Σ|ρ| / rel_det` (the system's
 //! condition times rounding), with `rel_det` from [`condition`]:
-//! * GPU vs twin: the same operations in the same order, so `4 ε_R` of that
-//!   (measured: 0, bit-identical on lavapipe; other drivers may fuse a·b+c);
+//! * GPU vs twin: the same operations in the same order, so `8 ε_R` of that
+//!   (measured: 0, bit-identical on lavapipe; other drivers fuse a·b+c and
+//!   round `f32` division, `sqrt`, `sin` and `cos` their own way, within
+//!   WGSL's accuracy: NVIDIA H200, driver 580, `f32` 4.4, `f64` 2.6, so the
+//!   same bound as against the reference);
 //! * GPU vs reference: the same results and the same errors for every pair
 //!   (the host re-solves untrusted pairs, see `kernels::atph_hermite`), and `ρ` within
 //!   `8 ε_R Σ|ρ| / rel_det` (`f64`: different `sin`/`cos`, series lengths and
@@ -150,7 +153,7 @@ fn check<R: Real>(ctx: &GpuContext, precision: Precision, eps: f64) {
         timings
     );
     assert!(kernel > 50_000, "{kernel}");
-    assert!(vs_twin <= 4.0, "{vs_twin}");
+    assert!(vs_twin <= 8.0, "{vs_twin}");
     assert!(vs_ref <= 8.0, "{vs_ref}");
 }
 

@@ -280,18 +280,21 @@ fn check(
 //
 // Coefficient 2 on β (≈ 3× the worst measured). Kernel vs twin: another
 // driver may fuse a·b + c or reorder; that is the same formula with other
-// roundings, bounded like the rounding against the reference: the same 2β.
+// roundings, bounded like the rounding against the reference: the same 2β,
+// plus the final `x₀ + offset` landing on a neighbouring value: one ulp of a
+// coordinate per component, ≤ √3 ε₆₄(|x₀| + L): `ref_abs = 2` (NVIDIA H200,
+// driver 580: one ulp of a 34 mm coordinate, 1.6× the budget without it).
 const TWIN_F64: Tol = Tol {
     eps: E64,
     point: 2.0,
     frame: 2.0,
-    ref_abs: 0.0,
+    ref_abs: 2.0,
 };
 const TWIN_F32: Tol = Tol {
     eps: E32,
     point: 2.0,
     frame: 2.0,
-    ref_abs: 0.0,
+    ref_abs: 2.0,
 };
 // Kernel vs the f64 reference.
 const REF_F64: Tol = Tol {
@@ -406,15 +409,21 @@ fn frenet_sampled_parity() {
             let tw = twin[i].as_ref().unwrap();
             assert_eq!(g.points.len(), m);
             let e = end[i].as_ref().unwrap();
-            assert_eq!(
-                g.points[m - 1],
-                e.point,
-                "{name} {i}: last sample vs end mode"
-            );
-            assert_eq!(g.tangents[m - 1], e.frame[0]);
             assert_eq!(g.points[0], p.start);
             let b = beta(p, steps, ref_tol.eps);
             let abs = 4.0 * E64 * (p.start.length() + p.length);
+            // The last sample is the end mode's answer: bit for bit on
+            // lavapipe; the same steps in another code path, which a driver
+            // may contract differently (NVIDIA H200: 1 ulp of f32), so
+            // within the twin tolerance.
+            let (de, dt) = (
+                (g.points[m - 1] - e.point).length(),
+                (g.tangents[m - 1] - e.frame[0]).length(),
+            );
+            assert!(
+                de <= twin_tol.point * b * p.length + abs && dt <= twin_tol.frame * b,
+                "{name} {i}: last sample vs end mode: {de:e}, tangent {dt:e}"
+            );
             for (j, w) in want[i].iter().enumerate() {
                 let rt = ((g.points[j] - tw.points[j]).length()
                     / (twin_tol.point * b * p.length + abs))

@@ -245,16 +245,22 @@ fn reference(chains: &[PiecewiseHelix], m: usize) -> Vec<ChainSamples> {
 // that changes the roundings of the same formula, so the difference is
 // bounded by the formula's own rounding error, which the reference
 // comparison measures at ≤ 3 εL and ≤ 7 ε: 16 (≈ 2× that; 0 here).
+//
+// And the host's `f64` sum `p₀ + offset`: offsets a few ulps apart may round
+// to neighbouring doubles, one ulp of a coordinate ≤ ε₆₄|x| per component,
+// ≤ √3 ε₆₄(|p₀| + L) in all: `ref_abs = 2`. Measured on an NVIDIA H200
+// (driver 580, which contracts into FMA): one ulp of a 30 mm coordinate on
+// a 0.99 mm element, 1.02× the budget without that term.
 const TWIN_F64: Tol = Tol {
     eps: E64,
     point: 16.0,
-    ref_abs: 0.0,
+    ref_abs: 2.0,
     tangent: 16.0,
 };
 const TWIN_F32: Tol = Tol {
     eps: E32,
     point: 16.0,
-    ref_abs: 0.0,
+    ref_abs: 2.0,
     tangent: 16.0,
 };
 // Kernel vs the f64 reference: 10× the measured 3.7 εL and 7.6 ε.

@@ -125,3 +125,33 @@ fn parity_batches_are_deterministic_and_the_twin_runs_them() {
     }
     strandfit::for_each_kernel!(all);
 }
+
+#[test]
+fn parity_check_lets_a_count_move_by_its_slack_and_nothing_else() {
+    // Without a GPU: the Ghosh bisection's step count (output 11 of each
+    // 12-value record) may differ by two steps; a third, or any real value
+    // 100 ε off, is an error that names the output.
+    use strandfit::kernels::ghosh_bisect::GhoshBisect;
+    let twin = outputs::<GhoshBisect, f32, _>(&Twin::<f32>::new(), (), 0);
+    let with = |index: usize, delta: f32| {
+        let mut v = twin.reals().to_vec();
+        v[index] += delta;
+        Data::<f32>::Real(v.into())
+    };
+    let steps = 7 * 12 + 11;
+    assert!(twin.reals()[steps] > 10.0, "a bisection ran");
+    assert_eq!(
+        parity_check::<GhoshBisect, f32>(&with(steps, 1.0), &twin),
+        Ok(0.0)
+    );
+    assert_eq!(
+        parity_check::<GhoshBisect, f32>(&with(steps, -2.0), &twin),
+        Ok(0.0)
+    );
+    let err = parity_check::<GhoshBisect, f32>(&with(steps, 3.0), &twin).unwrap_err();
+    assert!(err.contains("output 95 (a count)"), "{err}");
+    let phi = 7 * 12 + 1;
+    let big = 100.0 * f32::EPSILON * twin.reals()[phi].abs().max(1.0);
+    let err = parity_check::<GhoshBisect, f32>(&with(phi, big), &twin).unwrap_err();
+    assert!(err.contains("output 85"), "{err}");
+}

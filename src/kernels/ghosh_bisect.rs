@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use super::{by_precision, map, Exec, GpuError, MapKernel, Rng, Timings, Twin};
 use crate::helix::ghosh::ghosh_basis;
 use crate::helix::{HelixElement, HelixError, HermitePair, ShortHelix};
-use crate::twin::ghosh_bisect::{self as twin, status, IN_STRIDE, OUT_STRIDE};
+use crate::twin::ghosh_bisect::{self as twin, status, IN_STRIDE, OUT_STEPS, OUT_STRIDE};
 use crate::twin::Real;
 
 crate::map_kernel! {
@@ -40,6 +40,11 @@ impl MapKernel for GhoshBisect {
     fn twin_record<R: Real>(_: (), tol: f32, rec: &[R], out: &mut [R]) {
         let rec: &[R; IN_STRIDE] = rec.try_into().expect("stride");
         out.copy_from_slice(&twin::ghosh_bisect(rec, R::from_f64(tol as f64)));
+    }
+    /// The bisection's step count (a diagnostic) may differ by a step or
+    /// two where the stopping test `hi − lo > 2ε·hi` rounds the other way.
+    fn parity_count_slack(index: usize) -> Option<f64> {
+        (index % OUT_STRIDE == OUT_STEPS).then_some(2.0)
     }
     fn parity_records(_: (), rng: &mut Rng) -> (f32, Vec<f64>) {
         let mut records = Vec::new();
