@@ -369,6 +369,46 @@ fn codec_model_6_containers_still_decode() {
 }
 
 #[test]
+fn codec_model_7_containers_decode_to_the_points_they_did() {
+    // Written by the last build of codec model 7 (11-bit contexts adapted
+    // at a fixed rate; model 8 warms them up): the same 24 hairs at 0.1
+    // mm. Today's build decodes exactly the file that build decoded.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/sfh");
+    let old = dir.join("hair24_model7.sfh");
+    let out = ok(&["inspect", old.to_str().unwrap(), "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["header"]["model"].as_u64(), Some(7), "{r}");
+    let tmp = tempfile::tempdir().unwrap();
+    let back = tmp.path().join("back.tck");
+    ok(&[
+        "decompress",
+        old.to_str().unwrap(),
+        "-o",
+        back.to_str().unwrap(),
+    ]);
+    let then = std::fs::read(dir.join("hair24_model7_decoded.tck")).unwrap();
+    assert!(
+        std::fs::read(&back).unwrap() == then,
+        "model-7 decoding changed"
+    );
+    // And today's model writes fewer bytes for the same curves.
+    let new = tmp.path().join("new.sfh");
+    ok(&[
+        "compress",
+        dir.join("hair24.tck").to_str().unwrap(),
+        "--tolerance",
+        "0.1",
+        "-o",
+        new.to_str().unwrap(),
+    ]);
+    let (a, b) = (
+        std::fs::metadata(&old).unwrap().len(),
+        std::fs::metadata(&new).unwrap().len(),
+    );
+    assert!(b < a, "model 8: {b} bytes, model 7: {a}");
+}
+
+#[test]
 fn a_version_2_development_container_is_refused_by_name() {
     // Version 2 was written by development builds for a day; its streams
     // mean something else now, so it is refused, never misread.

@@ -40,11 +40,13 @@ pub const VERSION: u16 = 3;
 /// written by this build. A stream coded by another model would decode to
 /// other curves, so a decoder reads only the models it knows
 /// ([`READ_MODELS`]) and refuses the others by name.
-pub const MODEL: u8 = 7;
-/// The models this build decodes: 7, and 6 (whose screw prediction took
-/// its rotation from the last two step pairs' frames; [`CodecParams::model`]
-/// carries the difference).
-pub const READ_MODELS: [u8; 2] = [6, 7];
+pub const MODEL: u8 = 8;
+/// The models this build decodes: 8; 7, whose range coder's contexts
+/// adapted at a fixed rate with 11-bit probabilities
+/// ([`super::entropy::Adaptation`]); and 6, which also took the screw
+/// prediction's rotation from the last two step pairs' frames
+/// ([`CodecParams::model`] carries the differences).
+pub const READ_MODELS: [u8; 3] = [6, 7, 8];
 const END_MAGIC: [u8; 4] = *b"SFHE";
 const END_LEN: u64 = 12;
 /// Curves per block: the entropy models learn within a block, so larger
