@@ -611,6 +611,7 @@ fn slid_points(
 /// their own or a neighbour's prediction, whichever is estimated cheaper;
 /// returns the code and its decoded point count, and adds the decoded curve
 /// to the `neighbours` of the curves after it.
+#[allow(clippy::too_many_arguments)]
 fn choose(
     points: &[DVec3],
     opt: CurveOptions,
