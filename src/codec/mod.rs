@@ -692,6 +692,25 @@ fn choose(
     }
 }
 
+/// Mantissa bits of a curve's count (points or elements) coded in
+/// contexts from model 8 on: a resampled file's counts recur (20 points
+/// each in the bundles, 100 in the hair), and with all their bits modelled
+/// a recurring count costs a fraction of a bit instead of the two raw bits
+/// below the modelled ones (bundles 0.6–1.2 % smaller, the hair 0.2–0.4 %;
+/// 4 bits gain about as much on the bundles, half on the hair).
+const COUNT_MANTISSA: usize = 6;
+
+impl Models {
+    /// The models of a block coded by codec `model`.
+    fn for_model(model: u8) -> Self {
+        let mut m = Models::default();
+        if model >= 8 {
+            m.count = IntModel::with_mantissa(COUNT_MANTISSA);
+        }
+        m
+    }
+}
+
 /// The adaptive models of one block: one per coded field.
 #[derive(Default)]
 struct Models {
@@ -922,7 +941,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     let q_start = params.quantiser().start;
     let q_first = params.quantiser().first;
     let q_offset = params.quantiser().offset;
-    let mut m = Models::default();
+    let mut m = Models::for_model(params.model);
     let mut prev = Previous::default();
     let mut kinds = Vec::with_capacity(curves.len());
     let mut output_points = 0;
@@ -1136,7 +1155,7 @@ pub fn decode_block(
     params: &CodecParams,
 ) -> Result<Vec<Vec<DVec3>>, DecodeError> {
     let mut dec = Decoder::with_adaptation(bytes, Adaptation::of_model(params.model));
-    let mut m = Models::default();
+    let mut m = Models::for_model(params.model);
     let mut prev = Previous::default();
     let q = params.quantiser();
     let scale_exp = dec.direct(8) as i32 - 128;
