@@ -584,7 +584,9 @@ mod tests {
         // 19 = 10011b: with two mantissa bits modelled its last two are
         // coded raw (2 bits a value at least); with six, all are learnt.
         // Other values in between still round-trip.
-        let vals: Vec<u64> = (0..400).map(|i| if i % 50 == 7 { 300 + i } else { 19 }).collect();
+        let vals: Vec<u64> = (0..400)
+            .map(|i| if i % 50 == 7 { 300 + i } else { 19 })
+            .collect();
         let code = |modelled: usize| {
             let mut m = IntModel::with_mantissa(modelled);
             let mut enc = Encoder::new();

@@ -208,8 +208,8 @@ pub fn cheapest_points(
     rate: impl Fn([i64; 3]) -> u64,
 ) -> Option<(Vec<[i64; 3]>, u64)> {
     use super::check::dist2_to_segment;
-    /// One partial choice: its last point, its parent in the previous
-    /// vertex's beam, and its cost and rate so far.
+    /// One partial choice: its last point, its parent (an index into
+    /// `flat`, the previous vertex's beam), and its cost and rate so far.
     #[derive(Clone, Copy)]
     struct Node {
         q: [i64; 3],
@@ -218,15 +218,22 @@ pub fn cheapest_points(
         rate: u64,
     }
     let n = points.len();
+    if n == 0 {
+        return Some((Vec::new(), 0));
+    }
     let beam = beam.clamp(1, 16);
-    // nodes[k]: the beam at vertex k.
-    let mut nodes: Vec<Vec<Node>> = Vec::with_capacity(n);
-    nodes.push(vec![Node {
+    // The beams of all vertices one after the other (one allocation per
+    // curve); vertex k's is flat[level[k]..level[k + 1]].
+    let mut flat: Vec<Node> = Vec::with_capacity(n * beam);
+    let mut level: Vec<usize> = Vec::with_capacity(n + 1);
+    level.push(0);
+    flat.push(Node {
         q: first,
         parent: 0,
         cost: 0.0,
         rate: 0,
-    }]);
+    });
+    level.push(1);
     let mut scratch = vec![[0i64; 3]; n];
     let mut next: Vec<Node> = Vec::new();
     for k in 1..n {
@@ -238,15 +245,14 @@ pub fn cheapest_points(
             return None;
         }
         next.clear();
-        for (pi, node) in nodes[k - 1].iter().enumerate() {
+        for pi in level[k - 1]..level[k] {
+            let node = &flat[pi];
             // The path's last points into the scratch window.
-            let mut at = (k - 1, pi);
+            let mut at = pi;
             for j in (k.saturating_sub(PREDICT_LOOKBACK)..k).rev() {
-                let nd = nodes[at.0][at.1];
+                let nd = flat[at];
                 scratch[j] = nd.q;
-                if at.0 > 0 {
-                    at = (at.0 - 1, nd.parent as usize);
-                }
+                at = nd.parent as usize;
             }
             let o_prev = bcc_point(node.q, half);
             let feasible = |q: [i64; 3]| {
@@ -333,10 +339,17 @@ pub fn cheapest_points(
                     c = c2;
                 }
             }
+            // (Where the prediction lands near the vertex the centres
+            // coincide: each distinct one is searched once.)
+            let mut last_centre = None;
             for t in [0.0, 0.25, 0.5, 0.75, 1.0] {
                 let Some(centre) = bcc_nearest(c + (v - c) * t, half) else {
                     continue;
                 };
+                if last_centre == Some(centre) {
+                    continue;
+                }
+                last_centre = Some(centre);
                 consider(centre);
                 for d in BCC_NEIGHBOURS {
                     consider([0, 1, 2].map(|a| centre[a] + d[a]));
@@ -348,15 +361,15 @@ pub fn cheapest_points(
         }
         next.sort_by(|a, b| a.cost.total_cmp(&b.cost));
         next.truncate(beam);
-        nodes.push(next.clone());
+        flat.extend_from_slice(&next);
+        level.push(flat.len());
     }
     // The cheapest path, back from its end.
     let mut g = vec![[0i64; 3]; n];
-    let last = &nodes[n - 1][0];
-    let total = last.rate;
-    let mut at = 0usize;
+    let mut at = level[n - 1];
+    let total = flat[at].rate;
     for k in (0..n).rev() {
-        let nd = nodes[k][at];
+        let nd = flat[at];
         g[k] = nd.q;
         at = nd.parent as usize;
     }
