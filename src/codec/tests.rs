@@ -186,7 +186,8 @@ proptest! {
 
 /// A bundle: shifted, jittered, sometimes reversed copies of two shapes
 /// (a smooth arc-coded one and a coarse points-coded one), interleaved so
-/// that references and anchors reach up to and beyond 32 curves back.
+/// that references and anchors reach up to and beyond
+/// [`reference::MAX_BACK`] curves back.
 #[test]
 fn bundles_lean_on_neighbours_and_round_trip() {
     let mut rng = ChaCha8Rng::seed_from_u64(77);
