@@ -170,6 +170,23 @@ impl<'a> CurveEncoder<'a> {
         let (_, e1, e2) = state.predicted_frame(state.frame_chord(self.q.length));
         let a1 = Quantiser::index(d.dot(e1), self.q.offset)?;
         let a2 = Quantiser::index(d.dot(e2), self.q.offset)?;
+        self.candidate_with_code(state, from, j, kind, steps, [a1, a2])
+            .await
+    }
+
+    /// A G1 or straight element ending a chord of `steps` and offsets
+    /// `offset` (a corner: also its bulge) from `state`, as
+    /// [`candidate`](Self::candidate) checks it for reach `j`.
+    async fn candidate_with_code(
+        &self,
+        state: &ChainState,
+        from: usize,
+        j: usize,
+        kind: ElementKind,
+        steps: i64,
+        offset: [i64; 2],
+    ) -> Option<Candidate> {
+        let [a1, a2] = offset;
         let end = element_end(state, steps, a1, a2, &self.q);
         let mut code = ElementCode {
             kind,
@@ -209,6 +226,48 @@ impl<'a> CurveEncoder<'a> {
             samples,
             reach: j,
         })
+    }
+
+    /// The element `c` (from input vertex `from`) with its end's offsets
+    /// rounded toward the prediction instead of to the nearest step, where
+    /// that still passes: the same reach for fewer bits (rate-aware
+    /// rounding; both, then each alone). Measured: field lines 0.44 %
+    /// smaller at 0.001 R☉, 0.2 % larger at 0.01 (an end off the curve
+    /// predicts the next element worse); fornix −0.05 / +0.5 %, hair
+    /// −0.03 / −0.17 % at 0.1 / 0.5 mm; 0.15 % fewer bytes over the
+    /// shared data in all; no slower within the noise.
+    async fn cheapen(&self, state: &ChainState, from: usize, c: Candidate) -> Candidate {
+        if !matches!(c.code.kind, ElementKind::G1 | ElementKind::Straight) {
+            return c;
+        }
+        let j = c.reach;
+        let d = self.points[j] - state.point;
+        let (_, e1, e2) = state.predicted_frame(state.frame_chord(self.q.length));
+        let t = [d.dot(e1), d.dot(e2)].map(|x| Quantiser::index_toward_zero(x, self.q.offset));
+        let [Some(t1), Some(t2)] = t else {
+            return c;
+        };
+        let [a1, a2] = c.code.offset;
+        let steps = c.code.length + state.chord_steps;
+        let mut tries = Vec::with_capacity(3);
+        if t1 != a1 && t2 != a2 {
+            tries.push([t1, t2]);
+        }
+        if t1 != a1 {
+            tries.push([t1, a2]);
+        }
+        if t2 != a2 {
+            tries.push([a1, t2]);
+        }
+        for o in tries {
+            if let Some(better) = self
+                .candidate_with_code(state, from, j, c.code.kind, steps, o)
+                .await
+            {
+                return better;
+            }
+        }
+        c
     }
 
     /// Bulge codes to try for a corner from `q` to `end`: the estimate, then
@@ -324,6 +383,7 @@ impl<'a> CurveEncoder<'a> {
                     Jump::Impossible => return None,
                 },
             };
+            let chosen = self.cheapen(&state, from, chosen).await;
             decoded.extend_from_slice(&chosen.samples);
             state = next_state(&chosen.arc, &state, chosen.code.kind, self.q.length);
             span = chosen.reach - from;
