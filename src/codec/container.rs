@@ -21,6 +21,29 @@
 //! seeking to its blocks through the index. The framing costs about 40
 //! bytes and the header about as much again: on a file of a few hundred
 //! curves that is a few per cent of the whole.
+//!
+//! ```
+//! use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn, VERSION};
+//! use strandfit::io::{container::{SourceMeta, MAGIC}, Format, Metadata};
+//! use strandfit::DVec3;
+//!
+//! // One block of two curves, in memory.
+//! let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![]);
+//! let helix: Vec<DVec3> = (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s)).collect();
+//! let curves = [&helix, &helix].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+//! let mut w = CodecWriter::in_memory(&header);
+//! w.write_block(&encode_block_bytes(&curves, &header.params(), 0, 0).unwrap()).unwrap();
+//! let bytes = w.finish_bytes().unwrap();
+//! // The layout: magic, version; at the end the index, its CRC, its length, "SFHE".
+//! let n = bytes.len();
+//! assert_eq!((&bytes[..8], &bytes[8..10]), (&MAGIC[..], &VERSION.to_le_bytes()[..]));
+//! assert_eq!(&bytes[n - 4..], b"SFHE");
+//! let index_len = u32::from_le_bytes(bytes[n - 8..n - 4].try_into().unwrap()) as usize;
+//! let index = &bytes[n - 12 - index_len..n - 12];
+//! assert_eq!(crc32fast::hash(index).to_le_bytes(), bytes[n - 12..n - 8]);
+//! assert_eq!((index[0], index[index_len - 1]), (1, 2)); // 1 block, of 2 curves
+//! assert_eq!(CodecReader::from_bytes(bytes).unwrap().curve_count(), 2);
+//! ```
 
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom, Write};
@@ -35,28 +58,130 @@ use crate::io::container::{SourceMeta, MAGIC};
 use crate::io::{AtomicFile, IoError};
 
 /// The container format version this module reads and writes.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+/// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+/// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+/// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+/// #     w.finish_bytes().unwrap()
+/// # }
+///
+/// // A container says its version in bytes 8–9, after the magic number.
+/// let bytes = container(1);
+/// assert_eq!(bytes[8..10], VERSION.to_le_bytes());
+/// ```
 pub const VERSION: u16 = 3;
 /// The revision of the codec's model (what the geometry streams mean),
 /// written by this build. A stream coded by another model would decode to
 /// other curves, so a decoder reads only the models it knows
 /// ([`READ_MODELS`]) and refuses the others by name.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// use strandfit::codec::CodecParams;
+///
+/// // New headers and parameters are for this model, which this build reads.
+/// assert_eq!(header().model, MODEL);
+/// assert_eq!(CodecParams::new(0.01).model, MODEL);
+/// assert!(READ_MODELS.contains(&MODEL));
+/// ```
 pub const MODEL: u8 = 8;
 /// The models this build decodes: 8; 7, whose range coder's contexts
 /// adapted at a fixed rate with 11-bit probabilities
 /// ([`super::entropy::Adaptation`]); and 6, which also took the screw
 /// prediction's rotation from the last two step pairs' frames
 /// ([`CodecParams::model`] carries the differences).
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+///
+/// // Containers of these models open; one of another is refused by name.
+/// let with_model = |model: u8| {
+///     let mut h = header();
+///     h.model = model;
+///     CodecReader::from_bytes(CodecWriter::in_memory(&h).finish_bytes().unwrap())
+/// };
+/// for model in READ_MODELS {
+///     assert_eq!(with_model(model).unwrap().header().model, model);
+/// }
+/// let err = with_model(99).err().unwrap();
+/// assert!(err.to_string().contains("codec model 99"), "{err}");
+/// ```
 pub const READ_MODELS: [u8; 3] = [6, 7, 8];
 const END_MAGIC: [u8; 4] = *b"SFHE";
 const END_LEN: u64 = 12;
 /// Curves per block: the entropy models learn within a block, so larger
 /// blocks code a little smaller; 4,096 bounds memory and keeps two cores
 /// busy on files of a few blocks.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// use std::path::Path;
+/// use strandfit::codec::stream::compress_to_bytes;
+/// use strandfit::io::{Curve, VecReader};
+///
+/// // One curve more than a block holds: two blocks.
+/// let curves = vec![Curve::default(); BLOCK_CURVES + 1];
+/// let mut reader = VecReader::new(Metadata::new(Format::Json), curves);
+/// let bytes = compress_to_bytes(&mut reader, Path::new("in.json"), &header(), None).unwrap();
+/// let r = CodecReader::from_bytes(bytes).unwrap();
+/// assert_eq!(r.block_count(), 2);
+/// assert_eq!(r.block_span(1), (BLOCK_CURVES as u64, 1));
+/// ```
 pub const BLOCK_CURVES: usize = 4096;
 /// Largest header, block part or index accepted.
 const MAX_SECTION: u32 = 1 << 30;
 
 /// The header of a version-3 container.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// use std::path::Path;
+///
+/// // A header is read back as it was written.
+/// let mut meta = Metadata::new(Format::Trk);
+/// meta.units = Some("mm".into());
+/// meta.curve_data_names = vec!["weight".into()];
+/// let source = SourceMeta::from_metadata(&meta, Some(Path::new("af.trk")));
+/// let h = CodecHeader::new(0.05, source, vec!["fa".into()]);
+/// let bytes = CodecWriter::in_memory(&h).finish_bytes().unwrap();
+/// assert_eq!(CodecReader::from_bytes(bytes).unwrap().header(), &h);
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CodecHeader {
     /// The revision of the codec model that wrote the geometry ([`MODEL`]).
@@ -75,7 +200,25 @@ pub struct CodecHeader {
 }
 
 impl CodecHeader {
-    /// A header for the current model with the default steps.
+    /// A header for the current model with the default steps. A `.tck`
+    /// source's last extra field, `datatype: Float32LE`, is left out: it
+    /// is what the `.tck` writer writes there anyway.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// use strandfit::codec::quantise::Steps;
+    ///
+    /// let mut meta = Metadata::new(Format::Tck);
+    /// meta.extra = vec![("datatype".into(), "Float32LE".into())];
+    /// let h = CodecHeader::new(0.2, SourceMeta::from_metadata(&meta, None), vec![]);
+    /// assert_eq!((h.model, h.tolerance, h.steps), (MODEL, 0.2, Steps::default()));
+    /// assert!(h.source.extra.is_empty());
+    /// ```
     pub fn new(tolerance: f64, source: SourceMeta, point_data_names: Vec<String>) -> Self {
         // A .tck source's datatype is left out where it is what the .tck
         // writer writes by default in the same place (Float32LE, after the
@@ -102,6 +245,21 @@ impl CodecHeader {
     }
 
     /// The codec parameters the geometry was written with.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// use strandfit::codec::CodecParams;
+    ///
+    /// let mut h = header();
+    /// assert_eq!(h.params(), CodecParams::new(0.01));
+    /// h.tolerance = 0.5;
+    /// assert_eq!(h.params().tolerance, 0.5);
+    /// ```
     pub fn params(&self) -> CodecParams {
         CodecParams {
             tolerance: self.tolerance,
@@ -117,7 +275,13 @@ impl CodecHeader {
     fn to_bytes(&self) -> Vec<u8> {
         let mut b = Vec::with_capacity(64);
         b.push(self.model);
-        b.extend_from_slice(&self.tolerance.to_le_bytes());
+        if self.model >= 8 {
+            // The shortest decimal that reads back as the same f64, in
+            // exponent form ("1e-1": 5 bytes with its length, not 8).
+            put_str(&mut b, &format!("{:e}", self.tolerance));
+        } else {
+            b.extend_from_slice(&self.tolerance.to_le_bytes());
+        }
         let st = self.steps;
         if st == Steps::default() {
             b.push(0);
@@ -184,7 +348,13 @@ impl CodecHeader {
     fn from_bytes(b: &[u8]) -> Result<Self, String> {
         let mut c = Cursor { b, pos: 0 };
         let model = c.take(1)?[0];
-        let tolerance = c.f64()?;
+        let tolerance = if model >= 8 {
+            let t = c.str()?;
+            t.parse::<f64>()
+                .map_err(|_| format!("a tolerance {t:?} that is not a number"))?
+        } else {
+            c.f64()?
+        };
         let steps = match c.take(1)?[0] {
             0 => Steps::default(),
             1 => Steps {
@@ -261,6 +431,40 @@ fn put_str(out: &mut Vec<u8>, s: &str) {
 }
 
 /// One decoded curve.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+///
+/// // A curve with an id, a per-curve value and a per-point value, stored
+/// // and read back.
+/// let mut meta = Metadata::new(Format::Json);
+/// meta.curve_data_names = vec!["weight".into()];
+/// let h = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec!["s".into()]);
+/// let points = helix(0);
+/// let values: Vec<f32> = (0..30).map(|i| i as f32).collect();
+/// let c = CurveIn { id: Some("a"), points: &points, point_data: &values, curve_data: &[2.5] };
+/// let mut w = CodecWriter::in_memory(&h);
+/// w.write_block(&encode_block_bytes(&[c], &h.params(), 1, 1).unwrap()).unwrap();
+/// let mut r = CodecReader::from_bytes(w.finish_bytes().unwrap()).unwrap();
+/// let d = r.read_block_bytes(0).unwrap().decode(r.path(), r.header()).unwrap().remove(0);
+/// assert_eq!((d.id.as_deref(), &d.curve_data[..]), (Some("a"), &[2.5][..]));
+/// assert_eq!(d.point_data.len(), d.points.len()); // one value per decoded point
+/// assert!(strandfit::metrics::hausdorff(&points, &d.points).unwrap() <= 0.01);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct DecodedCurve {
     /// The curve's identifier, if the input had one.
@@ -274,6 +478,36 @@ pub struct DecodedCurve {
 }
 
 /// A curve to store.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+///
+/// // Per-curve values: as many as the header names; per-point values: as
+/// // many per point. A curve that has other counts is named.
+/// let points = helix(0);
+/// let curve = |point_data| CurveIn { id: Some("a"), points: &points, point_data, curve_data: &[1.0] };
+/// let ones = vec![1.0f32; 30];
+/// assert!(encode_block_bytes(&[curve(&ones)], &header().params(), 1, 1).is_ok());
+/// let (k, why) = encode_block_bytes(&[curve(&ones), curve(&ones[1..])], &header().params(), 1, 1)
+///     .err()
+///     .unwrap();
+/// assert_eq!(k, 1);
+/// assert!(why.contains("per-point values"), "{why}");
+/// ```
 pub struct CurveIn<'a> {
     /// The curve's identifier, if any.
     pub id: Option<&'a str>,
@@ -364,6 +598,30 @@ fn inflate(stored: &[u8], len: usize) -> Result<Vec<u8>, String> {
 }
 
 /// One encoded block, ready to write.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+///
+/// let b = blocks(&header(), 1).remove(0);
+/// assert_eq!(b.curves, 2);
+/// assert_eq!(b.geometry, b.encoded.bytes);
+/// // No ids and no values: no side data at all.
+/// assert!(b.side.is_empty() && b.side_len == 0);
+/// ```
 pub struct BlockBytes {
     /// Number of curves in the block.
     pub curves: u32,
@@ -387,6 +645,30 @@ impl BlockBytes {
     /// give every curve (empty exactly where the input was) and the point
     /// count the encoder checked. Separate from encoding so that a writer
     /// can verify one block while the next is fitted.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    ///
+    /// // A block decodes to the curves and points its encoder checked.
+    /// let h = header();
+    /// for b in blocks(&h, 2) {
+    ///     assert_eq!(b.verify(&h.params()), Ok(()));
+    /// }
+    /// ```
     pub fn verify(&self, params: &CodecParams) -> Result<(), (usize, String)> {
         let back = decode_block(&self.geometry, self.curves as usize, params)
             .map_err(|e| (0, format!("the block would not decode: {e}")))?;
@@ -410,6 +692,35 @@ impl BlockBytes {
 
 /// Encodes a block of curves (geometry in parallel over curves); call
 /// [`BlockBytes::verify`] before writing it.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+///
+/// let h = header();
+/// let (p, mut q) = (helix(0), helix(1));
+/// let curves = [&p, &q].map(|c| CurveIn { id: None, points: c, point_data: &[], curve_data: &[] });
+/// let block = encode_block_bytes(&curves, &h.params(), 0, 0).unwrap();
+/// assert_eq!((block.curves, block.encoded.kinds.len()), (2, 2));
+/// // A point that is not finite: the error names the curve and the point.
+/// q[4].z = f64::INFINITY;
+/// let curves = [&p, &q].map(|c| CurveIn { id: None, points: c, point_data: &[], curve_data: &[] });
+/// let (k, why) = encode_block_bytes(&curves, &h.params(), 0, 0).err().unwrap();
+/// assert_eq!((k, why.as_str()), (1, "point 4 is not finite"));
+/// ```
 pub fn encode_block_bytes(
     curves: &[CurveIn],
     params: &CodecParams,
@@ -422,6 +733,32 @@ pub fn encode_block_bytes(
 /// [`encode_block_bytes`], the candidate elements checked in batches on
 /// `checker` where one is given (the same bytes;
 /// [`super::encode_block_on`]).
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+///
+/// // Without a checker (the CPU), the bytes of `encode_block_bytes`.
+/// let h = header();
+/// let p = helix(0);
+/// let curves = [CurveIn { id: Some("a"), points: &p, point_data: &[], curve_data: &[] }];
+/// let on = encode_block_bytes_on(&curves, &h.params(), 0, 0, None).unwrap();
+/// let plain = encode_block_bytes(&curves, &h.params(), 0, 0).unwrap();
+/// assert_eq!((on.geometry, on.side), (plain.geometry, plain.side));
+/// ```
 pub fn encode_block_bytes_on(
     curves: &[CurveIn],
     params: &CodecParams,
@@ -514,6 +851,36 @@ pub fn encode_block_bytes_on(
 
 /// Writes a version-3 container; [`finish`](Self::finish) writes the index
 /// and end record and renames the file into place.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+///
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("out.sfh");
+/// let h = header();
+/// let mut w = CodecWriter::create(&path, &h).unwrap();
+/// for b in blocks(&h, 3) {
+///     b.verify(&h.params()).unwrap();
+///     w.write_block(&b).unwrap();
+/// }
+/// w.finish().unwrap();
+/// let r = CodecReader::open(&path).unwrap();
+/// assert_eq!((r.block_count(), r.curve_count()), (3, 6));
+/// ```
 pub struct CodecWriter {
     out: Sink,
     offset: u64,
@@ -529,6 +896,22 @@ enum Sink {
 }
 
 /// The name a container in memory goes by in messages.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// use std::path::Path;
+///
+/// // Messages about a container in memory name it so.
+/// assert_eq!(CodecWriter::in_memory(&header()).target(), Path::new(IN_MEMORY));
+/// let err = CodecReader::from_bytes(b"too short".to_vec()).err().unwrap();
+/// assert_eq!(err.path, Path::new(IN_MEMORY));
+/// assert!(err.to_string().starts_with(IN_MEMORY));
+/// ```
 pub const IN_MEMORY: &str = "<container in memory>";
 
 impl Sink {
@@ -546,11 +929,57 @@ impl Sink {
 impl CodecWriter {
     /// A container written to `path` (atomically: under a temporary name
     /// until [`finish`](Self::finish)).
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    ///
+    /// // Nothing at `path` until the container is finished.
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("out.sfh");
+    /// let w = CodecWriter::create(&path, &header()).unwrap();
+    /// assert!(!path.exists());
+    /// w.finish().unwrap();
+    /// assert_eq!(CodecReader::open(&path).unwrap().curve_count(), 0);
+    /// // A folder that is not there is an error at once.
+    /// assert!(CodecWriter::create(&dir.path().join("no/out.sfh"), &header()).is_err());
+    /// ```
     pub fn create(path: &Path, header: &CodecHeader) -> Result<Self, IoError> {
         Self::start(Sink::File(AtomicFile::create(path)?), header)
     }
 
     /// A container built in memory ([`finish_bytes`](Self::finish_bytes)).
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    ///
+    /// let h = header();
+    /// let mut w = CodecWriter::in_memory(&h);
+    /// for b in blocks(&h, 2) {
+    ///     w.write_block(&b).unwrap();
+    /// }
+    /// let bytes = w.finish_bytes().unwrap();
+    /// assert_eq!(bytes[..8], strandfit::io::container::MAGIC);
+    /// assert_eq!(CodecReader::from_bytes(bytes).unwrap().curve_count(), 4);
+    /// ```
     pub fn in_memory(header: &CodecHeader) -> Self {
         Self::start(Sink::Memory(Vec::new()), header).expect("memory does not fail")
     }
@@ -588,6 +1017,20 @@ impl CodecWriter {
     }
 
     /// Where the container is written (a placeholder path in memory).
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("out.sfh");
+    /// assert_eq!(CodecWriter::create(&path, &header()).unwrap().target(), path);
+    /// assert_eq!(CodecWriter::in_memory(&header()).target(), std::path::Path::new(IN_MEMORY));
+    /// ```
     pub fn target(&self) -> &Path {
         match &self.out {
             Sink::File(f) => f.target(),
@@ -596,12 +1039,71 @@ impl CodecWriter {
     }
 
     /// Appends an encoded block.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    ///
+    /// let h = header();
+    /// let mut w = CodecWriter::in_memory(&h);
+    /// for (k, b) in blocks(&h, 3).iter().enumerate() {
+    ///     w.write_block(b).unwrap();
+    ///     assert_eq!(w.curves(), 2 * (k as u64 + 1));
+    /// }
+    /// let r = CodecReader::from_bytes(w.finish_bytes().unwrap()).unwrap();
+    /// assert_eq!(r.block_span(2), (4, 2));
+    /// ```
     pub fn write_block(&mut self, b: &BlockBytes) -> Result<(), IoError> {
         self.write_parts(b.curves, &b.geometry, &b.side, b.side_len)
     }
 
     /// Appends a block read from another container with the same header,
     /// as it was (no decoding, no re-encoding): its bytes are the same.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// // Every block copied into a container of the same header: the same bytes.
+    /// let bytes = container(3);
+    /// let mut r = CodecReader::from_bytes(bytes.clone()).unwrap();
+    /// let mut w = CodecWriter::in_memory(r.header());
+    /// for k in 0..r.block_count() {
+    ///     w.copy_block(&r.read_block_bytes(k).unwrap()).unwrap();
+    /// }
+    /// assert_eq!(w.finish_bytes().unwrap(), bytes);
+    /// ```
     pub fn copy_block(&mut self, b: &RawBlock) -> Result<(), IoError> {
         self.write_parts(b.curves, &b.geometry, &b.side, b.side_len)
     }
@@ -635,11 +1137,63 @@ impl CodecWriter {
     }
 
     /// Curves written so far.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    ///
+    /// let h = header();
+    /// let mut w = CodecWriter::in_memory(&h);
+    /// assert_eq!(w.curves(), 0);
+    /// for b in blocks(&h, 2) {
+    ///     w.write_block(&b).unwrap();
+    /// }
+    /// assert_eq!(w.curves(), 4);
+    /// ```
     pub fn curves(&self) -> u64 {
         self.index.iter().map(|&(_, n)| n as u64).sum()
     }
 
     /// Completes and commits the file; returns its size in bytes.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("out.sfh");
+    /// let h = header();
+    /// let mut w = CodecWriter::create(&path, &h).unwrap();
+    /// w.write_block(&blocks(&h, 1)[0]).unwrap();
+    /// let size = w.finish().unwrap();
+    /// assert_eq!(size, std::fs::metadata(&path).unwrap().len());
+    /// ```
     pub fn finish(self) -> Result<u64, IoError> {
         let (sink, size) = self.complete()?;
         if let Sink::File(f) = sink {
@@ -651,6 +1205,40 @@ impl CodecWriter {
     /// Completes a container built [`in_memory`](Self::in_memory) and
     /// returns its bytes (a file-backed writer is committed, and its bytes
     /// read back).
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// // From a file-backed writer: the file is written, and its bytes are
+    /// // those of the same container built in memory.
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("out.sfh");
+    /// let h = header();
+    /// let mut w = CodecWriter::create(&path, &h).unwrap();
+    /// w.write_block(&blocks(&h, 1)[0]).unwrap();
+    /// let bytes = w.finish_bytes().unwrap();
+    /// assert_eq!(bytes, std::fs::read(&path).unwrap());
+    /// assert_eq!(bytes, container(1));
+    /// ```
     pub fn finish_bytes(self) -> Result<Vec<u8>, IoError> {
         match self.complete()? {
             (Sink::Memory(v), _) => Ok(v),
@@ -682,6 +1270,43 @@ impl CodecWriter {
 
 /// Reads a version-3 container: the header and index at open, any block on
 /// demand.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+/// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+/// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+/// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+/// #     w.finish_bytes().unwrap()
+/// # }
+///
+/// // Open, then decode block by block.
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("in.sfh");
+/// std::fs::write(&path, container(3)).unwrap();
+/// let mut r = CodecReader::open(&path).unwrap();
+/// let mut curves = Vec::new();
+/// for k in 0..r.block_count() {
+///     curves.extend(r.read_block_bytes(k).unwrap().decode(r.path(), r.header()).unwrap());
+/// }
+/// assert_eq!(curves.len(), 6);
+/// for (k, c) in curves.iter().enumerate() {
+///     assert!(strandfit::metrics::hausdorff(&helix(k), &c.points).unwrap() <= 0.01);
+/// }
+/// ```
 pub struct CodecReader {
     path: PathBuf,
     file: Box<dyn ReadSeek>,
@@ -719,12 +1344,57 @@ fn read_varint(file: &mut impl Read) -> std::io::Result<(u64, Vec<u8>)> {
 }
 
 /// What a [`CodecReader`] reads from: a file or bytes in memory.
+///
+/// ```
+/// use std::io::{Read, Seek, SeekFrom};
+/// use strandfit::codec::container::ReadSeek;
+///
+/// // Anything that reads and seeks (and can move between threads).
+/// let mut source: Box<dyn ReadSeek> = Box::new(std::io::Cursor::new(vec![1u8, 2, 3]));
+/// source.seek(SeekFrom::End(-1)).unwrap();
+/// let mut last = [0u8];
+/// source.read_exact(&mut last).unwrap();
+/// assert_eq!(last, [3]);
+/// ```
 pub trait ReadSeek: Read + Seek + Send {}
 impl<T: Read + Seek + Send> ReadSeek for T {}
 
 impl CodecReader {
     /// Opens a version-3 container (other versions are an error here; the
     /// caller's dispatch sends version 1 elsewhere).
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("in.sfh");
+    /// std::fs::write(&path, container(2)).unwrap();
+    /// assert_eq!(CodecReader::open(&path).unwrap().curve_count(), 4);
+    /// // Other files are errors that say why.
+    /// std::fs::write(&path, b"{\"curves\": []} and some more bytes").unwrap();
+    /// let err = CodecReader::open(&path).err().unwrap();
+    /// assert!(err.to_string().contains("wrong magic number"), "{err}");
+    /// assert!(CodecReader::open(&dir.path().join("missing.sfh")).is_err());
+    /// ```
     pub fn open(path: &Path) -> Result<Self, IoError> {
         let f = File::open(path).map_err(|e| IoError::os(path, "cannot read", e))?;
         let size = f
@@ -736,6 +1406,39 @@ impl CodecReader {
 
     /// Opens a version-3 container held in memory; messages name it
     /// [`IN_MEMORY`].
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// let bytes = container(1);
+    /// assert_eq!(CodecReader::from_bytes(bytes.clone()).unwrap().curve_count(), 2);
+    /// // A damaged header, or a missing end, is found at opening.
+    /// let mut bad = bytes.clone();
+    /// bad[12] ^= 1;
+    /// let err = CodecReader::from_bytes(bad).err().unwrap();
+    /// assert!(err.to_string().contains("checksum mismatch"), "{err}");
+    /// let err = CodecReader::from_bytes(bytes[..bytes.len() - 1].to_vec()).err().unwrap();
+    /// assert!(err.to_string().contains("no end record"), "{err}");
+    /// ```
     pub fn from_bytes(bytes: Vec<u8>) -> Result<Self, IoError> {
         let size = bytes.len() as u64;
         Self::from_source(
@@ -874,43 +1577,272 @@ impl CodecReader {
     }
 
     /// The container's header.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// let r = CodecReader::from_bytes(container(1)).unwrap();
+    /// assert_eq!(r.header(), &header());
+    /// assert_eq!(r.header().tolerance, 0.01);
+    /// ```
     pub fn header(&self) -> &CodecHeader {
         &self.header
     }
 
     /// The file read (a placeholder for bytes in memory).
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("in.sfh");
+    /// std::fs::write(&path, container(1)).unwrap();
+    /// assert_eq!(CodecReader::open(&path).unwrap().path(), path);
+    /// let r = CodecReader::from_bytes(container(1)).unwrap();
+    /// assert_eq!(r.path(), std::path::Path::new(IN_MEMORY));
+    /// ```
     pub fn path(&self) -> &Path {
         &self.path
     }
 
     /// Number of curves in the container.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// assert_eq!(CodecReader::from_bytes(container(3)).unwrap().curve_count(), 6);
+    /// assert_eq!(CodecReader::from_bytes(container(0)).unwrap().curve_count(), 0);
+    /// ```
     pub fn curve_count(&self) -> u64 {
         self.curves
     }
 
     /// Number of blocks in the container.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// assert_eq!(CodecReader::from_bytes(container(3)).unwrap().block_count(), 3);
+    /// ```
     pub fn block_count(&self) -> usize {
         self.blocks.len()
     }
 
     /// Bytes read from the container so far: its header, end record and
     /// index at opening, then each block read.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// // Opening reads the ends of the container; each block is read on demand.
+    /// let mut r = CodecReader::from_bytes(container(3)).unwrap();
+    /// let mut read = r.bytes_read();
+    /// for k in 0..3 {
+    ///     assert!(read < r.size());
+    ///     r.read_block_bytes(k).unwrap();
+    ///     assert!(r.bytes_read() > read);
+    ///     read = r.bytes_read();
+    /// }
+    /// assert_eq!(r.bytes_read(), r.size());
+    /// ```
     pub fn bytes_read(&self) -> u64 {
         self.bytes_read
     }
 
     /// Size of the container in bytes.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// let bytes = container(2);
+    /// assert_eq!(CodecReader::from_bytes(bytes.clone()).unwrap().size(), bytes.len() as u64);
+    /// ```
     pub fn size(&self) -> u64 {
         self.size
     }
 
     /// First curve and curve count of block `k`.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// let r = CodecReader::from_bytes(container(3)).unwrap();
+    /// let spans: Vec<_> = (0..r.block_count()).map(|k| r.block_span(k)).collect();
+    /// assert_eq!(spans, [(0, 2), (2, 2), (4, 2)]);
+    /// ```
     pub fn block_span(&self, k: usize) -> (u64, u64) {
         (self.blocks[k].3, self.blocks[k].2 as u64)
     }
 
     /// The raw bytes of block `k` (geometry, side), checked against their
     /// CRC; cheap enough to call from one thread while others decode.
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// let mut bytes = container(1);
+    /// let b = CodecReader::from_bytes(bytes.clone()).unwrap().read_block_bytes(0).unwrap();
+    /// assert_eq!((b.index, b.first, b.curves), (0, 0, 2));
+    /// // A damaged block (the byte 20 from the end is in the block, before the
+    /// // index and the end record) opens, but does not read.
+    /// let at = bytes.len() - 20;
+    /// bytes[at] ^= 1;
+    /// let mut r = CodecReader::from_bytes(bytes).unwrap();
+    /// let err = r.read_block_bytes(0).err().unwrap();
+    /// assert!(err.to_string().contains("block checksum mismatch"), "{err}");
+    /// ```
     pub fn read_block_bytes(&mut self, k: usize) -> Result<RawBlock, IoError> {
         let (off, len, curves, first) = self.blocks[k];
         let path = self.path.clone();
@@ -960,6 +1892,33 @@ impl CodecReader {
 }
 
 /// A block's checked bytes, decoded by [`RawBlock::decode`].
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+/// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+/// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+/// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+/// #     w.finish_bytes().unwrap()
+/// # }
+///
+/// let mut r = CodecReader::from_bytes(container(3)).unwrap();
+/// let b = r.read_block_bytes(2).unwrap();
+/// assert_eq!((b.index, b.first, b.curves), (2, 4, 2));
+/// ```
 pub struct RawBlock {
     /// Index of the block in the container.
     pub index: usize,
@@ -974,6 +1933,40 @@ pub struct RawBlock {
 
 impl RawBlock {
     /// The block's curves (pure computation: run blocks in parallel).
+    ///
+    /// ```
+    /// # use strandfit::codec::container::*;
+    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::DVec3;
+    /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+    /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+    /// # }
+    /// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+    /// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+    /// # }
+    /// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+    /// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+    /// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+    /// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+    /// #     }).collect()
+    /// # }
+    /// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+    /// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+    /// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+    /// #     w.finish_bytes().unwrap()
+    /// # }
+    ///
+    /// let mut r = CodecReader::from_bytes(container(2)).unwrap();
+    /// let b = r.read_block_bytes(1).unwrap();
+    /// let curves = b.decode(r.path(), r.header()).unwrap();
+    /// assert_eq!(curves.len(), 2);
+    /// // Curves 2 and 3 of the container, within the tolerance.
+    /// for (k, c) in curves.iter().enumerate() {
+    ///     let h = strandfit::metrics::hausdorff(&helix(2 + k), &c.points).unwrap();
+    ///     assert!(h <= 0.01, "{h}");
+    ///     assert!(c.id.is_none() && c.point_data.is_empty() && c.curve_data.is_empty());
+    /// }
+    /// ```
     pub fn decode(&self, path: &Path, header: &CodecHeader) -> Result<Vec<DecodedCurve>, IoError> {
         let err = |curve: u64, why: String| {
             IoError::new(path, why)
@@ -1076,6 +2069,37 @@ impl RawBlock {
 }
 
 /// The version of the container at `path` (its bytes 8–9), if it is one.
+///
+/// ```
+/// # use strandfit::codec::container::*;
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
+/// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
+/// # }
+/// # fn helix(k: usize) -> Vec<DVec3> { // 30 points, raised by k
+/// #     (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()
+/// # }
+/// # fn blocks(h: &CodecHeader, n: usize) -> Vec<BlockBytes> { // block b: helices 2b and 2b + 1
+/// #     (0..n).map(|b| [helix(2 * b), helix(2 * b + 1)]).map(|[p, q]| {
+/// #         let c = [&p, &q].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
+/// #         encode_block_bytes(&c, &h.params(), 0, 0).unwrap()
+/// #     }).collect()
+/// # }
+/// # fn container(n: usize) -> Vec<u8> { // n blocks, in memory
+/// #     let (h, mut w) = (header(), CodecWriter::in_memory(&header()));
+/// #     blocks(&h, n).iter().for_each(|b| w.write_block(b).unwrap());
+/// #     w.finish_bytes().unwrap()
+/// # }
+///
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("in.sfh");
+/// std::fs::write(&path, container(1)).unwrap();
+/// assert_eq!(container_version(&path), Some(VERSION));
+/// std::fs::write(&path, "not a container").unwrap();
+/// assert_eq!(container_version(&path), None);
+/// assert_eq!(container_version(&dir.path().join("missing.sfh")), None);
+/// ```
 pub fn container_version(path: &Path) -> Option<u16> {
     let mut b = [0u8; 10];
     File::open(path)

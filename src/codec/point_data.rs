@@ -7,6 +7,28 @@
 //! polyline. The locations are found in one forward walk, since both
 //! polylines run the same way within the tolerance of each other; the cost
 //! is linear in the points of both.
+//!
+//! ```
+//! use std::path::Path;
+//! use strandfit::codec::{container::{CodecHeader, CodecReader}, stream::{compress_to_bytes, read_range}};
+//! use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+//! use strandfit::DVec3;
+//!
+//! // A helix whose one per-point value is its height z, compressed to 0.01:
+//! // each decoded point's value is the height there, to the tolerance.
+//! let points: Vec<DVec3> = (0..60).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s)).collect();
+//! let point_data: Vec<f32> = points.iter().map(|p| p.z as f32).collect();
+//! let mut meta = Metadata::new(Format::Json);
+//! meta.point_data_names = vec!["z".into()];
+//! let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec!["z".into()]);
+//! let curve = Curve { point_data, ..Curve::from_points(points) };
+//! let bytes = compress_to_bytes(&mut VecReader::new(meta, vec![curve]), Path::new("in.json"), &header, None).unwrap();
+//! let back = read_range(&mut CodecReader::from_bytes(bytes).unwrap(), 0, 1).unwrap().remove(0);
+//! assert_eq!(back.point_data.len(), back.points.len());
+//! for (p, &z) in back.points.iter().zip(&back.point_data) {
+//!     assert!((p.z - z as f64).abs() <= 0.011, "{} vs {z}", p.z);
+//! }
+//! ```
 
 use glam::DVec3;
 
@@ -14,6 +36,24 @@ use glam::DVec3;
 /// interpolated from `values` on the polyline `input` at the nearest
 /// location found walking forward. An empty `input` gives no values; a
 /// one-point `input` gives its values everywhere.
+///
+/// ```
+/// use strandfit::codec::point_data::carry;
+/// use strandfit::DVec3;
+///
+/// // A line whose value is x: other points near it get their own x.
+/// let input: Vec<DVec3> = (0..5).map(|k| DVec3::new(k as f64, 0.0, 0.0)).collect();
+/// let values: Vec<f32> = (0..5).map(|k| k as f32).collect();
+/// let output = [
+///     DVec3::new(0.5, 0.01, 0.0),
+///     DVec3::new(2.25, -0.01, 0.0),
+///     DVec3::new(4.0, 0.0, 0.01),
+/// ];
+/// assert_eq!(carry(&input, &values, 1, &output), vec![0.5, 2.25, 4.0]);
+/// // No input, no values; a one-point input's values everywhere.
+/// assert!(carry(&[], &[], 1, &output).is_empty());
+/// assert_eq!(carry(&input[..1], &[7.0], 1, &output), vec![7.0; 3]);
+/// ```
 pub fn carry(input: &[DVec3], values: &[f32], width: usize, output: &[DVec3]) -> Vec<f32> {
     debug_assert_eq!(values.len(), input.len() * width);
     let mut out = Vec::with_capacity(output.len() * width);

@@ -16,6 +16,46 @@ use super::container::{CodecHeader, CodecReader, CodecWriter};
 use crate::io::IoError;
 
 /// One output of [`split`] or [`merge`].
+///
+/// ```
+/// use strandfit::codec::shards::merge;
+/// # use std::path::Path;
+/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecWriter, CurveIn};
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # /// A container at `path`, coded to `tolerance`, with a block of `n` curves
+/// # /// per entry `n` of `blocks` (three short helices, the rest empty: quick to code).
+/// # fn write(path: &Path, tolerance: f64, blocks: &[usize]) -> u64 {
+/// #     let meta = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);
+/// #     let header = CodecHeader::new(tolerance, meta, vec![]);
+/// #     let helix: Vec<DVec3> = (0..20)
+/// #         .map(|k| DVec3::new((0.3 * k as f64).cos(), (0.3 * k as f64).sin(), 0.03 * k as f64))
+/// #         .collect();
+/// #     let mut w = CodecWriter::create(path, &header).unwrap();
+/// #     for &n in blocks {
+/// #         let curves: Vec<CurveIn> = (0..n)
+/// #             .map(|k| CurveIn {
+/// #                 id: None,
+/// #                 points: if k < 3 { &helix[..] } else { &[] },
+/// #                 point_data: &[],
+/// #                 curve_data: &[],
+/// #             })
+/// #             .collect();
+/// #         w.write_block(&encode_block_bytes(&curves, &header.params(), 0, 0).unwrap()).unwrap();
+/// #     }
+/// #     w.finish().unwrap()
+/// # }
+///
+/// // Three containers of 2, 3 and 4 curves, merged: where each one's
+/// // curves went, and its size.
+/// let dir = tempfile::tempdir().unwrap();
+/// let inputs: Vec<_> = (0..3).map(|k| dir.path().join(format!("in{k}.sfh"))).collect();
+/// let sizes: Vec<u64> = inputs.iter().zip([2, 3, 4]).map(|(p, n)| write(p, 0.01, &[n])).collect();
+/// let parts = merge(&inputs, &dir.path().join("all.sfh")).unwrap();
+/// assert_eq!(parts.iter().map(|s| (s.first, s.curves, s.blocks)).collect::<Vec<_>>(),
+///            [(0, 2, 1), (2, 3, 1), (5, 4, 1)]);
+/// assert_eq!(parts.iter().map(|s| s.bytes).collect::<Vec<_>>(), sizes);
+/// ```
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct Shard {
     /// The shard's file.
@@ -34,6 +74,15 @@ pub struct Shard {
 }
 
 /// The name of shard `k` of `input` in `dir`: `STEM-00000.sfh`, …
+///
+/// ```
+/// use std::path::Path;
+/// use strandfit::codec::shards::shard_path;
+///
+/// // The input's stem, then the shard's number in five digits.
+/// let p = shard_path(Path::new("/data/sub-01.sfh"), Path::new("/out"), 12);
+/// assert_eq!(p, Path::new("/out/sub-01-00012.sfh"));
+/// ```
 pub fn shard_path(input: &Path, dir: &Path, k: usize) -> PathBuf {
     let stem = input
         .file_stem()
@@ -48,6 +97,56 @@ pub fn shard_path(input: &Path, dir: &Path, k: usize) -> PathBuf {
 /// shards of an earlier, longer split of the same input in `dir` are
 /// removed. On an error the shards already written are removed: nothing
 /// is left half done.
+///
+/// ```
+/// use strandfit::codec::container::BLOCK_CURVES;
+/// use strandfit::codec::shards::{shard_path, split};
+/// # use std::path::Path;
+/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecWriter, CurveIn};
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # /// A container at `path`, coded to `tolerance`, with a block of `n` curves
+/// # /// per entry `n` of `blocks` (three short helices, the rest empty: quick to code).
+/// # fn write(path: &Path, tolerance: f64, blocks: &[usize]) -> u64 {
+/// #     let meta = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);
+/// #     let header = CodecHeader::new(tolerance, meta, vec![]);
+/// #     let helix: Vec<DVec3> = (0..20)
+/// #         .map(|k| DVec3::new((0.3 * k as f64).cos(), (0.3 * k as f64).sin(), 0.03 * k as f64))
+/// #         .collect();
+/// #     let mut w = CodecWriter::create(path, &header).unwrap();
+/// #     for &n in blocks {
+/// #         let curves: Vec<CurveIn> = (0..n)
+/// #             .map(|k| CurveIn {
+/// #                 id: None,
+/// #                 points: if k < 3 { &helix[..] } else { &[] },
+/// #                 point_data: &[],
+/// #                 curve_data: &[],
+/// #             })
+/// #             .collect();
+/// #         w.write_block(&encode_block_bytes(&curves, &header.params(), 0, 0).unwrap()).unwrap();
+/// #     }
+/// #     w.finish().unwrap()
+/// # }
+///
+/// // Blocks of 4,096, 5 and 6 curves. A shard of at most 1 curve is rounded
+/// // up to one whole block; one of 5,000 curves holds one full block too.
+/// let dir = tempfile::tempdir().unwrap();
+/// let input = dir.path().join("in.sfh");
+/// write(&input, 0.01, &[BLOCK_CURVES, 5, 6]);
+/// let parts = dir.path().join("parts");
+/// let shards = split(&input, &parts, 1).unwrap();
+/// assert_eq!(shards.iter().map(|s| (s.first, s.curves)).collect::<Vec<_>>(),
+///            [(0, 4096), (4096, 11)]);
+/// assert_eq!(shards[1].blocks, 2);
+/// assert_eq!(shards[0].path, shard_path(&input, &parts, 0));
+/// assert_eq!(split(&input, &parts, 5000).unwrap().len(), 2);
+/// // No shard can hold no curves; a file that is no container is refused
+/// // before anything is made.
+/// assert!(split(&input, &parts, 0).is_err());
+/// std::fs::write(dir.path().join("bad.sfh"), b"not a container").unwrap();
+/// assert!(split(&dir.path().join("bad.sfh"), &dir.path().join("none"), 10).is_err());
+/// assert!(!dir.path().join("none").exists());
+/// ```
 pub fn split(input: &Path, dir: &Path, curves_per_shard: u64) -> Result<Vec<Shard>, IoError> {
     if curves_per_shard == 0 {
         return Err(IoError::new(input, "curves per shard must be at least 1"));
@@ -152,10 +251,57 @@ fn header_difference(a: &CodecHeader, b: &CodecHeader) -> Option<&'static str> {
 
 /// Joins the containers `inputs`, in order, into one at `output`
 /// (atomically), block by block: the curves in order, each as it was. They
-/// must have the same header (tolerance, model, steps, source metadata),
-/// as the shards of one [`split`] have; otherwise the error names the
+/// must have the same header (tolerance, model, steps, per-point value
+/// names, source metadata), as the shards of one [`split`] have; otherwise the error names the
 /// first input that differs and how. Returns where each input's curves
 /// went.
+///
+/// ```
+/// use strandfit::codec::shards::{merge, split};
+/// # use std::path::Path;
+/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecWriter, CurveIn};
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # /// A container at `path`, coded to `tolerance`, with a block of `n` curves
+/// # /// per entry `n` of `blocks` (three short helices, the rest empty: quick to code).
+/// # fn write(path: &Path, tolerance: f64, blocks: &[usize]) -> u64 {
+/// #     let meta = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);
+/// #     let header = CodecHeader::new(tolerance, meta, vec![]);
+/// #     let helix: Vec<DVec3> = (0..20)
+/// #         .map(|k| DVec3::new((0.3 * k as f64).cos(), (0.3 * k as f64).sin(), 0.03 * k as f64))
+/// #         .collect();
+/// #     let mut w = CodecWriter::create(path, &header).unwrap();
+/// #     for &n in blocks {
+/// #         let curves: Vec<CurveIn> = (0..n)
+/// #             .map(|k| CurveIn {
+/// #                 id: None,
+/// #                 points: if k < 3 { &helix[..] } else { &[] },
+/// #                 point_data: &[],
+/// #                 curve_data: &[],
+/// #             })
+/// #             .collect();
+/// #         w.write_block(&encode_block_bytes(&curves, &header.params(), 0, 0).unwrap()).unwrap();
+/// #     }
+/// #     w.finish().unwrap()
+/// # }
+///
+/// // Split, then merge: the input back, byte for byte.
+/// let dir = tempfile::tempdir().unwrap();
+/// let input = dir.path().join("in.sfh");
+/// write(&input, 0.01, &[strandfit::codec::container::BLOCK_CURVES, 7]);
+/// let shards = split(&input, &dir.path().join("parts"), 1).unwrap();
+/// assert_eq!(shards.len(), 2);
+/// let paths: Vec<_> = shards.iter().map(|s| s.path.clone()).collect();
+/// let joined = dir.path().join("joined.sfh");
+/// merge(&paths, &joined).unwrap();
+/// assert_eq!(std::fs::read(&joined).unwrap(), std::fs::read(&input).unwrap());
+/// // Containers of another tolerance are not merged, nor is nothing.
+/// let other = dir.path().join("other.sfh");
+/// write(&other, 0.02, &[3]);
+/// let err = merge(&[input.clone(), other], &joined).unwrap_err();
+/// assert!(err.to_string().contains("tolerance"), "{err}");
+/// assert!(merge(&[], &joined).is_err());
+/// ```
 pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Vec<Shard>, IoError> {
     let Some(first) = inputs.first() else {
         return Err(IoError::new(

@@ -4,6 +4,43 @@
 //! [`CurveWriter`], decoding several blocks at once. Memory is bounded by a
 //! few blocks whatever the file's size; neither prints (progress goes to a
 //! callback).
+//!
+//! ```
+//! use strandfit::codec::container::{CodecHeader, CodecReader};
+//! use strandfit::codec::stream::{compress_stream, decompress_stream, output_curve};
+//! use strandfit::io::{container::SourceMeta, create_writer, open_reader, read_all, Curve, Format, Metadata};
+//! use strandfit::DVec3;
+//!
+//! // A .tck file of 50 helices, compressed to 0.01 and back to .tck.
+//! let dir = tempfile::tempdir().unwrap();
+//! let [input, packed, output] = ["in.tck", "in.sfh", "out.tck"].map(|f| dir.path().join(f));
+//! let mut w = create_writer(&input, None, &Metadata::new(Format::Tck)).unwrap();
+//! for k in 0..50 {
+//!     let s = (0..40).map(|i| 0.2 * i as f64);
+//!     w.write_curve(&Curve::from_points(s.map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()))
+//!         .unwrap();
+//! }
+//! w.finish().unwrap();
+//!
+//! let mut reader = open_reader(&input, None).unwrap();
+//! let source = SourceMeta::from_metadata(reader.metadata(), Some(&input));
+//! let header = CodecHeader::new(0.01, source, vec![]);
+//! let summary = compress_stream(&mut *reader, &input, &packed, &header, None, &mut |_| {}).unwrap();
+//! assert_eq!(summary.curves, 50);
+//! assert!(summary.bytes * 5 < std::fs::metadata(&input).unwrap().len());
+//!
+//! let mut container = CodecReader::open(&packed).unwrap();
+//! let mut w = create_writer(&output, None, &container.header().source.to_metadata()).unwrap();
+//! let as_decoded = |c| output_curve(c, None, None, 0);
+//! assert_eq!(decompress_stream(&mut container, &mut *w, &as_decoded, &mut |_| {}).unwrap(), 50);
+//! w.finish().unwrap();
+//! // Every curve within the tolerance of the one read.
+//! let ((_, before), (_, after)) = (read_all(&input, None).unwrap(), read_all(&output, None).unwrap());
+//! assert_eq!(after.len(), 50);
+//! for (a, b) in before.iter().zip(&after) {
+//!     assert!(strandfit::metrics::hausdorff(&a.points, &b.points).unwrap() <= 0.01);
+//! }
+//! ```
 
 use std::path::Path;
 
@@ -18,6 +55,32 @@ use super::container::{
 use crate::io::{Curve, CurveReader, CurveWriter, IoError};
 
 /// What [`compress_stream`] did.
+///
+/// ```
+/// use std::path::Path;
+/// use strandfit::codec::container::{CodecHeader, CodecWriter};
+/// use strandfit::codec::stream::compress_blocks;
+/// use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+/// use strandfit::DVec3;
+///
+/// // An empty curve and a helix: one of each kind counted, every point too.
+/// let helix: Vec<DVec3> = (0..40)
+///     .map(|k| 0.2 * k as f64)
+///     .map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s))
+///     .collect();
+/// let meta = Metadata::new(Format::Json);
+/// let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec![]);
+/// let mut reader = VecReader::new(meta, vec![Curve::default(), Curve::from_points(helix)]);
+/// let mut writer = CodecWriter::in_memory(&header);
+/// let summary =
+///     compress_blocks(&mut reader, Path::new("in.json"), &mut writer, &header, None, &mut |_| {})
+///         .unwrap();
+/// assert_eq!((summary.curves, summary.points), (2, 40));
+/// assert_eq!(summary.kinds[0], 1); // the empty curve
+/// assert_eq!(summary.kinds.iter().sum::<u64>(), 2);
+/// assert!(summary.output_points > 0);
+/// assert_eq!(summary.batch_checked, 0); // no backend: each curve checked its own
+/// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CompressSummary {
     /// Curves compressed.
@@ -45,6 +108,40 @@ pub struct CompressSummary {
 /// [`compress_blocks`] into memory: the bytes of a version-3 container
 /// holding every curve of `reader` (`input` names it in errors; `checker`
 /// as in [`compress_stream`]).
+///
+/// ```
+/// use std::path::Path;
+/// use strandfit::codec::container::{CodecHeader, CodecReader};
+/// use strandfit::codec::stream::{compress_to_bytes, read_range};
+/// use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+/// use strandfit::DVec3;
+///
+/// // Three named helices, and a header for a tolerance of 0.01.
+/// let helix = |r: f64| -> Vec<DVec3> {
+///     (0..40).map(|k| 0.2 * k as f64).map(|s| DVec3::new(r * s.cos(), r * s.sin(), 0.1 * s)).collect()
+/// };
+/// let curves: Vec<Curve> = (1..=3)
+///     .map(|k| Curve { id: Some(format!("c{k}")), ..Curve::from_points(helix(k as f64)) })
+///     .collect();
+/// let meta = Metadata::new(Format::Json);
+/// let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec![]);
+/// let mut reader = VecReader::new(meta.clone(), curves.clone());
+/// let bytes = compress_to_bytes(&mut reader, Path::new("in.json"), &header, None).unwrap();
+/// // Every curve back, named, within the tolerance.
+/// let mut container = CodecReader::from_bytes(bytes).unwrap();
+/// let back = read_range(&mut container, 0, 3).unwrap();
+/// assert_eq!(back.len(), 3);
+/// for (c, b) in curves.iter().zip(&back) {
+///     assert_eq!(b.id, c.id);
+///     assert!(strandfit::metrics::hausdorff(&c.points, &b.points).unwrap() <= 0.01);
+/// }
+/// // A bad point is an error naming the input and the curve.
+/// let mut bad = curves;
+/// bad[1].points[5].y = f64::NAN;
+/// let err = compress_to_bytes(&mut VecReader::new(meta, bad), Path::new("in.json"), &header, None)
+///     .unwrap_err();
+/// assert_eq!((err.path.as_path(), err.curve), (Path::new("in.json"), Some(1)));
+/// ```
 pub fn compress_to_bytes(
     reader: &mut dyn CurveReader,
     input: &Path,
@@ -62,6 +159,40 @@ pub fn compress_to_bytes(
 /// curves in parallel); the bytes are the same either way. `progress` gets
 /// the number of curves done after each block. Errors name the input file
 /// and curve for bad input, the output for write failures.
+///
+/// ```
+/// use std::path::Path;
+/// use strandfit::codec::container::{CodecHeader, CodecReader};
+/// use strandfit::codec::stream::compress_stream;
+/// use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+/// use strandfit::DVec3;
+///
+/// // Three named helices, and a header for a tolerance of 0.01.
+/// let helix = |r: f64| -> Vec<DVec3> {
+///     (0..40).map(|k| 0.2 * k as f64).map(|s| DVec3::new(r * s.cos(), r * s.sin(), 0.1 * s)).collect()
+/// };
+/// let curves: Vec<Curve> = (1..=3)
+///     .map(|k| Curve { id: Some(format!("c{k}")), ..Curve::from_points(helix(k as f64)) })
+///     .collect();
+/// let meta = Metadata::new(Format::Json);
+/// let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec![]);
+/// let dir = tempfile::tempdir().unwrap();
+/// let out = dir.path().join("helices.sfh");
+/// let mut done = Vec::new();
+/// let summary = compress_stream(
+///     &mut VecReader::new(meta, curves),
+///     Path::new("helices.json"),
+///     &out,
+///     &header,
+///     None,
+///     &mut |n| done.push(n),
+/// )
+/// .unwrap();
+/// assert_eq!((summary.curves, summary.points), (3, 120));
+/// assert_eq!(summary.bytes, std::fs::metadata(&out).unwrap().len());
+/// assert_eq!(done.last(), Some(&3));
+/// assert_eq!(CodecReader::open(&out).unwrap().curve_count(), 3);
+/// ```
 pub fn compress_stream(
     reader: &mut dyn CurveReader,
     input: &Path,
@@ -79,6 +210,39 @@ pub fn compress_stream(
 /// The blocks of [`compress_stream`], written to `writer` (a file or
 /// memory, [`CodecWriter::in_memory`]) made with the same `header`; the
 /// caller finishes it. `summary.bytes` is left 0.
+///
+/// ```
+/// use std::path::Path;
+/// use strandfit::codec::container::{CodecHeader, CodecReader, CodecWriter};
+/// use strandfit::codec::stream::compress_blocks;
+/// use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+/// use strandfit::DVec3;
+///
+/// // Three named helices, and a header for a tolerance of 0.01.
+/// let helix = |r: f64| -> Vec<DVec3> {
+///     (0..40).map(|k| 0.2 * k as f64).map(|s| DVec3::new(r * s.cos(), r * s.sin(), 0.1 * s)).collect()
+/// };
+/// let curves: Vec<Curve> = (1..=3)
+///     .map(|k| Curve { id: Some(format!("c{k}")), ..Curve::from_points(helix(k as f64)) })
+///     .collect();
+/// let meta = Metadata::new(Format::Json);
+/// let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec![]);
+/// let mut writer = CodecWriter::in_memory(&header);
+/// let summary = compress_blocks(
+///     &mut VecReader::new(meta, curves),
+///     Path::new("helices.json"),
+///     &mut writer,
+///     &header,
+///     None,
+///     &mut |_| {},
+/// )
+/// .unwrap();
+/// // The curves are in the writer, which the caller finishes.
+/// assert_eq!((summary.curves, summary.bytes), (3, 0));
+/// assert_eq!(writer.curves(), 3);
+/// let bytes = writer.finish_bytes().unwrap();
+/// assert_eq!(CodecReader::from_bytes(bytes).unwrap().curve_count(), 3);
+/// ```
 pub fn compress_blocks(
     reader: &mut dyn CurveReader,
     input: &Path,
@@ -171,6 +335,49 @@ const BLOCKS_AT_ONCE: usize = 8;
 /// Writes every curve of the container to `writer` (which the caller
 /// finishes), `map` turning each decoded curve into the curve written
 /// (e.g. resampling it). Returns the number of curves written.
+///
+/// ```
+/// use strandfit::codec::stream::{decompress_stream, output_curve};
+/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # /// A container in memory of three blocks, one helix each, named c0, c1, c2.
+/// # fn three_blocks() -> CodecReader {
+/// #     let meta = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);
+/// #     let header = CodecHeader::new(0.01, meta, vec![]);
+/// #     let mut w = CodecWriter::in_memory(&header);
+/// #     for k in 0..3 {
+/// #         let points: Vec<DVec3> = (0..30)
+/// #             .map(|i| DVec3::new((0.2 * i as f64).cos(), (0.2 * i as f64).sin(), 0.02 * i as f64 + k as f64))
+/// #             .collect();
+/// #         let id = format!("c{k}");
+/// #         let c = CurveIn { id: Some(&id), points: &points, point_data: &[], curve_data: &[] };
+/// #         w.write_block(&encode_block_bytes(&[c], &header.params(), 0, 0).unwrap()).unwrap();
+/// #     }
+/// #     CodecReader::from_bytes(w.finish_bytes().unwrap()).unwrap()
+/// # }
+/// # use strandfit::io::{Curve, CurveWriter, IoError};
+/// # /// A writer that keeps the curves.
+/// # struct Collect(Vec<Curve>);
+/// # impl CurveWriter for Collect {
+/// #     fn write_curve(&mut self, c: &Curve) -> Result<(), IoError> {
+/// #         self.0.push(c.clone());
+/// #         Ok(())
+/// #     }
+/// #     fn finish(self: Box<Self>) -> Result<(), IoError> {
+/// #         Ok(())
+/// #     }
+/// # }
+///
+/// // Every curve, resampled to 10 points on the way out.
+/// let mut container = three_blocks();
+/// let mut out = Collect(Vec::new());
+/// let map = |c| output_curve(c, Some(10), None, 0);
+/// let n = decompress_stream(&mut container, &mut out, &map, &mut |_| {}).unwrap();
+/// assert_eq!(n, 3);
+/// assert_eq!(out.0.iter().map(|c| c.id.as_deref().unwrap()).collect::<Vec<_>>(), ["c0", "c1", "c2"]);
+/// assert!(out.0.iter().all(|c| c.points.len() == 10));
+/// ```
 pub fn decompress_stream(
     reader: &mut CodecReader,
     writer: &mut dyn CurveWriter,
@@ -184,6 +391,53 @@ pub fn decompress_stream(
 /// [`decompress_stream`] for curves `range` only (clamped to the
 /// container): only the blocks that hold them are read
 /// ([`CodecReader::bytes_read`] says how much).
+///
+/// ```
+/// use strandfit::codec::stream::{decompress_range, output_curve};
+/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # /// A container in memory of three blocks, one helix each, named c0, c1, c2.
+/// # fn three_blocks() -> CodecReader {
+/// #     let meta = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);
+/// #     let header = CodecHeader::new(0.01, meta, vec![]);
+/// #     let mut w = CodecWriter::in_memory(&header);
+/// #     for k in 0..3 {
+/// #         let points: Vec<DVec3> = (0..30)
+/// #             .map(|i| DVec3::new((0.2 * i as f64).cos(), (0.2 * i as f64).sin(), 0.02 * i as f64 + k as f64))
+/// #             .collect();
+/// #         let id = format!("c{k}");
+/// #         let c = CurveIn { id: Some(&id), points: &points, point_data: &[], curve_data: &[] };
+/// #         w.write_block(&encode_block_bytes(&[c], &header.params(), 0, 0).unwrap()).unwrap();
+/// #     }
+/// #     CodecReader::from_bytes(w.finish_bytes().unwrap()).unwrap()
+/// # }
+/// # use strandfit::io::{Curve, CurveWriter, IoError};
+/// # /// A writer that keeps the curves.
+/// # struct Collect(Vec<Curve>);
+/// # impl CurveWriter for Collect {
+/// #     fn write_curve(&mut self, c: &Curve) -> Result<(), IoError> {
+/// #         self.0.push(c.clone());
+/// #         Ok(())
+/// #     }
+/// #     fn finish(self: Box<Self>) -> Result<(), IoError> {
+/// #         Ok(())
+/// #     }
+/// # }
+///
+/// // Curve 1 only: one block of three read.
+/// let mut container = three_blocks();
+/// let opened = container.bytes_read();
+/// let mut out = Collect(Vec::new());
+/// let map = |c| output_curve(c, None, None, 0);
+/// let n = decompress_range(&mut container, &mut out, &map, 1..2, &mut |_| {}).unwrap();
+/// assert_eq!(n, 1);
+/// assert_eq!(out.0[0].id.as_deref(), Some("c1"));
+/// let one_block = container.bytes_read() - opened;
+/// assert!(one_block > 0 && opened + one_block < container.size());
+/// // The range is clamped to the container.
+/// assert_eq!(decompress_range(&mut container, &mut out, &map, 2..100, &mut |_| {}).unwrap(), 1);
+/// ```
 pub fn decompress_range(
     reader: &mut CodecReader,
     writer: &mut dyn CurveWriter,
@@ -230,6 +484,37 @@ pub fn decompress_range(
 
 /// Curves `first..first + count` of the container, reading only the
 /// blocks that hold them (random access through the index).
+///
+/// ```
+/// use strandfit::codec::stream::read_range;
+/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
+/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::DVec3;
+/// # /// A container in memory of three blocks, one helix each, named c0, c1, c2.
+/// # fn three_blocks() -> CodecReader {
+/// #     let meta = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);
+/// #     let header = CodecHeader::new(0.01, meta, vec![]);
+/// #     let mut w = CodecWriter::in_memory(&header);
+/// #     for k in 0..3 {
+/// #         let points: Vec<DVec3> = (0..30)
+/// #             .map(|i| DVec3::new((0.2 * i as f64).cos(), (0.2 * i as f64).sin(), 0.02 * i as f64 + k as f64))
+/// #             .collect();
+/// #         let id = format!("c{k}");
+/// #         let c = CurveIn { id: Some(&id), points: &points, point_data: &[], curve_data: &[] };
+/// #         w.write_block(&encode_block_bytes(&[c], &header.params(), 0, 0).unwrap()).unwrap();
+/// #     }
+/// #     CodecReader::from_bytes(w.finish_bytes().unwrap()).unwrap()
+/// # }
+///
+/// let mut container = three_blocks();
+/// let ids = |r: Vec<strandfit::codec::container::DecodedCurve>| {
+///     r.into_iter().map(|c| c.id.unwrap()).collect::<Vec<_>>()
+/// };
+/// assert_eq!(ids(read_range(&mut container, 1, 2).unwrap()), ["c1", "c2"]);
+/// // Past the end: what there is.
+/// assert_eq!(ids(read_range(&mut container, 2, 10).unwrap()), ["c2"]);
+/// assert!(read_range(&mut container, 3, 1).unwrap().is_empty());
+/// ```
 pub fn read_range(
     reader: &mut CodecReader,
     first: u64,
@@ -263,6 +548,29 @@ pub fn read_range(
 /// `step` along its arc length, its per-point values (`width` per point)
 /// carried onto the new points ([`super::point_data::carry`]). Resampling
 /// gives up the guarantee.
+///
+/// ```
+/// use strandfit::codec::container::DecodedCurve;
+/// use strandfit::codec::stream::output_curve;
+/// use strandfit::DVec3;
+///
+/// // A straight curve of 3 points whose one per-point value is x.
+/// let c = DecodedCurve {
+///     id: Some("a".into()),
+///     points: vec![DVec3::ZERO, DVec3::X, 2.0 * DVec3::X],
+///     point_data: vec![0.0, 1.0, 2.0],
+///     curve_data: vec![5.0],
+/// };
+/// // As decoded: the same points and values.
+/// let same = output_curve(c.clone(), None, None, 1);
+/// assert_eq!((&same.points, &same.point_data), (&c.points, &c.point_data));
+/// // Resampled to 5 points: the values follow.
+/// let five = output_curve(c.clone(), Some(5), None, 1);
+/// assert_eq!(five.point_data, [0.0, 0.5, 1.0, 1.5, 2.0]);
+/// assert_eq!((five.id.as_deref(), five.curve_data), (Some("a"), vec![5.0]));
+/// // Every 0.25: 9 points.
+/// assert_eq!(output_curve(c, None, Some(0.25), 1).points.len(), 9);
+/// ```
 pub fn output_curve(
     c: DecodedCurve,
     points: Option<usize>,
@@ -290,6 +598,20 @@ pub fn output_curve(
 
 /// `m` points equally spaced in arc length along the polyline (or points
 /// `step` apart, both ends kept).
+///
+/// ```
+/// use strandfit::codec::stream::resample_polyline;
+/// use strandfit::DVec3;
+///
+/// // An L of length 4: 5 points are a point every unit, the corner among them.
+/// let l = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 3.0, 0.0)];
+/// let r = resample_polyline(&l, Some(5), None);
+/// assert_eq!(r.len(), 5);
+/// assert_eq!((r[1], r[4]), (DVec3::X, DVec3::new(1.0, 3.0, 0.0)));
+/// // Every 0.5: 9 points; fewer than 2 points: as they are.
+/// assert_eq!(resample_polyline(&l, None, Some(0.5)).len(), 9);
+/// assert_eq!(resample_polyline(&l[..1], Some(5), None), [DVec3::ZERO]);
+/// ```
 pub fn resample_polyline(
     p: &[glam::DVec3],
     m: Option<usize>,

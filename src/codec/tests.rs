@@ -369,3 +369,39 @@ fn coarse_curls_are_coded_by_screw_prediction_and_smaller() {
         block.bytes.len()
     );
 }
+
+/// Model 8 writes the tolerance as its shortest exponent-form decimal: any
+/// tolerance reads back bit for bit, and the header is smaller than the
+/// f64's eight bytes for the usual ones.
+#[test]
+fn the_tolerance_reads_back_exactly_from_its_decimal() {
+    use crate::io::container::SourceMeta;
+    use crate::io::{Format, Metadata};
+    use container::{CodecHeader, CodecReader, CodecWriter};
+    let source = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);
+    let mut sizes = Vec::new();
+    for t in [
+        0.1,
+        0.5,
+        1e-3,
+        1.0 / 3.0,
+        1e-300,
+        123.25,
+        f64::MIN_POSITIVE,
+        7e300,
+    ] {
+        let h = CodecHeader::new(t, source.clone(), vec![]);
+        assert_eq!(h.model, container::MODEL);
+        let bytes = CodecWriter::in_memory(&h).finish_bytes().unwrap();
+        sizes.push(bytes.len());
+        let back = CodecReader::from_bytes(bytes).unwrap();
+        assert_eq!(back.header().tolerance.to_bits(), t.to_bits(), "{t:e}");
+        assert_eq!(back.header(), &h);
+    }
+    // "1e-1" (a length and four bytes) against a model-7 header's f64.
+    let mut old = CodecHeader::new(0.1, source, vec![]);
+    old.model = 7;
+    let old_size = CodecWriter::in_memory(&old).finish_bytes().unwrap().len();
+    assert_eq!(sizes[0] + 3, old_size, "{sizes:?}");
+    assert!(sizes[0] < sizes[3], "{sizes:?}");
+}

@@ -82,6 +82,43 @@ fn refine(points: &[DVec2], piece: &mut Piece, obj: &Objective, max_iterations: 
 use super::ProjectedHelix;
 
 /// The smallest number of vertices a helix is fitted to.
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # /// The projections of two helices, the second starting where the first
+/// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
+/// # /// 43 vertices, the corner at vertex 24.
+/// # fn two_helices() -> Vec<DVec2> {
+/// #     let a = PlacedHelix::from_params(&[0.0, 0.0, 0.0, 1.0, 0.3, 0.8], false);
+/// #     let turn = a.derivative(3.0).to_angle() + 0.6 - std::f64::consts::FRAC_PI_2;
+/// #     let end = a.point(3.0);
+/// #     let b = PlacedHelix::from_params(&[turn, end.x, end.y, 0.7, 0.1, 1.0], true);
+/// #     let dense = |h: &PlacedHelix| -> Vec<DVec2> {
+/// #         (0..=1000).map(|k| h.point(3.0 * k as f64 / 1000.0)).collect()
+/// #     };
+/// #     let (da, db) = (dense(&a), dense(&b));
+/// #     let len = |p: &[DVec2]| -> f64 { p.windows(2).map(|w| (w[1] - w[0]).length()).sum() };
+/// #     let nb = (25.0 * len(&db) / len(&da)).round() as usize;
+/// #     let mut d = resample(&da, 25);
+/// #     d.extend(resample(&db, nb + 1).into_iter().skip(1));
+/// #     assert_eq!(d.len(), 43);
+/// #     d
+/// # }
+/// # /// The drawing scaled to unit length, and its tangents and curvatures.
+/// # fn unit(d: &[DVec2]) -> (Vec<DVec2>, Vec<(DVec2, f64)>) {
+/// #     let length: f64 = d.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+/// #     let unit: Vec<DVec2> = d.iter().map(|p| *p / length).collect();
+/// #     let geometry = strandfit::sketch::estimate::tangents_and_curvatures(&unit, 3);
+/// #     (unit, geometry)
+/// # }
+/// use strandfit::sketch::cover::{cover, CoverOptions, MIN_VERTICES};
+///
+/// // Every helix of a covering fits at least MIN_VERTICES vertices.
+/// let (points, geometry) = unit(&two_helices());
+/// let pieces = cover(&points, &geometry, &CoverOptions { emax: 1e-3, nmax: 12, end_guard: 3 });
+/// assert!(pieces.iter().all(|p| p.last + 1 - p.first >= MIN_VERTICES));
+/// ```
 pub const MIN_VERTICES: usize = 4;
 
 /// `β_D` of Section 6.2.
@@ -129,6 +166,35 @@ const START_TILTS: [f64; 3] = [0.0, 0.9, -0.9];
 const REFINED_CANDIDATES: usize = 3;
 
 /// Options of the covering.
+///
+/// ```
+/// # use glam::DVec2;
+/// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+/// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+/// # fn one_helix() -> Vec<DVec2> {
+/// #     let (tilt, pitch) = (0.8f64, 0.3);
+/// #     (0..60)
+/// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+/// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+/// #         .collect()
+/// # }
+/// # /// The drawing scaled to unit length, and its tangents and curvatures.
+/// # fn unit(d: &[DVec2]) -> (Vec<DVec2>, Vec<(DVec2, f64)>) {
+/// #     let length: f64 = d.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+/// #     let unit: Vec<DVec2> = d.iter().map(|p| *p / length).collect();
+/// #     let geometry = strandfit::sketch::estimate::tangents_and_curvatures(&unit, 3);
+/// #     (unit, geometry)
+/// # }
+/// use strandfit::sketch::cover::{cover, CoverOptions};
+///
+/// // One helix drawn: one piece, every vertex within E_max of it.
+/// let (points, geometry) = unit(&one_helix());
+/// let opts = CoverOptions { emax: 1e-3, nmax: 12, end_guard: 3 };
+/// let pieces = cover(&points, &geometry, &opts);
+/// assert_eq!(pieces.len(), 1);
+/// assert_eq!((pieces[0].first, pieces[0].last), (0, 59));
+/// assert!(pieces[0].max_distance(&points) <= opts.emax);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CoverOptions {
     /// `E_max`, in the sketch's units.
@@ -561,8 +627,50 @@ fn polish_junctions(points: &[DVec2], pieces: &mut [Piece], opts: &CoverOptions)
 /// Iteration cap of the refinements of [`polish_junctions`] (warm starts).
 const POLISH_ITERATIONS: usize = 30;
 
-/// Cover vertices `[lo, hi]` (Section 6.4); pieces in order along the
-/// sketch, consecutive ones sharing their junction vertex.
+/// Cover all the vertices of `points` (Section 6.4; `geometry`: their
+/// tangents and curvatures, [`tangents_and_curvatures`](super::estimate::tangents_and_curvatures));
+/// pieces in order along the sketch, consecutive ones sharing their
+/// junction vertex.
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # /// The projections of two helices, the second starting where the first
+/// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
+/// # /// 43 vertices, the corner at vertex 24.
+/// # fn two_helices() -> Vec<DVec2> {
+/// #     let a = PlacedHelix::from_params(&[0.0, 0.0, 0.0, 1.0, 0.3, 0.8], false);
+/// #     let turn = a.derivative(3.0).to_angle() + 0.6 - std::f64::consts::FRAC_PI_2;
+/// #     let end = a.point(3.0);
+/// #     let b = PlacedHelix::from_params(&[turn, end.x, end.y, 0.7, 0.1, 1.0], true);
+/// #     let dense = |h: &PlacedHelix| -> Vec<DVec2> {
+/// #         (0..=1000).map(|k| h.point(3.0 * k as f64 / 1000.0)).collect()
+/// #     };
+/// #     let (da, db) = (dense(&a), dense(&b));
+/// #     let len = |p: &[DVec2]| -> f64 { p.windows(2).map(|w| (w[1] - w[0]).length()).sum() };
+/// #     let nb = (25.0 * len(&db) / len(&da)).round() as usize;
+/// #     let mut d = resample(&da, 25);
+/// #     d.extend(resample(&db, nb + 1).into_iter().skip(1));
+/// #     assert_eq!(d.len(), 43);
+/// #     d
+/// # }
+/// # /// The drawing scaled to unit length, and its tangents and curvatures.
+/// # fn unit(d: &[DVec2]) -> (Vec<DVec2>, Vec<(DVec2, f64)>) {
+/// #     let length: f64 = d.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+/// #     let unit: Vec<DVec2> = d.iter().map(|p| *p / length).collect();
+/// #     let geometry = strandfit::sketch::estimate::tangents_and_curvatures(&unit, 3);
+/// #     (unit, geometry)
+/// # }
+/// use strandfit::sketch::cover::{cover, CoverOptions};
+///
+/// // Two helices drawn: two pieces, joined at the corner, each within E_max.
+/// let (points, geometry) = unit(&two_helices());
+/// let opts = CoverOptions { emax: 1e-3, nmax: 12, end_guard: 3 };
+/// let pieces = cover(&points, &geometry, &opts);
+/// let spans: Vec<_> = pieces.iter().map(|p| (p.first, p.last)).collect();
+/// assert_eq!(spans, [(0, 24), (24, 42)]);
+/// assert!(pieces.iter().all(|p| p.max_distance(&points) <= opts.emax));
+/// ```
 pub fn cover(points: &[DVec2], geometry: &[(DVec2, f64)], opts: &CoverOptions) -> Vec<Piece> {
     let mut out = if points.len() >= 2 {
         cover_range(points, geometry, (0, points.len() - 1), opts)

@@ -109,6 +109,21 @@ fn sg9(points: &[DVec2], i: usize) -> DVec2 {
 /// The polyline smoothed by the 9-point Savitzky–Golay filter (`SG9`),
 /// its first and last four vertices kept: for judging the drawing's
 /// sampling where noise moves each vertex by a sizeable part of an edge.
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::estimate::smoothed;
+///
+/// // A cubic is left as it is (to rounding); the ends are kept exactly.
+/// let cubic: Vec<DVec2> = (0..20).map(|i| 0.1 * i as f64).map(|x| DVec2::new(x, x * x * x - x)).collect();
+/// let s = smoothed(&cubic);
+/// assert_eq!(s.len(), 20);
+/// assert_eq!(s[..4], cubic[..4]);
+/// assert!(s.iter().zip(&cubic).all(|(a, b)| (*a - *b).length() < 1e-12));
+/// // A zigzag about a line is pulled towards it.
+/// let zigzag: Vec<DVec2> = (0..20).map(|i| DVec2::new(i as f64, if i % 2 == 0 { 0.1 } else { -0.1 })).collect();
+/// assert!(smoothed(&zigzag)[4..16].iter().all(|p| p.y.abs() < 0.02));
+/// ```
 pub fn smoothed(points: &[DVec2]) -> Vec<DVec2> {
     let n = points.len();
     (0..n)
@@ -218,6 +233,19 @@ fn turning(points: &[DVec2], i: usize) -> f64 {
 /// A vertex turning by more than `CORNER_TURN` and `CORNER_RATIO` times
 /// the median turning of the vertices around it (a corner; on a smooth
 /// stroke the turning varies slowly).
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::estimate::is_corner;
+///
+/// // An L: the vertex at the bend is a corner, the others are not.
+/// let mut l: Vec<DVec2> = (0..10).map(|i| DVec2::new(i as f64, 0.0)).collect();
+/// l.extend((1..10).map(|i| DVec2::new(9.0, i as f64)));
+/// assert_eq!((0..l.len()).filter(|&i| is_corner(&l, i)).collect::<Vec<_>>(), [9]);
+/// // A circle turns by 0.2 rad at every vertex, but evenly: no corner.
+/// let circle: Vec<DVec2> = (0..30).map(|i| DVec2::from_angle(0.2 * i as f64)).collect();
+/// assert!((0..30).all(|i| !is_corner(&circle, i)));
+/// ```
 pub fn is_corner(points: &[DVec2], i: usize) -> bool {
     let t = turning(points, i);
     if t <= CORNER_TURN {
@@ -249,6 +277,24 @@ const CORNER_SPAN: usize = 8;
 /// it). Where the vertices lie on a smooth curve with edges of length `h`,
 /// the new points lie within `O(h³)` of it rather than the chords' `O(h²)`
 /// (15× closer on a coarse, uneven test drawing).
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::estimate::densify;
+///
+/// // A half circle of 8 vertices, densified to edges of about 0.1.
+/// let coarse: Vec<DVec2> = (0..8).map(|i| DVec2::from_angle(std::f64::consts::PI * i as f64 / 7.0)).collect();
+/// let fine = densify(&coarse, 0.1);
+/// assert!(fine.len() > 30);
+/// assert!(fine.windows(2).all(|w| (w[1] - w[0]).length() <= 0.1));
+/// // Every vertex is kept, in order.
+/// let kept: Vec<DVec2> = fine.iter().copied().filter(|p| coarse.contains(p)).collect();
+/// assert_eq!(kept, coarse);
+/// // The new points are within 0.002 of the circle; the chords' midpoints 0.025.
+/// assert!(fine.iter().all(|p| (p.length() - 1.0).abs() < 0.002));
+/// // Too few vertices, or no target: as it was.
+/// assert_eq!(densify(&coarse[..2], 0.1), coarse[..2]);
+/// ```
 pub fn densify(points: &[DVec2], target: f64) -> Vec<DVec2> {
     let n = points.len();
     if n < 3 || !(target > 0.0) {

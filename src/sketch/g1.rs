@@ -13,9 +13,11 @@
 //!
 //! Bound: the lifted vertex `i` projects to the drawing's vertex `i`, and
 //! orthogonal projection does not lengthen distances, so the projected
-//! chain is within the chain's 3D distance of the drawing — the reported
-//! projection distance is at most the 3D one (and at most `T` when the
-//! tolerance is met); `tests/sketch.rs` checks it.
+//! chain is within the chain's 3D distance of the drawing. The reported
+//! projection distance measures the chain sampled, with a sagitta of at
+//! most `T/64`, and adds that sagitta: it is at most the 3D one plus twice
+//! the sagitta (so at most `T + T/32` when the tolerance is met);
+//! `tests/sketch.rs` checks it.
 
 use glam::DVec3;
 
@@ -25,6 +27,40 @@ use crate::helix::PiecewiseHelix;
 use crate::metrics::ordered_distance;
 
 /// The G1 re-fit of a lift.
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # /// The projections of two helices, the second starting where the first
+/// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
+/// # /// 43 vertices, the corner at vertex 24.
+/// # fn two_helices() -> Vec<DVec2> {
+/// #     let a = PlacedHelix::from_params(&[0.0, 0.0, 0.0, 1.0, 0.3, 0.8], false);
+/// #     let turn = a.derivative(3.0).to_angle() + 0.6 - std::f64::consts::FRAC_PI_2;
+/// #     let end = a.point(3.0);
+/// #     let b = PlacedHelix::from_params(&[turn, end.x, end.y, 0.7, 0.1, 1.0], true);
+/// #     let dense = |h: &PlacedHelix| -> Vec<DVec2> {
+/// #         (0..=1000).map(|k| h.point(3.0 * k as f64 / 1000.0)).collect()
+/// #     };
+/// #     let (da, db) = (dense(&a), dense(&b));
+/// #     let len = |p: &[DVec2]| -> f64 { p.windows(2).map(|w| (w[1] - w[0]).length()).sum() };
+/// #     let nb = (25.0 * len(&db) / len(&da)).round() as usize;
+/// #     let mut d = resample(&da, 25);
+/// #     d.extend(resample(&db, nb + 1).into_iter().skip(1));
+/// #     assert_eq!(d.len(), 43);
+/// #     d
+/// # }
+/// use strandfit::sketch::{lift_sketch, refit_g1, SketchOptions};
+///
+/// // The lift of a drawing with a corner has a kink at its junction; the
+/// // re-fit has none (to rounding).
+/// let lift = lift_sketch(&two_helices(), &SketchOptions::default()).unwrap();
+/// assert!(lift.junctions[0].tangent_angle > 0.1);
+/// let g1 = refit_g1(&lift, 1e-3 * lift.length).unwrap();
+/// let (gap, angle) = g1.continuity;
+/// assert!(gap < 1e-9 * lift.length && angle < 1e-7, "{gap} {angle}");
+/// assert!(g1.chain.len() >= 2);
+/// ```
 #[derive(Clone, Debug)]
 pub struct G1Refit {
     /// The chain, in the drawing's units (`x, y` the drawing's, `z` lifted).
@@ -48,6 +84,29 @@ pub struct G1Refit {
 /// Re-fit `lift.points_3d` with the floating-tangents fitter within
 /// `tolerance` (drawing units; the lift's `E_max · L` is the natural
 /// choice).
+///
+/// ```
+/// # use glam::DVec2;
+/// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+/// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+/// # fn one_helix() -> Vec<DVec2> {
+/// #     let (tilt, pitch) = (0.8f64, 0.3);
+/// #     (0..60)
+/// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+/// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+/// #         .collect()
+/// # }
+/// use strandfit::sketch::{lift_sketch, refit_g1, SketchOptions};
+///
+/// let lift = lift_sketch(&one_helix(), &SketchOptions::default()).unwrap();
+/// let t = 1e-3 * lift.length;
+/// let g1 = refit_g1(&lift, t).unwrap();
+/// // Within T of the lifted vertices, and so of the drawing once projected
+/// // (up to the sampling allowance, T/64 twice).
+/// assert!(g1.within_tolerance && g1.distance_3d <= t);
+/// assert!(g1.projection_distance <= g1.distance_3d + t / 32.0);
+/// assert_eq!(g1.tolerance, t);
+/// ```
 pub fn refit_g1(lift: &SketchLift, tolerance: f64) -> Result<G1Refit, AdaptiveError> {
     let opts = AdaptiveOptions::new(ElementCount::Tolerance(tolerance));
     let fit = fit_polyline_chain(&lift.points_3d, &opts)?;

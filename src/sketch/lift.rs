@@ -28,9 +28,62 @@ use super::ProjectedHelix;
 
 /// Inputs whose longest edge is within this factor of the shortest are
 /// used as they are; others are resampled ([`Resampling`]).
+///
+/// ```
+/// # use glam::DVec2;
+/// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+/// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+/// # fn one_helix() -> Vec<DVec2> {
+/// #     let (tilt, pitch) = (0.8f64, 0.3);
+/// #     (0..60)
+/// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+/// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+/// #         .collect()
+/// # }
+/// use strandfit::sketch::{lift::UNIFORM_RATIO, lift_sketch, SketchOptions};
+///
+/// // Even edges: used as they are.
+/// let even = one_helix();
+/// let lift = lift_sketch(&even, &SketchOptions::default()).unwrap();
+/// assert!(!lift.resampled);
+/// assert_eq!(lift.points_2d, even);
+/// // Every vertex of the first half, every fourth of the second: the longest
+/// // edge is over UNIFORM_RATIO times the shortest, so the drawing is evened
+/// // out first (densified by default: the drawn vertices are all kept).
+/// let uneven: Vec<DVec2> = even.iter().enumerate().filter(|(k, _)| *k < 30 || k % 4 == 3).map(|(_, p)| *p).collect();
+/// let lift = lift_sketch(&uneven, &SketchOptions::default()).unwrap();
+/// assert!(lift.resampled);
+/// assert!(uneven.iter().all(|p| lift.points_2d.contains(p)));
+/// ```
 pub const UNIFORM_RATIO: f64 = 3.0;
 
 /// How an unevenly sampled drawing is evened out before the covering.
+///
+/// ```
+/// # use glam::DVec2;
+/// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+/// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+/// # fn one_helix() -> Vec<DVec2> {
+/// #     let (tilt, pitch) = (0.8f64, 0.3);
+/// #     (0..60)
+/// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+/// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+/// #         .collect()
+/// # }
+/// use strandfit::sketch::{lift_sketch, Resampling, SketchOptions};
+///
+/// // An unevenly sampled drawing (every fourth vertex in its second half).
+/// let uneven: Vec<DVec2> = one_helix().into_iter().enumerate().filter(|(k, _)| *k < 30 || k % 4 == 3).map(|(_, p)| p).collect();
+/// assert_eq!(SketchOptions::default().resampling, Resampling::Densify);
+/// let densified = lift_sketch(&uneven, &SketchOptions::default()).unwrap();
+/// assert!(densified.points_2d.len() > uneven.len());
+/// assert!(uneven.iter().all(|p| densified.points_2d.contains(p)));
+/// // The paper's: as many points, evenly spaced; the ends kept.
+/// let opts = SketchOptions { resampling: Resampling::Uniform, ..Default::default() };
+/// let uniform = lift_sketch(&uneven, &opts).unwrap();
+/// assert_eq!(uniform.points_2d.len(), uneven.len());
+/// assert_eq!(uniform.points_2d.last(), uneven.last());
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Resampling {
     /// Every edge longer than the mean split along a spline through the
@@ -49,15 +102,87 @@ pub enum Resampling {
 }
 
 /// The paper's `E_max`, as a fraction of the sketch's length (Section 6.3).
+///
+/// ```
+/// # use glam::DVec2;
+/// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+/// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+/// # fn one_helix() -> Vec<DVec2> {
+/// #     let (tilt, pitch) = (0.8f64, 0.3);
+/// #     (0..60)
+/// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+/// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+/// #         .collect()
+/// # }
+/// use strandfit::sketch::{lift_sketch, SketchOptions};
+///
+/// let lift = lift_sketch(&one_helix(), &SketchOptions::default()).unwrap();
+/// use strandfit::sketch::lift::EMAX_FRACTION;
+///
+/// // A clean drawing: E_max is the paper's 0.1 % of its length.
+/// assert!((lift.emax - EMAX_FRACTION * lift.length).abs() < 1e-12 * lift.length);
+/// ```
 pub const EMAX_FRACTION: f64 = 1e-3;
 
 /// The automatic `E_max` is at least this many times the drawing's noise
 /// (per coordinate): every vertex of a helix's stretch must lie within
 /// `E_max` of it for the covering to go on, and of 500 vertices with
 /// Gaussian noise the farthest is about 3.3 σ from the true curve.
+///
+/// ```
+/// # use glam::DVec2;
+/// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+/// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+/// # fn one_helix() -> Vec<DVec2> {
+/// #     let (tilt, pitch) = (0.8f64, 0.3);
+/// #     (0..60)
+/// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+/// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+/// #         .collect()
+/// # }
+/// use strandfit::sketch::{lift::NOISE_FACTOR, lift_sketch, SketchOptions};
+///
+/// // Every vertex moved by ±0.01 in x and y: E_max follows the noise.
+/// let noisy: Vec<DVec2> = one_helix()
+///     .iter()
+///     .enumerate()
+///     .map(|(k, p)| *p + 0.01 * if (k * 7919) % 3 == 0 { DVec2::new(1.0, -1.0) } else { DVec2::new(-1.0, 1.0) })
+///     .collect();
+/// let lift = lift_sketch(&noisy, &SketchOptions::default()).unwrap();
+/// assert!(lift.noise > 0.005);
+/// assert!((lift.emax - NOISE_FACTOR * lift.noise).abs() < 1e-12 * lift.emax);
+/// ```
 pub const NOISE_FACTOR: f64 = 5.0;
 
 /// Options of [`lift_sketch`].
+///
+/// ```
+/// # use glam::DVec2;
+/// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+/// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+/// # fn one_helix() -> Vec<DVec2> {
+/// #     let (tilt, pitch) = (0.8f64, 0.3);
+/// #     (0..60)
+/// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+/// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+/// #         .collect()
+/// # }
+/// use strandfit::sketch::{lift_sketch, SketchError, SketchOptions};
+///
+/// // E_max given: 0.5 % of the length, whatever the drawing.
+/// let opts = SketchOptions { emax: Some(5e-3), ..Default::default() };
+/// let lift = lift_sketch(&one_helix(), &opts).unwrap();
+/// assert!((lift.emax - 5e-3 * lift.length).abs() < 1e-12);
+/// assert!(lift.max_error <= lift.emax);
+/// // Options out of range are refused before any work.
+/// for bad in [
+///     SketchOptions { emax: Some(0.0), ..Default::default() },
+///     SketchOptions { alpha_t: 1.0, ..Default::default() },
+///     SketchOptions { window: 0, ..Default::default() },
+/// ] {
+///     assert!(matches!(lift_sketch(&one_helix(), &bad), Err(SketchError::Options(_))));
+/// }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SketchOptions {
     /// `E_max` as a fraction of the sketch length. `None` (the default):
@@ -91,15 +216,35 @@ impl Default for SketchOptions {
 }
 
 /// Why a sketch cannot be lifted.
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::{lift_sketch, SketchError, SketchOptions};
+///
+/// let lift = |p: &[DVec2]| lift_sketch(p, &SketchOptions::default()).err();
+/// let (o, x) = (DVec2::ZERO, DVec2::X);
+/// assert_eq!(lift(&[o, o, x]), Some(SketchError::TooFew(2)));
+/// assert_eq!(lift(&[o, o, o, o]), Some(SketchError::TooFew(1)));
+/// assert_eq!(lift(&[o, DVec2::NAN, x]), Some(SketchError::NonFinite(1)));
+/// let far = DVec2::new(1e308, 0.0);
+/// assert_eq!(lift(&[o, far, -far]), Some(SketchError::ZeroLength));
+/// assert_eq!(
+///     SketchError::TooFew(2).to_string(),
+///     "a sketch needs at least 3 distinct points, found 2"
+/// );
+/// ```
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SketchError {
-    /// Fewer than 3 distinct points (the count found).
+    /// Fewer than 3 points once repeated consecutive points are dropped
+    /// (the count left).
     #[error("a sketch needs at least 3 distinct points, found {0}")]
     TooFew(usize),
     /// A coordinate is NaN or infinite (the point's index).
     #[error("point {0} is not finite")]
     NonFinite(usize),
-    /// Every point is the same.
+    /// The sketch's length is zero or not finite (its points are too far
+    /// apart for `f64`). A sketch whose points are all the same is
+    /// [`TooFew`](Self::TooFew).
     #[error("the sketch has zero length")]
     ZeroLength,
     /// An option out of its range (which, and why).
@@ -108,6 +253,30 @@ pub enum SketchError {
 }
 
 /// One helix of the result, in the sketch's units.
+///
+/// ```
+/// # use glam::DVec2;
+/// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+/// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+/// # fn one_helix() -> Vec<DVec2> {
+/// #     let (tilt, pitch) = (0.8f64, 0.3);
+/// #     (0..60)
+/// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+/// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+/// #         .collect()
+/// # }
+/// use strandfit::sketch::{lift_sketch, SketchOptions};
+///
+/// let lift = lift_sketch(&one_helix(), &SketchOptions::default()).unwrap();
+///
+/// // One helix over the whole drawing, from t_start at its first vertex to
+/// // t_end at its last, its radius and pitch the drawn helix's.
+/// let h = lift.helices[0];
+/// assert_eq!((lift.helices.len(), h.first, h.last), (1, 0, 59));
+/// assert!((h.point_2d(h.t_start) - lift.points_2d[0]).length() <= h.max_error);
+/// assert!((h.point_2d(h.t_end) - lift.points_2d[59]).length() <= h.max_error);
+/// assert!((h.helix.a.abs() - 1.0).abs() < 1e-3 && (h.helix.b.abs() - 0.3).abs() < 1e-3);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LiftedHelix {
     /// `(a, b, c)` of Section 4.1 (radius `|a|`, pitch `|b|` per radian,
@@ -147,23 +316,112 @@ impl LiftedHelix {
     }
 
     /// The projected helix in the sketch plane.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+    /// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+    /// # fn one_helix() -> Vec<DVec2> {
+    /// #     let (tilt, pitch) = (0.8f64, 0.3);
+    /// #     (0..60)
+    /// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+    /// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+    /// #         .collect()
+    /// # }
+    /// use strandfit::sketch::{lift_sketch, SketchOptions};
+    ///
+    /// let lift = lift_sketch(&one_helix(), &SketchOptions::default()).unwrap();
+    ///
+    /// // The projection of the 3D helix, near the drawing.
+    /// let h = lift.helices[0];
+    /// let t = 0.5 * (h.t_start + h.t_end);
+    /// assert_eq!(h.point_2d(t), h.point_3d(t).truncate());
+    /// assert!((h.point_2d(h.t_start) - lift.points_2d[h.first]).length() <= lift.max_error);
+    /// ```
     pub fn point_2d(&self, t: f64) -> DVec2 {
         self.placed().point(t)
     }
 
     /// The 3D helix.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+    /// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+    /// # fn one_helix() -> Vec<DVec2> {
+    /// #     let (tilt, pitch) = (0.8f64, 0.3);
+    /// #     (0..60)
+    /// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+    /// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+    /// #         .collect()
+    /// # }
+    /// use strandfit::sketch::{lift_sketch, SketchOptions};
+    ///
+    /// let lift = lift_sketch(&one_helix(), &SketchOptions::default()).unwrap();
+    ///
+    /// // The lifted vertices' depths are the helix's, at their parameters; the
+    /// // first vertex is at z = 0.
+    /// let h = lift.helices[0];
+    /// assert_eq!(lift.points_3d[0].z, h.point_3d(h.t_start).z);
+    /// assert!(h.point_3d(h.t_start).z.abs() < 1e-12);
+    /// ```
     pub fn point_3d(&self, t: f64) -> DVec3 {
         self.placed().point_3d(t, self.mirror, self.z0)
     }
 
     /// The unit tangent of the 3D helix, pointing along the sketch (`t`
     /// may run either way: from `t_start` at the first vertex to `t_end`).
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+    /// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+    /// # fn one_helix() -> Vec<DVec2> {
+    /// #     let (tilt, pitch) = (0.8f64, 0.3);
+    /// #     (0..60)
+    /// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+    /// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+    /// #         .collect()
+    /// # }
+    /// use strandfit::sketch::{lift_sketch, SketchOptions};
+    ///
+    /// let lift = lift_sketch(&one_helix(), &SketchOptions::default()).unwrap();
+    ///
+    /// // A unit vector, pointing from the first vertex towards the next.
+    /// let h = lift.helices[0];
+    /// let tangent = h.tangent_3d(h.t_start).unwrap();
+    /// assert!((tangent.length() - 1.0).abs() < 1e-12);
+    /// assert!(tangent.dot(lift.points_3d[1] - lift.points_3d[0]) > 0.0);
+    /// ```
     pub fn tangent_3d(&self, t: f64) -> Option<DVec3> {
         let sign = if self.t_end < self.t_start { -1.0 } else { 1.0 };
         self.placed().tangent_3d(t, self.mirror).map(|v| sign * v)
     }
 
     /// `m ≥ 2` points of the 3D helix, evenly spaced in `t`.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # /// The projection of a helix of radius 1 and pitch 0.3 per radian whose
+    /// # /// axis is tilted 0.8 rad out of the page, one and a half turns, 60 vertices.
+    /// # fn one_helix() -> Vec<DVec2> {
+    /// #     let (tilt, pitch) = (0.8f64, 0.3);
+    /// #     (0..60)
+    /// #         .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+    /// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+    /// #         .collect()
+    /// # }
+    /// use strandfit::sketch::{lift_sketch, SketchOptions};
+    ///
+    /// let lift = lift_sketch(&one_helix(), &SketchOptions::default()).unwrap();
+    ///
+    /// let h = lift.helices[0];
+    /// let s = h.sample_3d(10);
+    /// assert_eq!(s.len(), 10);
+    /// assert_eq!(s[0], h.point_3d(h.t_start));
+    /// assert!((s[9] - h.point_3d(h.t_end)).length() < 1e-12);
+    /// assert_eq!(h.sample_3d(0).len(), 2); // at least the ends
+    /// ```
     pub fn sample_3d(&self, m: usize) -> Vec<DVec3> {
         let m = m.max(2);
         (0..m)
@@ -177,6 +435,40 @@ impl LiftedHelix {
 
 /// What is left at a junction vertex (the paper's curve is neither C0 nor
 /// G1 there).
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # /// The projections of two helices, the second starting where the first
+/// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
+/// # /// 43 vertices, the corner at vertex 24.
+/// # fn two_helices() -> Vec<DVec2> {
+/// #     let a = PlacedHelix::from_params(&[0.0, 0.0, 0.0, 1.0, 0.3, 0.8], false);
+/// #     let turn = a.derivative(3.0).to_angle() + 0.6 - std::f64::consts::FRAC_PI_2;
+/// #     let end = a.point(3.0);
+/// #     let b = PlacedHelix::from_params(&[turn, end.x, end.y, 0.7, 0.1, 1.0], true);
+/// #     let dense = |h: &PlacedHelix| -> Vec<DVec2> {
+/// #         (0..=1000).map(|k| h.point(3.0 * k as f64 / 1000.0)).collect()
+/// #     };
+/// #     let (da, db) = (dense(&a), dense(&b));
+/// #     let len = |p: &[DVec2]| -> f64 { p.windows(2).map(|w| (w[1] - w[0]).length()).sum() };
+/// #     let nb = (25.0 * len(&db) / len(&da)).round() as usize;
+/// #     let mut d = resample(&da, 25);
+/// #     d.extend(resample(&db, nb + 1).into_iter().skip(1));
+/// #     assert_eq!(d.len(), 43);
+/// #     d
+/// # }
+/// use strandfit::sketch::{lift_sketch, SketchOptions};
+///
+/// // Two helices drawn with a corner at vertex 24: one junction there. The
+/// // depths meet; the gap left is in the drawing, within both helices' errors.
+/// let lift = lift_sketch(&two_helices(), &SketchOptions::default()).unwrap();
+/// assert_eq!(lift.junctions.len(), 1);
+/// let (j, l, r) = (lift.junctions[0], lift.helices[0], lift.helices[1]);
+/// assert_eq!((j.vertex, l.last, r.first), (24, 24, 24));
+/// assert!(j.position_gap <= l.max_error + r.max_error + 1e-12);
+/// assert!(j.tangent_angle > 0.1); // the lift is not G1 there
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Junction {
     /// The vertex the two helices share.
@@ -188,6 +480,42 @@ pub struct Junction {
 }
 
 /// The result of [`lift_sketch`].
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # /// The projections of two helices, the second starting where the first
+/// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
+/// # /// 43 vertices, the corner at vertex 24.
+/// # fn two_helices() -> Vec<DVec2> {
+/// #     let a = PlacedHelix::from_params(&[0.0, 0.0, 0.0, 1.0, 0.3, 0.8], false);
+/// #     let turn = a.derivative(3.0).to_angle() + 0.6 - std::f64::consts::FRAC_PI_2;
+/// #     let end = a.point(3.0);
+/// #     let b = PlacedHelix::from_params(&[turn, end.x, end.y, 0.7, 0.1, 1.0], true);
+/// #     let dense = |h: &PlacedHelix| -> Vec<DVec2> {
+/// #         (0..=1000).map(|k| h.point(3.0 * k as f64 / 1000.0)).collect()
+/// #     };
+/// #     let (da, db) = (dense(&a), dense(&b));
+/// #     let len = |p: &[DVec2]| -> f64 { p.windows(2).map(|w| (w[1] - w[0]).length()).sum() };
+/// #     let nb = (25.0 * len(&db) / len(&da)).round() as usize;
+/// #     let mut d = resample(&da, 25);
+/// #     d.extend(resample(&db, nb + 1).into_iter().skip(1));
+/// #     assert_eq!(d.len(), 43);
+/// #     d
+/// # }
+/// use strandfit::sketch::{lift_sketch, SketchOptions};
+///
+/// let drawing = two_helices();
+/// let lift = lift_sketch(&drawing, &SketchOptions::default()).unwrap();
+/// // The helices cover the vertices in order, sharing the junction vertices.
+/// let spans: Vec<_> = lift.helices.iter().map(|h| (h.first, h.last)).collect();
+/// assert_eq!(spans, [(0, 24), (24, 42)]);
+/// // The lifted vertices are the drawing's, raised.
+/// assert_eq!(lift.points_2d, drawing);
+/// assert!(lift.points_3d.iter().zip(&drawing).all(|(p, q)| p.truncate() == *q));
+/// assert!(lift.rms_error <= lift.max_error && lift.max_error <= lift.emax);
+/// assert!(lift.fine_fit.after <= lift.fine_fit.before);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct SketchLift {
     /// The helices, in order along the drawing.

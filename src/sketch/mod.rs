@@ -12,6 +12,31 @@
 //! * [`lift`]: the whole method, [`lift_sketch`].
 //! * [`g1`]: beyond the paper, the lift re-fitted exactly G1 by the
 //!   floating-tangents fitter, [`refit_g1`].
+//!
+//! ```
+//! use glam::DVec2;
+//! use strandfit::sketch::{lift_sketch, refit_g1, SketchOptions};
+//! use strandfit::ParamCurve3;
+//!
+//! // A drawing: the projection of a helix whose axis is tilted 0.8 rad out
+//! // of the page, one and a half turns.
+//! let (tilt, pitch) = (0.8f64, 0.3);
+//! let drawing: Vec<DVec2> = (0..60)
+//!     .map(|k| 3.0 * std::f64::consts::PI * k as f64 / 59.0)
+//!     .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
+//!     .collect();
+//! // Lifted: its vertices raised out of the page, fitted by one helix.
+//! let lift = lift_sketch(&drawing, &SketchOptions::default()).unwrap();
+//! assert_eq!(lift.helices.len(), 1);
+//! assert!(lift.points_3d.iter().zip(&drawing).all(|(p, q)| p.truncate() == *q));
+//! let depth = lift.points_3d.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max)
+//!     - lift.points_3d.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+//! assert!(depth > 1.0);
+//! // As a G1 piecewise helix of the core, within 0.1 % of the length.
+//! let g1 = refit_g1(&lift, 1e-3 * lift.length).unwrap();
+//! assert!(g1.within_tolerance);
+//! assert!(g1.chain.arc_length() > lift.length);
+//! ```
 
 pub mod cover;
 pub mod estimate;

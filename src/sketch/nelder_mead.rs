@@ -6,12 +6,27 @@
 //!
 //! Stops when the simplex is small in both senses —
 //! `max |f_i − f_0| ≤ ftol·(|f_0| + tiny)` and `max ‖x_i − x_0‖_∞ ≤ xtol` —
-//! or after `max_evals` evaluations.
+//! or once `max_evals` evaluations are spent (checked before each step:
+//! the step under way may spend up to `N + 1` more).
 
 /// Stopping rules.
+///
+/// ```
+/// use strandfit::sketch::nelder_mead::{minimize, NelderMeadOptions};
+///
+/// let rosenbrock = |x: &[f64; 2]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2);
+/// // A budget of 30 evaluations stops the search early: the last step may
+/// // overrun it by at most N + 1 = 3.
+/// let opts = NelderMeadOptions { max_evals: 30, ..Default::default() };
+/// let m = minimize(rosenbrock, [-1.2, 1.0], [0.1, 0.1], &opts);
+/// assert!(m.evals >= 30 && m.evals <= 33, "{}", m.evals);
+/// let full = minimize(rosenbrock, [-1.2, 1.0], [0.1, 0.1], &NelderMeadOptions::default());
+/// assert!(full.value < m.value);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NelderMeadOptions {
-    /// Most evaluations of the function.
+    /// Evaluations of the function after which the search stops (checked
+    /// before each step, which may spend up to `N + 1` more).
     pub max_evals: usize,
     /// Relative spread of the simplex's values to stop at.
     pub ftol: f64,
@@ -30,6 +45,18 @@ impl Default for NelderMeadOptions {
 }
 
 /// The best vertex found, its value and the evaluations spent.
+///
+/// ```
+/// use strandfit::sketch::nelder_mead::{minimize, NelderMeadOptions};
+///
+/// // The value is the function's at the vertex returned; every call counted.
+/// let mut calls = 0;
+/// let f = |x: &[f64; 3]| (x[0] - 3.0).powi(2) + 10.0 * (x[1] + 1.0).powi(2) + x[2] * x[2];
+/// let m = minimize(|x: &[f64; 3]| { calls += 1; f(x) }, [0.0; 3], [0.5; 3], &NelderMeadOptions::default());
+/// assert_eq!(m.evals, calls);
+/// assert_eq!(m.value, f(&m.x));
+/// assert!((m.x[0] - 3.0).abs() < 1e-4 && (m.x[1] + 1.0).abs() < 1e-4);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Minimum<const N: usize> {
     /// The best vertex.

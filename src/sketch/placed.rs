@@ -19,9 +19,33 @@ use glam::{DVec2, DVec3};
 use super::ProjectedHelix;
 
 /// The number of parameters of one placed helix.
+///
+/// ```
+/// use strandfit::sketch::placed::{PlacedHelix, PARAMS};
+///
+/// // The parameter vector, and one column of the Jacobian per parameter.
+/// let p: [f64; PARAMS] = [0.7, 0.3, -0.2, 0.4, 0.15, 0.5];
+/// let h = PlacedHelix::from_params(&p, false);
+/// assert_eq!(h.params(), p);
+/// assert_eq!(h.param_jacobian(0.4).len(), PARAMS);
+/// ```
 pub const PARAMS: usize = 6;
 
 /// A projected helix in sketch coordinates.
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::PlacedHelix;
+///
+/// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+///
+/// // H(0) lands on the origin; the placement keeps distances.
+/// assert!((h.point(0.0) - h.origin).length() < 1e-15);
+/// let (s, u) = (-1.0, 2.0);
+/// let placed = (h.point(s) - h.point(u)).length();
+/// let own = (h.helix.point(s) - h.helix.point(u)).length();
+/// assert!((placed - own).abs() < 1e-14);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlacedHelix {
     /// The projected helix in its own frame.
@@ -41,6 +65,15 @@ fn rotate(theta: f64, v: DVec2) -> DVec2 {
 
 impl PlacedHelix {
     /// From the parameter vector `[θ, o_x, o_y, a, b, c]`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::{PlacedHelix, ProjectedHelix};
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    /// assert_eq!((h.theta, h.origin, h.reflect), (0.7, DVec2::new(0.3, -0.2), true));
+    /// assert_eq!(h.helix, ProjectedHelix::new(0.4, 0.15, 0.5));
+    /// ```
     pub fn from_params(p: &[f64; PARAMS], reflect: bool) -> Self {
         PlacedHelix {
             helix: ProjectedHelix::new(p[3], p[4], p[5]),
@@ -52,6 +85,15 @@ impl PlacedHelix {
 
     /// The parameter vector `[θ, o_x, o_y, a, b, c]` (the inverse of
     /// [`from_params`](Self::from_params)).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// assert_eq!(PlacedHelix::from_params(&h.params(), h.reflect), h);
+    /// ```
     pub fn params(&self) -> [f64; PARAMS] {
         [
             self.theta,
@@ -64,6 +106,18 @@ impl PlacedHelix {
     }
 
     /// `R S v`: a vector of the helix frame in the sketch.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// // Turned a quarter: x goes to y, or to −y when reflected first.
+    /// let p = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, 1.0, 0.2, 0.3];
+    /// let turned = PlacedHelix::from_params(&p, false).to_sketch_vector(DVec2::X);
+    /// assert!((turned - DVec2::Y).length() < 1e-15);
+    /// let reflected = PlacedHelix::from_params(&p, true).to_sketch_vector(DVec2::X);
+    /// assert!((reflected + DVec2::Y).length() < 1e-15);
+    /// ```
     pub fn to_sketch_vector(&self, v: DVec2) -> DVec2 {
         let v = if self.reflect {
             DVec2::new(-v.x, v.y)
@@ -74,6 +128,18 @@ impl PlacedHelix {
     }
 
     /// The inverse map of a sketch point into the helix frame.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // The inverse of the placement.
+    /// for t in [-2.0, 0.3, 1.7] {
+    ///     assert!((h.to_local(h.point(t)) - h.helix.point(t)).length() < 1e-14);
+    /// }
+    /// ```
     pub fn to_local(&self, p: DVec2) -> DVec2 {
         let v = rotate(-self.theta, p - self.origin);
         if self.reflect {
@@ -84,16 +150,51 @@ impl PlacedHelix {
     }
 
     /// `P(t)`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// assert_eq!(h.point(0.0), h.origin);
+    /// let t = 1.1;
+    /// assert!((h.point(t) - (h.origin + h.to_sketch_vector(h.helix.point(t)))).length() < 1e-15);
+    /// ```
     pub fn point(&self, t: f64) -> DVec2 {
         self.origin + self.to_sketch_vector(self.helix.point(t))
     }
 
     /// `P′(t)`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // Against a central difference.
+    /// let (t, e) = (0.8, 1e-6);
+    /// let d = (h.point(t + e) - h.point(t - e)) / (2.0 * e);
+    /// assert!((d - h.derivative(t)).length() < 1e-8);
+    /// ```
     pub fn derivative(&self, t: f64) -> DVec2 {
         self.to_sketch_vector(self.helix.derivative(t))
     }
 
     /// `P″(t)`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // Against a central difference of P′.
+    /// let (t, e) = (0.8, 1e-6);
+    /// let dd = (h.derivative(t + e) - h.derivative(t - e)) / (2.0 * e);
+    /// assert!((dd - h.second_derivative(t)).length() < 1e-8);
+    /// ```
     pub fn second_derivative(&self, t: f64) -> DVec2 {
         self.to_sketch_vector(self.helix.second_derivative(t))
     }
@@ -101,11 +202,44 @@ impl PlacedHelix {
     /// `∂P(t)/∂p` for `p = [θ, o_x, o_y, a, b, c]`, from
     /// `∂H/∂a = (cos t − 1, −sin c sin t)`, `∂H/∂b = (0, t cos c)`,
     /// `∂H/∂c = (0, −bt sin c − a cos c sin t)` and `∂(R v)/∂θ = (R v)^⊥`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // The origin moves the point as itself; the radius as a central
+    /// // difference says.
+    /// let t = 1.3;
+    /// let j = h.param_jacobian(t);
+    /// assert_eq!((j[1], j[2]), (DVec2::X, DVec2::Y));
+    /// let e = 1e-6;
+    /// let (mut up, mut down) = (h.params(), h.params());
+    /// up[3] += e;
+    /// down[3] -= e;
+    /// let fd = (PlacedHelix::from_params(&up, true).point(t) - PlacedHelix::from_params(&down, true).point(t)) / (2.0 * e);
+    /// assert!((fd - j[3]).length() < 1e-8);
+    /// ```
     pub fn param_jacobian(&self, t: f64) -> [DVec2; PARAMS] {
         self.evaluator().param_jacobian(t)
     }
 
     /// The lifted point `(P(t), σ z(t) + z₀)`, `σ = −1` when `mirror`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // Over the sketch point; the mirror turns z over, z0 raises it.
+    /// let t = 0.9;
+    /// let (up, mirrored) = (h.point_3d(t, false, 0.0), h.point_3d(t, true, 2.0));
+    /// assert_eq!(up.truncate(), h.point(t));
+    /// assert_eq!(mirrored.truncate(), h.point(t));
+    /// assert!((mirrored.z - (2.0 - up.z)).abs() < 1e-15);
+    /// ```
     pub fn point_3d(&self, t: f64, mirror: bool, z0: f64) -> DVec3 {
         let p = self.point(t);
         let z = self.helix.point_3d(t).z;
@@ -114,6 +248,22 @@ impl PlacedHelix {
 
     /// The unit tangent of the lift; `None` where the helix degenerates to
     /// a point (`a = b = 0`).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // Along a central difference of the lift, unit length.
+    /// let (t, e) = (0.9, 1e-6);
+    /// let tangent = h.tangent_3d(t, true).unwrap();
+    /// let d = (h.point_3d(t + e, true, 0.0) - h.point_3d(t - e, true, 0.0)).normalize();
+    /// assert!((tangent - d).length() < 1e-8);
+    /// // A helix of no radius and no pitch is a point.
+    /// let dot = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.0, 0.0, 0.5], false);
+    /// assert_eq!(dot.tangent_3d(t, false), None);
+    /// ```
     pub fn tangent_3d(&self, t: f64, mirror: bool) -> Option<DVec3> {
         let d = self.helix.derivative_3d(t);
         let xy = self.to_sketch_vector(DVec2::new(d.x, d.y));
@@ -122,17 +272,58 @@ impl PlacedHelix {
 
     /// The parameter of the point of the curve nearest `v`, by Newton's
     /// method from `guess`; see [`Evaluator::closest_parameter`].
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // A point 0.01 off the curve along its normal at t: the foot is at t.
+    /// let t = 0.6;
+    /// let (_, normal) = h.normal_offset(DVec2::ZERO, t);
+    /// let v = h.point(t) + 0.01 * normal;
+    /// assert!((h.closest_parameter(v, t + 0.1) - t).abs() < 1e-9);
+    /// ```
     pub fn closest_parameter(&self, v: DVec2, guess: f64) -> f64 {
         self.evaluator().closest_parameter(v, guess)
     }
 
     /// The signed distance of `v` from the curve at parameter `t` along the
     /// unit normal `ν = P′^⊥/|P′|`, and that normal (zero at a cusp).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// let t = 0.6;
+    /// let (_, normal) = h.normal_offset(DVec2::ZERO, t);
+    /// assert!((normal.length() - 1.0).abs() < 1e-15);
+    /// assert!(normal.dot(h.derivative(t)).abs() < 1e-15);
+    /// // Signed: the side of the normal is positive.
+    /// let (d, _) = h.normal_offset(h.point(t) - 0.02 * normal, t);
+    /// assert!((d + 0.02).abs() < 1e-15);
+    /// ```
     pub fn normal_offset(&self, v: DVec2, t: f64) -> (f64, DVec2) {
         self.evaluator().normal_offset(v, t)
     }
 
     /// The curve with its trigonometry precomputed, for inner loops.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// let e = h.evaluator();
+    /// let (p, d1, d2) = e.jet(0.4);
+    /// assert!((p - h.point(0.4)).length() < 1e-15);
+    /// assert!((d1 - h.derivative(0.4)).length() < 1e-15);
+    /// assert!((d2 - h.second_derivative(0.4)).length() < 1e-15);
+    /// ```
     pub fn evaluator(&self) -> Evaluator {
         let (st, ct) = self.theta.sin_cos();
         let sx = if self.reflect { -1.0 } else { 1.0 };
@@ -154,6 +345,21 @@ impl PlacedHelix {
 /// [`PlacedHelix::normal_offset`]), the normal, and `sin t`, `cos t` (or
 /// those a last sub-1e-9 Newton step before `t`; see
 /// [`Evaluator::project`]).
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::PlacedHelix;
+///
+/// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+///
+/// // A vertex 0.01 off the curve along its normal at t = 0.6, projected.
+/// let (_, normal) = h.normal_offset(DVec2::ZERO, 0.6);
+/// let foot = h.evaluator().project(h.point(0.6) + 0.01 * normal, 0.5);
+/// assert!((foot.t - 0.6).abs() < 1e-9);
+/// assert!((foot.offset - 0.01).abs() < 1e-12);
+/// assert!((foot.normal - normal).length() < 1e-9);
+/// assert!((foot.sin_t - foot.t.sin()).abs() < 1e-8 && (foot.cos_t - foot.t.cos()).abs() < 1e-8);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Foot {
     /// The parameter of the foot.
@@ -172,6 +378,19 @@ pub struct Foot {
 /// precomputed: `P`, `P′` and `P″` at one `t` then cost one `sin_cos(t)`
 /// (the closest-point searches and least-squares rows of every fit run
 /// through here, a few hundred thousand times per sketch).
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::PlacedHelix;
+///
+/// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+///
+/// // The same curve as the placed helix.
+/// let e = h.evaluator();
+/// for t in [-2.1, 0.0, 1.1] {
+///     assert!((e.jet(t).0 - h.point(t)).length() < 1e-15);
+/// }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Evaluator {
     origin: DVec2,
@@ -191,6 +410,19 @@ impl Evaluator {
     /// `(P(t), P′(t), P″(t))`, from `H = (a(cos t − 1), bt cos c − a sin c
     /// sin t)`, `H′ = (−a sin t, b cos c − a sin c cos t)`, `H″ = (−a cos t,
     /// a sin c sin t)`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // P′ and P″ against central differences.
+    /// let (e, t, step) = (h.evaluator(), 2.0, 1e-6);
+    /// let ((p0, d0, _), (p1, d1, _), (_, d, dd)) = (e.jet(t - step), e.jet(t + step), e.jet(t));
+    /// assert!(((p1 - p0) / (2.0 * step) - d).length() < 1e-8);
+    /// assert!(((d1 - d0) / (2.0 * step) - dd).length() < 1e-8);
+    /// ```
     pub fn jet(&self, t: f64) -> (DVec2, DVec2, DVec2) {
         let (st, ct) = t.sin_cos();
         self.jet_trig(t, st, ct)
@@ -215,6 +447,20 @@ impl Evaluator {
     /// capped at ½ rad). Local: it follows the branch of the curve near
     /// `guess`, which is what walking along a polyline needs — a projected
     /// helix can loop back near itself, so a global search could jump.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // A point 0.01 off the curve along its normal at t: found from a guess.
+    /// let e = h.evaluator();
+    /// let t = -1.0;
+    /// let (_, normal) = e.normal_offset(DVec2::ZERO, t);
+    /// let v = e.jet(t).0 + 0.01 * normal;
+    /// assert!((e.closest_parameter(v, t - 0.2) - t).abs() < 1e-9);
+    /// ```
     pub fn closest_parameter(&self, v: DVec2, guess: f64) -> f64 {
         self.project(v, guess).t
     }
@@ -226,6 +472,21 @@ impl Evaluator {
     /// O(step²·|P″|) (below 1e-17 of the curve's scale), and one more
     /// evaluation per vertex — a third of a refinement's trigonometry — is
     /// saved.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // A vertex 0.01 off the curve along its normal at t: its foot and offset.
+    /// let e = h.evaluator();
+    /// let t = 1.5;
+    /// let (_, normal) = e.normal_offset(DVec2::ZERO, t);
+    /// let foot = e.project(e.jet(t).0 + 0.01 * normal, t + 0.1);
+    /// assert!((foot.t - t).abs() < 1e-9);
+    /// assert!((foot.offset - 0.01).abs() < 1e-12);
+    /// ```
     pub fn project(&self, v: DVec2, guess: f64) -> Foot {
         let mut t = guess;
         for _ in 0..30 {
@@ -265,6 +526,16 @@ impl Evaluator {
     }
 
     /// See [`PlacedHelix::normal_offset`].
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// let v = DVec2::new(0.5, 0.1);
+    /// assert_eq!(h.evaluator().normal_offset(v, 0.3), h.normal_offset(v, 0.3));
+    /// ```
     pub fn normal_offset(&self, v: DVec2, t: f64) -> (f64, DVec2) {
         let f = self.foot(v, t);
         (f.offset, f.normal)
@@ -274,6 +545,19 @@ impl Evaluator {
     /// kept, so that the least-squares row of the same vertex
     /// ([`param_jacobian_at`](Self::param_jacobian_at)) costs no more
     /// trigonometry.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// // Measured at t as given (no search).
+    /// let (e, v, t) = (h.evaluator(), DVec2::new(0.5, 0.1), 0.3);
+    /// let foot = e.foot(v, t);
+    /// assert_eq!((foot.t, foot.sin_t, foot.cos_t), (t, t.sin(), t.cos()));
+    /// assert!((foot.offset - (v - h.point(t)).dot(foot.normal)).abs() < 1e-15);
+    /// ```
     pub fn foot(&self, v: DVec2, t: f64) -> Foot {
         let (st, ct) = t.sin_cos();
         let (p, d1, _) = self.jet_trig(t, st, ct);
@@ -288,12 +572,32 @@ impl Evaluator {
     }
 
     /// [`param_jacobian`](Self::param_jacobian) at a foot's parameter.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// let e = h.evaluator();
+    /// let foot = e.foot(DVec2::new(0.5, 0.1), 0.3);
+    /// assert_eq!(e.param_jacobian_at(&foot), e.param_jacobian(0.3));
+    /// ```
     pub fn param_jacobian_at(&self, foot: &Foot) -> [DVec2; PARAMS] {
         self.param_jacobian_trig(foot.t, foot.sin_t, foot.cos_t)
     }
 
     /// `∂P(t)/∂p` for `p = [θ, o_x, o_y, a, b, c]`; see
     /// [`PlacedHelix::param_jacobian`].
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    ///
+    /// assert_eq!(h.evaluator().param_jacobian(-0.7), h.param_jacobian(-0.7));
+    /// ```
     pub fn param_jacobian(&self, t: f64) -> [DVec2; PARAMS] {
         let (st, ct) = t.sin_cos();
         self.param_jacobian_trig(t, st, ct)

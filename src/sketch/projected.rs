@@ -13,7 +13,18 @@
 
 use glam::{DVec2, DVec3};
 
-/// `(a, b, c)`: radius `a ≥ 0`, pitch `b ≥ 0`, tilt `c` about the `x` axis.
+/// `(a, b, c)`: radius `|a|`, pitch `|b|` per radian, tilt `c` about the
+/// `x` axis (`a` and `b` are signed: a fit may leave either negative).
+///
+/// ```
+/// use strandfit::sketch::ProjectedHelix;
+///
+/// // In 3D it is a helix: constant speed √(a² + b²) whatever the tilt.
+/// let h = ProjectedHelix::new(1.3, 0.4, 0.7);
+/// for t in [-2.0, 0.0, 0.5, 3.0] {
+///     assert!((h.derivative_3d(t).length() - (1.3f64 * 1.3 + 0.4 * 0.4).sqrt()).abs() < 1e-14);
+/// }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProjectedHelix {
     /// Radius (signed; `|a|` is the radius).
@@ -26,11 +37,29 @@ pub struct ProjectedHelix {
 
 impl ProjectedHelix {
     /// The helix `(a, b, c)`.
+    ///
+    /// ```
+    /// use strandfit::sketch::ProjectedHelix;
+    ///
+    /// let h = ProjectedHelix::new(1.0, 0.2, -0.5);
+    /// assert_eq!((h.a, h.b, h.c), (1.0, 0.2, -0.5));
+    /// ```
     pub fn new(a: f64, b: f64, c: f64) -> Self {
         ProjectedHelix { a, b, c }
     }
 
     /// `H_3D,R(t)`.
+    ///
+    /// ```
+    /// use strandfit::sketch::ProjectedHelix;
+    /// use glam::{DQuat, DVec3};
+    ///
+    /// // H_Prim(t) turned by c about the x axis.
+    /// let (a, b, c, t) = (1.3, 0.4, 0.7, 2.1f64);
+    /// let prim = DVec3::new(a * (t.cos() - 1.0), b * t, a * t.sin());
+    /// let h = ProjectedHelix::new(a, b, c);
+    /// assert!((DQuat::from_rotation_x(c) * prim - h.point_3d(t)).length() < 1e-14);
+    /// ```
     pub fn point_3d(&self, t: f64) -> DVec3 {
         let (st, ct) = t.sin_cos();
         let (sc, cc) = self.c.sin_cos();
@@ -42,6 +71,16 @@ impl ProjectedHelix {
     }
 
     /// `H_3D,R′(t)`.
+    ///
+    /// ```
+    /// use strandfit::sketch::ProjectedHelix;
+    ///
+    /// // Against a central difference of the points.
+    /// let h = ProjectedHelix::new(1.3, 0.4, 0.7);
+    /// let (t, e) = (0.9, 1e-6);
+    /// let d = (h.point_3d(t + e) - h.point_3d(t - e)) / (2.0 * e);
+    /// assert!((d - h.derivative_3d(t)).length() < 1e-8);
+    /// ```
     pub fn derivative_3d(&self, t: f64) -> DVec3 {
         let (st, ct) = t.sin_cos();
         let (sc, cc) = self.c.sin_cos();
@@ -59,7 +98,7 @@ impl ProjectedHelix {
     /// let h = ProjectedHelix::new(1.0, 0.2, 0.5);
     /// let t = 0.7;
     /// assert_eq!(h.point(t), h.point_3d(t).truncate());
-    /// // Every point of the lift lies at distance |a| from the helix axis.
+    /// // The helix passes through the origin at t = 0.
     /// assert!(h.point_3d(0.0).length() < 1e-15);
     /// ```
     pub fn point(&self, t: f64) -> DVec2 {
@@ -68,6 +107,17 @@ impl ProjectedHelix {
     }
 
     /// `H′(t) = (−a sin t, b cos c − a sin c cos t)`.
+    ///
+    /// ```
+    /// use strandfit::sketch::ProjectedHelix;
+    ///
+    /// // Against a central difference, and the first two coordinates of H_3D,R′.
+    /// let h = ProjectedHelix::new(1.3, 0.4, 0.7);
+    /// let (t, e) = (0.9, 1e-6);
+    /// let d = (h.point(t + e) - h.point(t - e)) / (2.0 * e);
+    /// assert!((d - h.derivative(t)).length() < 1e-8);
+    /// assert_eq!(h.derivative(t), h.derivative_3d(t).truncate());
+    /// ```
     pub fn derivative(&self, t: f64) -> DVec2 {
         let (st, ct) = t.sin_cos();
         let (sc, cc) = self.c.sin_cos();
@@ -75,6 +125,16 @@ impl ProjectedHelix {
     }
 
     /// `H″(t) = (−a cos t, a sin c sin t)`.
+    ///
+    /// ```
+    /// use strandfit::sketch::ProjectedHelix;
+    ///
+    /// // Against a central difference of H′.
+    /// let h = ProjectedHelix::new(1.3, 0.4, 0.7);
+    /// let (t, e) = (-1.2, 1e-6);
+    /// let dd = (h.derivative(t + e) - h.derivative(t - e)) / (2.0 * e);
+    /// assert!((dd - h.second_derivative(t)).length() < 1e-8);
+    /// ```
     pub fn second_derivative(&self, t: f64) -> DVec2 {
         let (st, ct) = t.sin_cos();
         DVec2::new(-self.a * ct, self.a * self.c.sin() * st)
@@ -82,12 +142,39 @@ impl ProjectedHelix {
 
     /// The unit tangent `T̂_H(t)` (Section 4.3); `None` at a cusp of the
     /// projection (`H′ = 0`).
+    ///
+    /// ```
+    /// use strandfit::sketch::ProjectedHelix;
+    ///
+    /// let h = ProjectedHelix::new(1.0, 0.3, 0.4);
+    /// let tangent = h.unit_tangent(0.8).unwrap();
+    /// assert!((tangent.length() - 1.0).abs() < 1e-15);
+    /// assert!(tangent.perp_dot(h.derivative(0.8)).abs() < 1e-15);
+    /// // Untilted and without pitch, the projection runs back and forth along a
+    /// // segment: cusps at t = 0 and π.
+    /// assert_eq!(ProjectedHelix::new(1.0, 0.0, 0.0).unit_tangent(0.0), None);
+    /// ```
     pub fn unit_tangent(&self, t: f64) -> Option<DVec2> {
         self.derivative(t).try_normalize()
     }
 
     /// `κ_H(t) = |a(b cos c cos t − a sin c)| / (a² sin²t + (b cos c −
     /// a sin c cos t)²)^{3/2}` (Section 4.2); infinite at a cusp.
+    ///
+    /// ```
+    /// use strandfit::sketch::ProjectedHelix;
+    ///
+    /// // The plane curvature |x′y″ − y′x″| / |H′|³.
+    /// let h = ProjectedHelix::new(1.3, 0.4, 0.7);
+    /// let (d1, d2) = (h.derivative(0.6), h.second_derivative(0.6));
+    /// let kappa = d1.perp_dot(d2).abs() / d1.length().powi(3);
+    /// assert!((h.curvature(0.6) - kappa).abs() < 1e-12);
+    /// // Seen along its axis (c = π/2), a helix projects to a circle of radius |a|.
+    /// let h = ProjectedHelix::new(2.0, 0.5, std::f64::consts::FRAC_PI_2);
+    /// for t in [0.0, 1.0, 2.5] {
+    ///     assert!((h.curvature(t) - 0.5).abs() < 1e-12);
+    /// }
+    /// ```
     pub fn curvature(&self, t: f64) -> f64 {
         let (st, ct) = t.sin_cos();
         let (sc, cc) = self.c.sin_cos();

@@ -31,6 +31,19 @@ use glam::{DVec2, DVec3};
 use super::placed::{Foot, PlacedHelix, PARAMS};
 
 /// One helix of the covering with the sketch vertices it fits.
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::{refine::Piece, PlacedHelix};
+///
+/// // Twenty vertices of a placed helix, and the piece that fits them.
+/// let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+/// let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+/// let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+/// let piece = Piece { helix, first: 0, last: 19, ts, mirror: false };
+/// assert!(piece.max_distance(&points) < 1e-15);
+/// assert_eq!(piece.orientation(), 1.0);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Piece {
     /// The helix, placed in the sketch.
@@ -48,12 +61,43 @@ pub struct Piece {
 
 impl Piece {
     /// Re-project every vertex, each from its previous parameter.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+    /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+    /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+    /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+    /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+    ///
+    /// // From parameters 0.05 off, each vertex goes back to its own.
+    /// piece.ts.iter_mut().for_each(|t| *t += 0.05);
+    /// piece.reproject(&points);
+    /// assert!(piece.ts.iter().zip(&ts).all(|(a, b)| (a - b).abs() < 1e-9));
+    /// ```
     pub fn reproject(&mut self, points: &[DVec2]) {
         self.reproject_feet(points);
     }
 
     /// [`reproject`](Self::reproject), returning each vertex measured at
     /// its new parameter.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+    /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+    /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+    /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+    /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+    /// // The vertices moved 0.01 off the curve, along its normals.
+    /// let off: Vec<DVec2> = piece.feet(&points).iter().zip(&points).map(|(f, p)| *p + 0.01 * f.normal).collect();
+    /// piece.ts.iter_mut().for_each(|t| *t -= 0.05);
+    /// let feet = piece.reproject_feet(&off);
+    /// assert!(feet.iter().all(|f| (f.offset - 0.01).abs() < 1e-12));
+    /// assert!(piece.ts.iter().zip(&ts).all(|(a, b)| (a - b).abs() < 1e-9));
+    /// ```
     pub fn reproject_feet(&mut self, points: &[DVec2]) -> Vec<Foot> {
         let e = self.helix.evaluator();
         self.ts
@@ -68,6 +112,21 @@ impl Piece {
     }
 
     /// Every vertex measured at its parameter.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+    /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+    /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+    /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+    /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+    ///
+    /// // Measured where the parameters are, without a search.
+    /// let feet = piece.feet(&points);
+    /// assert_eq!(feet.len(), 20);
+    /// assert!(feet.iter().zip(&ts).all(|(f, &t)| f.t == t && f.offset.abs() < 1e-15));
+    /// ```
     pub fn feet(&self, points: &[DVec2]) -> Vec<Foot> {
         let e = self.helix.evaluator();
         self.ts
@@ -78,6 +137,19 @@ impl Piece {
     }
 
     /// The largest vertex distance from the curve.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+    /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+    /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+    /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+    /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+    /// // The vertices moved 0.01 off the curve, along its normals.
+    /// let off: Vec<DVec2> = piece.feet(&points).iter().zip(&points).map(|(f, p)| *p + 0.01 * f.normal).collect();
+    /// assert!((piece.max_distance(&off) - 0.01).abs() < 1e-12);
+    /// ```
     pub fn max_distance(&self, points: &[DVec2]) -> f64 {
         let e = self.helix.evaluator();
         self.ts
@@ -93,6 +165,19 @@ impl Piece {
     /// paper: a drawing is a view of its curve, and a piece whose depth
     /// runs to many times its drawn length (a curve seen almost end-on)
     /// fits noise, not a stroke (see [`cover`](super::cover)).
+    ///
+    /// ```
+    /// use strandfit::sketch::{refine::Piece, PlacedHelix};
+    ///
+    /// // A helix seen along its axis (tilt π/2): a circle of radius 1 drawn,
+    /// // depth 0.5 per radian, so a slope of 0.5.
+    /// let helix = PlacedHelix::from_params(&[0.0, 0.0, 0.0, 1.0, 0.5, std::f64::consts::FRAC_PI_2], false);
+    /// let ts: Vec<f64> = (0..20).map(|k| 0.05 * k as f64).collect();
+    /// let mut piece = Piece { helix, first: 0, last: 19, ts, mirror: false };
+    /// assert!((piece.depth_slope() - 0.5).abs() < 1e-3);
+    /// piece.ts.truncate(1);
+    /// assert_eq!(piece.depth_slope(), 0.0);
+    /// ```
     pub fn depth_slope(&self) -> f64 {
         let e = self.helix.evaluator();
         let (mut lo, mut hi, mut drawn) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
@@ -118,6 +203,20 @@ impl Piece {
 
     /// `+1` if `t` increases along the sketch on this piece, `−1` if it
     /// decreases.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+    /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+    /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+    /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+    /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+    ///
+    /// assert_eq!(piece.orientation(), 1.0);
+    /// piece.ts.reverse();
+    /// assert_eq!(piece.orientation(), -1.0);
+    /// ```
     pub fn orientation(&self) -> f64 {
         match self.ts.len() {
             0 | 1 => 1.0,
@@ -128,6 +227,22 @@ impl Piece {
 
     /// The unit tangent of the lift at the first or last vertex, pointing
     /// along the sketch.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+    /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+    /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+    /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+    /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+    ///
+    /// let end = piece.end_tangent(true);
+    /// assert!((end.length() - 1.0).abs() < 1e-12);
+    /// // Along the sketch: run the other way, the start's tangent is the end's, reversed.
+    /// piece.ts.reverse();
+    /// assert!((piece.end_tangent(false) + end).length() < 1e-12);
+    /// ```
     pub fn end_tangent(&self, at_end: bool) -> DVec3 {
         let t = if at_end {
             self.ts[self.ts.len() - 1]
@@ -139,6 +254,24 @@ impl Piece {
 }
 
 /// Weights of the objective.
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+/// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+/// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+/// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+/// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+/// use strandfit::sketch::refine::{objective, Objective};
+///
+/// // The vertices moved 0.01 off the curve, along its normals.
+/// let off: Vec<DVec2> = piece.feet(&points).iter().zip(&points).map(|(f, p)| *p + 0.01 * f.normal).collect();
+/// // Each vertex one E_max off: E_D = 20, weighed by 1 − α_T (no junctions).
+/// let e = |alpha_t| objective(&off, std::slice::from_ref(&piece), &Objective { alpha_t, emax: 0.01 });
+/// assert!((e(0.0) - 20.0).abs() < 1e-9);
+/// assert!((e(0.5) - 10.0).abs() < 1e-9);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Objective {
     /// `α_T ∈ [0, 1)`: the weight of tangent continuity.
@@ -148,6 +281,24 @@ pub struct Objective {
 }
 
 /// What a refinement did.
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+/// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+/// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+/// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+/// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+/// use strandfit::sketch::refine::{refine, Objective};
+///
+/// // A helix a little off the vertices, refined in at most 50 iterations.
+/// piece.helix.helix.a += 0.02;
+/// piece.reproject(&points);
+/// let report = refine(&points, std::slice::from_mut(&mut piece), &Objective { alpha_t: 0.5, emax: 0.01 }, 50);
+/// assert!(report.iterations >= 1 && report.iterations <= 50);
+/// assert!(report.after < report.before);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RefineReport {
     /// Iterations run.
@@ -164,6 +315,32 @@ fn joined(pieces: &[Piece], i: usize) -> bool {
 }
 
 /// `E` for the current parameters and projections.
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+/// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+/// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+/// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+/// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+/// use strandfit::sketch::refine::{objective, Objective};
+///
+/// // The piece cut in two at vertex 10: no kink, no distance, E = 0.
+/// let mut left = piece.clone();
+/// left.last = 10;
+/// left.ts.truncate(11);
+/// let mut right = piece.clone();
+/// right.first = 10;
+/// right.ts.drain(..10);
+/// let obj = Objective { alpha_t: 0.5, emax: 0.01 };
+/// assert!(objective(&points, &[left.clone(), right.clone()], &obj) < 1e-20);
+/// // Lift the right half with the mirror helix: E = α_T ‖T̂⁻ − T̂⁺‖².
+/// right.mirror = true;
+/// let kink = (left.end_tangent(true) - right.end_tangent(false)).length_squared();
+/// assert!(kink > 0.01);
+/// assert!((objective(&points, &[left, right], &obj) - 0.5 * kink).abs() < 1e-12);
+/// ```
 pub fn objective(points: &[DVec2], pieces: &[Piece], obj: &Objective) -> f64 {
     let feet: Vec<Vec<Foot>> = pieces.iter().map(|p| p.feet(points)).collect();
     objective_with(pieces, &feet, obj)
@@ -205,6 +382,28 @@ fn perturbed_tangent(piece: &Piece, params: &[f64; PARAMS], v: DVec2, at_end: bo
 /// vertex ranges fixed). Stops after `max_iterations`, when a step no
 /// longer lowers `E` by a relative `1e-13`, or when `E` reaches zero to
 /// rounding.
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+/// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+/// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+/// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+/// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+/// use strandfit::sketch::refine::{refine, Objective};
+///
+/// // From a helix a little off (radius, pitch and rotation), back onto the
+/// // vertices.
+/// piece.helix.helix.a += 0.02;
+/// piece.helix.helix.b -= 0.01;
+/// piece.helix.theta += 0.02;
+/// piece.reproject(&points);
+/// assert!(piece.max_distance(&points) > 1e-3);
+/// let report = refine(&points, std::slice::from_mut(&mut piece), &Objective { alpha_t: 0.5, emax: 0.01 }, 100);
+/// assert!(report.after < 1e-12 * report.before, "{report:?}");
+/// assert!(piece.max_distance(&points) < 1e-7);
+/// ```
 pub fn refine(
     points: &[DVec2],
     pieces: &mut [Piece],
@@ -215,6 +414,28 @@ pub fn refine(
 }
 
 /// [`refine`], stopping once a step lowers `E` by a relative `gain` or less.
+///
+/// ```
+/// # use glam::DVec2;
+/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+/// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+/// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+/// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+/// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+/// use strandfit::sketch::refine::{refine, refine_to, Objective};
+///
+/// // Stopping at the first step that gains less than half: fewer iterations.
+/// piece.helix.helix.a += 0.02;
+/// piece.helix.theta += 0.02;
+/// piece.reproject(&points);
+/// let obj = Objective { alpha_t: 0.5, emax: 0.01 };
+/// let mut full = piece.clone();
+/// let all = refine(&points, std::slice::from_mut(&mut full), &obj, 100);
+/// let some = refine_to(&points, std::slice::from_mut(&mut piece), &obj, 100, 0.5);
+/// assert!(some.after < some.before);
+/// assert!(some.iterations < all.iterations, "{some:?} {all:?}");
+/// ```
 pub fn refine_to(
     points: &[DVec2],
     pieces: &mut [Piece],
