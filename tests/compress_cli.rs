@@ -340,17 +340,19 @@ fn version_1_containers_still_decode() {
     assert_eq!(r["curve_count"].as_u64(), Some(300));
 }
 
-#[test]
-fn codec_model_6_containers_still_decode() {
-    // Written by the build before codec model 7 (whose screw prediction
-    // fits its rotation to five step pairs): 24 curly hairs at 0.1 mm, 11
-    // of them points curves, some predicted by the model-6 screw. Today's
-    // build decodes them within the tolerance, both ways.
+/// A committed container of an older codec model (`tests/data/sfh/NAME`):
+/// `inspect` says its model is `model`, and `decompress` with the defaults
+/// writes `back.tck` in a fresh temporary folder. Returns the fixtures'
+/// folder, the temporary one and that file.
+fn decode_old_fixture(
+    name: &str,
+    model: u64,
+) -> (std::path::PathBuf, tempfile::TempDir, std::path::PathBuf) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/sfh");
-    let old = dir.join("hair24_model6.sfh");
+    let old = dir.join(name);
     let out = ok(&["inspect", old.to_str().unwrap(), "--json"]);
     let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(r["header"]["model"].as_u64(), Some(6), "{r}");
+    assert_eq!(r["header"]["model"].as_u64(), Some(model), "{r}");
     let tmp = tempfile::tempdir().unwrap();
     let back = tmp.path().join("back.tck");
     ok(&[
@@ -359,6 +361,16 @@ fn codec_model_6_containers_still_decode() {
         "-o",
         back.to_str().unwrap(),
     ]);
+    (dir, tmp, back)
+}
+
+#[test]
+fn codec_model_6_containers_still_decode() {
+    // Written by the build before codec model 7 (whose screw prediction
+    // fits its rotation to five step pairs): 24 curly hairs at 0.1 mm, 11
+    // of them points curves, some predicted by the model-6 screw. Today's
+    // build decodes them within the tolerance, both ways.
+    let (dir, _tmp, back) = decode_old_fixture("hair24_model6.sfh", 6);
     let (_, a) = read_all(&dir.join("hair24.tck"), None).unwrap();
     let (_, b) = read_all(&back, None).unwrap();
     assert_eq!((a.len(), b.len()), (24, 24));
@@ -373,19 +385,8 @@ fn codec_model_7_containers_decode_to_the_points_they_did() {
     // Written by the last build of codec model 7 (11-bit contexts adapted
     // at a fixed rate; model 8 warms them up): the same 24 hairs at 0.1
     // mm. Today's build decodes exactly the file that build decoded.
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/sfh");
+    let (dir, tmp, back) = decode_old_fixture("hair24_model7.sfh", 7);
     let old = dir.join("hair24_model7.sfh");
-    let out = ok(&["inspect", old.to_str().unwrap(), "--json"]);
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(r["header"]["model"].as_u64(), Some(7), "{r}");
-    let tmp = tempfile::tempdir().unwrap();
-    let back = tmp.path().join("back.tck");
-    ok(&[
-        "decompress",
-        old.to_str().unwrap(),
-        "-o",
-        back.to_str().unwrap(),
-    ]);
     let then = std::fs::read(dir.join("hair24_model7_decoded.tck")).unwrap();
     assert!(
         std::fs::read(&back).unwrap() == then,

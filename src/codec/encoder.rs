@@ -166,12 +166,19 @@ impl<'a> CurveEncoder<'a> {
         kind: ElementKind,
         steps: i64,
     ) -> Option<Candidate> {
-        let d = self.points[j] - state.point;
-        let (_, e1, e2) = state.predicted_frame(state.frame_chord(self.q.length));
-        let a1 = Quantiser::index(d.dot(e1), self.q.offset)?;
-        let a2 = Quantiser::index(d.dot(e2), self.q.offset)?;
+        let [x1, x2] = self.offsets_to(state, j);
+        let a1 = Quantiser::index(x1, self.q.offset)?;
+        let a2 = Quantiser::index(x2, self.q.offset)?;
         self.candidate_with_code(state, from, j, kind, steps, [a1, a2])
             .await
+    }
+
+    /// Input vertex `j`'s offsets from `state` across its predicted chord
+    /// (before quantisation).
+    fn offsets_to(&self, state: &ChainState, j: usize) -> [f64; 2] {
+        let d = self.points[j] - state.point;
+        let (_, e1, e2) = state.predicted_frame(state.frame_chord(self.q.length));
+        [d.dot(e1), d.dot(e2)]
     }
 
     /// A G1 or straight element ending a chord of `steps` and offsets
@@ -241,9 +248,9 @@ impl<'a> CurveEncoder<'a> {
             return c;
         }
         let j = c.reach;
-        let d = self.points[j] - state.point;
-        let (_, e1, e2) = state.predicted_frame(state.frame_chord(self.q.length));
-        let t = [d.dot(e1), d.dot(e2)].map(|x| Quantiser::index_toward_zero(x, self.q.offset));
+        let t = self
+            .offsets_to(state, j)
+            .map(|x| Quantiser::index_toward_zero(x, self.q.offset));
         let [Some(t1), Some(t2)] = t else {
             return c;
         };
