@@ -66,7 +66,7 @@ fn main() {
         _ => 1,
     };
     println!(
-        "| drawing | noise σ/L | seed | helices | depth / exact's | max err / σ | noise found / L | E_max / L | ms |"
+        "| drawing | noise σ/L | seed | helices | depth / exact's | drawn err / σ | noise found / L | E_max / L | ms |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     for (name, d) in &drawings {
@@ -83,9 +83,9 @@ fn main() {
                     "| {name} | {noise:.0e} | {seed} | {} | {:.2} | {:.1} | {:.1e} | {:.1e} | {ms:.0} |",
                     r.helices.len(),
                     depth(&r) / exact_depth,
-                    if noise > 0.0 { r.max_error / (noise * l) } else { f64::NAN },
-                    r.noise / r.length,
-                    r.emax / r.length,
+                    if noise > 0.0 { r.drawn_error / (noise * l) } else { f64::NAN },
+                    r.noise / l,
+                    r.emax / l,
                 );
                 if std::env::var("SKETCH_VERBOSE").is_ok() {
                     for h in &r.helices {

@@ -537,6 +537,11 @@ pub struct SketchArgs {
     /// or the paper's uniform resampling (corners between samples are cut).
     #[arg(long, value_enum, default_value_t = ResampleArg::Densify)]
     pub resample: ResampleArg,
+    /// Fit the drawn vertices as they are, even where the drawing is
+    /// noisy (by default a drawing whose noise is over 3e-6 of its length
+    /// is denoised first, keeping its corners).
+    #[arg(long = "no-denoise")]
+    pub no_denoise: bool,
 }
 
 /// See [`crate::sketch::Resampling`].

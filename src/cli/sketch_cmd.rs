@@ -64,6 +64,8 @@ struct SketchOut {
     /// The drawing's noise as estimated (standard deviation per
     /// coordinate, in the drawing's units).
     noise_distance: f64,
+    /// Whether the drawing was denoised before the fit (`--no-denoise`).
+    denoised: bool,
     alpha_t: f64,
     helices: Vec<HelixOut>,
     junctions: Vec<JunctionOut>,
@@ -133,7 +135,11 @@ fn g1_answer(g: &G1Refit, vertices: usize) -> G1Out {
 
 #[derive(Serialize)]
 struct ProjectionOut {
+    /// Of the vertices fitted (denoised where `denoised`, evened out where
+    /// `resampled`).
     max_distance: f64,
+    /// Of the drawn vertices.
+    drawn_max_distance: f64,
     rms_distance: f64,
     /// `max_distance` over the drawing's length.
     max_relative_distance: f64,
@@ -187,6 +193,7 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
         },
         emax_distance: r.emax,
         noise_distance: r.noise,
+        denoised: r.denoised,
         alpha_t: opts.alpha_t,
         helices,
         max_tangent_angle_deg: junctions
@@ -196,6 +203,7 @@ fn answer(input: String, r: &SketchLift, opts: &SketchOptions) -> SketchOut {
         junctions,
         projection: ProjectionOut {
             max_distance: r.max_error,
+            drawn_max_distance: r.drawn_error,
             rms_distance: r.rms_error,
             max_relative_distance: r.max_error / r.length,
         },
@@ -230,6 +238,7 @@ pub fn run(args: &SketchArgs) -> Result<()> {
             ResampleArg::Densify => Resampling::Densify,
             ResampleArg::Uniform => Resampling::Uniform,
         },
+        denoise: !args.no_denoise,
         ..Default::default()
     };
     if opts.emax.is_some_and(|e| !(e > 0.0 && e < 1.0)) {

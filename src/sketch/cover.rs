@@ -67,16 +67,23 @@ use super::refine::{refine_to, Objective, Piece};
 /// nearly equal helices, by ~1e-4 of `E` per iteration, for hundreds of
 /// iterations that change no vertex by a visible fraction of `E_max`. The
 /// fine fit of Section 7 converges fully afterwards.
-const COVER_GAIN: f64 = 1e-6;
+pub const COVER_GAIN: f64 = 1e-6;
+
+/// [`COVER_GAIN`] for a denoised drawing: no helix fits it closer than the
+/// noise left, and the fits crawl towards their minimum for many more
+/// iterations than on a clean drawing. Measured on the noisy drawings of
+/// `benches/sketch_noise.rs` (40 at 0.1 % noise): the same helix counts
+/// as with 1e-6, in half the time.
+pub const NOISY_COVER_GAIN: f64 = 1e-3;
 
 /// Refine one piece of the covering (see [`COVER_GAIN`]).
-fn refine(points: &[DVec2], piece: &mut Piece, obj: &Objective, max_iterations: usize) {
+fn refine(points: &[DVec2], piece: &mut Piece, obj: &Objective, gain: f64, max_iterations: usize) {
     refine_to(
         points,
         std::slice::from_mut(piece),
         obj,
         max_iterations,
-        COVER_GAIN,
+        gain,
     );
 }
 use super::ProjectedHelix;
@@ -112,11 +119,11 @@ use super::ProjectedHelix;
 /// #     let geometry = strandfit::sketch::estimate::tangents_and_curvatures(&unit, 3);
 /// #     (unit, geometry)
 /// # }
-/// use strandfit::sketch::cover::{cover, CoverOptions, MIN_VERTICES};
+/// use strandfit::sketch::cover::{cover, CoverOptions, COVER_GAIN, MIN_VERTICES};
 ///
 /// // Every helix of a covering fits at least MIN_VERTICES vertices.
 /// let (points, geometry) = unit(&two_helices());
-/// let pieces = cover(&points, &geometry, &CoverOptions { emax: 1e-3, nmax: 12, end_guard: 3 });
+/// let pieces = cover(&points, &geometry, &CoverOptions { emax: 1e-3, nmax: 12, end_guard: 3, gain: COVER_GAIN });
 /// assert!(pieces.iter().all(|p| p.last + 1 - p.first >= MIN_VERTICES));
 /// ```
 pub const MIN_VERTICES: usize = 4;
@@ -185,11 +192,11 @@ const REFINED_CANDIDATES: usize = 3;
 /// #     let geometry = strandfit::sketch::estimate::tangents_and_curvatures(&unit, 3);
 /// #     (unit, geometry)
 /// # }
-/// use strandfit::sketch::cover::{cover, CoverOptions};
+/// use strandfit::sketch::cover::{cover, CoverOptions, COVER_GAIN};
 ///
 /// // One helix drawn: one piece, every vertex within E_max of it.
 /// let (points, geometry) = unit(&one_helix());
-/// let opts = CoverOptions { emax: 1e-3, nmax: 12, end_guard: 3 };
+/// let opts = CoverOptions { emax: 1e-3, nmax: 12, end_guard: 3, gain: COVER_GAIN };
 /// let pieces = cover(&points, &geometry, &opts);
 /// assert_eq!(pieces.len(), 1);
 /// assert_eq!((pieces[0].first, pieces[0].last), (0, 59));
@@ -203,6 +210,10 @@ pub struct CoverOptions {
     pub nmax: usize,
     /// Vertices at either end of the sketch not taken as seeds.
     pub end_guard: usize,
+    /// The covering's refinements stop once an iteration gains less than
+    /// this, relative: [`COVER_GAIN`], or [`NOISY_COVER_GAIN`] for a
+    /// denoised drawing.
+    pub gain: f64,
 }
 
 /// Parameter of the vertex after `t` along the walk direction `dir` (±1):
@@ -450,8 +461,8 @@ fn fit_one(
         .map(|(_, _, mut piece)| {
             for _ in 0..GROW_ROUNDS {
                 if piece.ts.len() >= 3 {
-                    refine(points, &mut piece, &obj, GROW_ITERATIONS);
-                    hop(points, &mut piece, &obj);
+                    refine(points, &mut piece, &obj, opts.gain, GROW_ITERATIONS);
+                    hop(points, &mut piece, &obj, opts.gain);
                 }
                 if !extend(&mut piece, points, (lo, hi), opts.emax) {
                     break;
@@ -488,7 +499,7 @@ fn fit_one(
 /// minimum: over a short arc many helices fit nearly as well, and the one
 /// reached need not extend), restart it from the radius scaled by each of
 /// [`HOP_SCALES`] and keep the best.
-fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective) {
+fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective, gain: f64) {
     let cost = |p: &Piece| distance_cost(points, p, obj);
     let mut best_cost = cost(piece);
     if piece.max_distance(points) <= HOP_BELOW * obj.emax {
@@ -504,7 +515,7 @@ fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective) {
             p[3] *= scale;
             trial.helix = PlacedHelix::from_params(&p, trial.helix.reflect);
             trial.reproject(points);
-            refine(points, &mut trial, obj, GROW_ITERATIONS);
+            refine(points, &mut trial, obj, gain, GROW_ITERATIONS);
             (cost(&trial), trial)
         })
         .collect();
@@ -519,17 +530,23 @@ fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective) {
 /// Force `piece` to span `[first, last]`, projecting the new vertices.
 fn stretch(piece: &mut Piece, points: &[DVec2], first: usize, last: usize) {
     let e = piece.helix.evaluator();
+    let orient = piece.orientation();
+    // As in the walk: a foot behind its predecessor (a loop of the
+    // projection crossed, or noise along the stroke) stays at the
+    // predecessor's parameter, for the fit to move on from.
     while piece.first > first {
         piece.first -= 1;
         let t0 = piece.ts[0];
         let t = next_parameter(&e, points[piece.first], t0);
-        piece.ts.insert(0, t);
+        piece
+            .ts
+            .insert(0, if (t0 - t) * orient > 0.0 { t } else { t0 });
     }
     while piece.last < last {
         piece.last += 1;
         let t0 = piece.ts[piece.ts.len() - 1];
         let t = next_parameter(&e, points[piece.last], t0);
-        piece.ts.push(t);
+        piece.ts.push(if (t - t0) * orient > 0.0 { t } else { t0 });
     }
 }
 
@@ -555,14 +572,15 @@ fn meet_at(
     right: &Piece,
     j: usize,
     obj: &Objective,
+    gain: f64,
     iterations: usize,
 ) -> (f64, Piece, Piece) {
     let mut l = left.clone();
     set_range(&mut l, points, left.first, j);
     let mut r = right.clone();
     set_range(&mut r, points, j, right.last);
-    refine(points, &mut l, obj, iterations);
-    refine(points, &mut r, obj, iterations);
+    refine(points, &mut l, obj, gain, iterations);
+    refine(points, &mut r, obj, gain, iterations);
     let score = distance_cost(points, &l, obj) + distance_cost(points, &r, obj);
     (score, l, r)
 }
@@ -604,7 +622,8 @@ fn polish_junctions(points: &[DVec2], pieces: &mut [Piece], opts: &CoverOptions)
             let trials: Vec<(f64, usize, Piece, Piece)> = (lo..=hi)
                 .into_par_iter()
                 .map(|j| {
-                    let (score, l, r) = meet_at(points, left, right, j, &obj, POLISH_ITERATIONS);
+                    let (score, l, r) =
+                        meet_at(points, left, right, j, &obj, opts.gain, POLISH_ITERATIONS);
                     (score, j, l, r)
                 })
                 .collect();
@@ -661,11 +680,11 @@ const POLISH_ITERATIONS: usize = 30;
 /// #     let geometry = strandfit::sketch::estimate::tangents_and_curvatures(&unit, 3);
 /// #     (unit, geometry)
 /// # }
-/// use strandfit::sketch::cover::{cover, CoverOptions};
+/// use strandfit::sketch::cover::{cover, CoverOptions, COVER_GAIN};
 ///
 /// // Two helices drawn: two pieces, joined at the corner, each within E_max.
 /// let (points, geometry) = unit(&two_helices());
-/// let opts = CoverOptions { emax: 1e-3, nmax: 12, end_guard: 3 };
+/// let opts = CoverOptions { emax: 1e-3, nmax: 12, end_guard: 3, gain: COVER_GAIN };
 /// let pieces = cover(&points, &geometry, &opts);
 /// let spans: Vec<_> = pieces.iter().map(|p| (p.first, p.last)).collect();
 /// assert_eq!(spans, [(0, 24), (24, 42)]);
@@ -726,8 +745,8 @@ fn take_over_implausible(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &Cover
                 let mut trial = pieces[j].clone();
                 let (f, l) = (trial.first.min(first), trial.last.max(last));
                 stretch(&mut trial, points, f, l);
-                refine(points, &mut trial, &obj, GROW_ITERATIONS);
-                hop(points, &mut trial, &obj);
+                refine(points, &mut trial, &obj, opts.gain, GROW_ITERATIONS);
+                hop(points, &mut trial, &obj, opts.gain);
                 plausible(&trial).then(|| (trial.max_distance(points), j, trial))
             })
             .collect();
@@ -751,6 +770,21 @@ fn take_over_implausible(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &Cover
 /// that stops a few vertices short of a true junction leaves such a
 /// sliver, and a sliver is a spurious junction.
 fn absorb(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
+    absorb_while(points, pieces, opts, |_, l, r| {
+        let d = l.max_distance(points).max(r.max_distance(points));
+        (d <= opts.emax).then_some(d)
+    });
+}
+
+/// Drop the piece between neighbours `i − 1` and `i + 1` where
+/// `accept(trio, left, right)` scores the neighbours grown to meet inside
+/// it (the lower the better; `None`: refused), until none is dropped.
+fn absorb_while(
+    points: &[DVec2],
+    pieces: &mut Vec<Piece>,
+    opts: &CoverOptions,
+    accept: impl Fn(&[Piece], &Piece, &Piece) -> Option<f64>,
+) {
     let obj = Objective {
         alpha_t: 0.0,
         emax: opts.emax,
@@ -783,7 +817,17 @@ fn absorb(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
             best = meetings
                 .into_par_iter()
                 // `left` ends and `right` starts inside `mid`: both grow.
-                .map(|j| meet_at(points, left, right, j, &obj, MERGE_PROBE_ITERATIONS))
+                .map(|j| {
+                    meet_at(
+                        points,
+                        left,
+                        right,
+                        j,
+                        &obj,
+                        opts.gain,
+                        MERGE_PROBE_ITERATIONS,
+                    )
+                })
                 .collect::<Vec<_>>()
                 .into_iter()
                 .min_by(|x, y| x.0.total_cmp(&y.0));
@@ -793,10 +837,9 @@ fn absorb(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
                 if probe > MERGE_PROBE_LIMIT * opts.emax {
                     return None;
                 }
-                refine(points, &mut l, &obj, GROW_ITERATIONS);
-                refine(points, &mut r, &obj, GROW_ITERATIONS);
-                let d = l.max_distance(points).max(r.max_distance(points));
-                (d <= opts.emax).then_some((d, l, r))
+                refine(points, &mut l, &obj, opts.gain, GROW_ITERATIONS);
+                refine(points, &mut r, &obj, opts.gain, GROW_ITERATIONS);
+                accept(&pieces[i - 1..=i + 1], &l, &r).map(|score| (score, l, r))
             });
         }
         match best {
@@ -834,6 +877,22 @@ fn meeting_candidates(first: usize, last: usize) -> Vec<usize> {
 /// [`hop`]); the merged fit starts from a helix that already fits a
 /// longer stretch, which usually escapes it.
 fn merge(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
+    merge_while(points, pieces, opts, |_, merged| {
+        let d = merged.max_distance(points);
+        (d <= opts.emax).then_some(d)
+    });
+}
+
+/// Merge neighbours `i − 1` and `i` where `accept(pair, merged)` scores a
+/// merged trial (the lower the better; `None`: refused), until no pair
+/// merges. The trials are refined from either neighbour's parameters over
+/// both ranges and must be [`plausible`].
+fn merge_while(
+    points: &[DVec2],
+    pieces: &mut Vec<Piece>,
+    opts: &CoverOptions,
+    accept: impl Fn(&[Piece], &Piece) -> Option<f64> + Sync,
+) {
     let obj = Objective {
         alpha_t: 0.0,
         emax: opts.emax,
@@ -841,6 +900,7 @@ fn merge(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
     let mut i = 1;
     while i < pieces.len() {
         let (first, last) = (pieces[i - 1].first, pieces[i].last);
+        let pair = &pieces[i - 1..=i];
         let trials: Vec<Option<(f64, Piece)>> = [&pieces[i - 1], &pieces[i]]
             .into_par_iter()
             .map(|start| {
@@ -855,15 +915,17 @@ fn merge(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
                     let f = trial.first - (trial.first - first) * k / MERGE_STEPS;
                     let l = trial.last + (last - trial.last) * k / MERGE_STEPS;
                     stretch(&mut trial, points, f, l);
-                    refine(points, &mut trial, &obj, MERGE_PROBE_ITERATIONS);
+                    refine(points, &mut trial, &obj, opts.gain, MERGE_PROBE_ITERATIONS);
                     if trial.max_distance(points) > MERGE_PROBE_LIMIT * opts.emax {
                         return None;
                     }
                 }
-                refine(points, &mut trial, &obj, GROW_ITERATIONS);
-                hop(points, &mut trial, &obj);
-                let d = trial.max_distance(points);
-                (d <= opts.emax && plausible(&trial)).then_some((d, trial))
+                refine(points, &mut trial, &obj, opts.gain, GROW_ITERATIONS);
+                hop(points, &mut trial, &obj, opts.gain);
+                if !plausible(&trial) {
+                    return None;
+                }
+                accept(pair, &trial).map(|score| (score, trial))
             })
             .collect();
         let best = trials
@@ -879,6 +941,77 @@ fn merge(points: &[DVec2], pieces: &mut Vec<Piece>, opts: &CoverOptions) {
             None => i += 1,
         }
     }
+}
+
+/// The drawn vertices of a denoised drawing, for [`merge_noisy`]: each in
+/// the units the covering ran in, with the index of its denoised
+/// counterpart among the covered points, and the drawing's noise (per
+/// coordinate, same units).
+#[derive(Clone, Debug)]
+pub(super) struct Drawn<'a> {
+    /// `(index of the counterpart, drawn vertex)`, in order.
+    pub vertices: &'a [(usize, DVec2)],
+    /// The noise `σ` of the drawn vertices.
+    pub sigma: f64,
+}
+
+impl Drawn<'_> {
+    /// Sum of squared distances of the drawn vertices in `piece`'s range
+    /// from its projected curve (each by a closest-point search from its
+    /// counterpart's parameter).
+    fn residual(&self, piece: &Piece) -> f64 {
+        let e = piece.helix.evaluator();
+        self.vertices
+            .iter()
+            .filter(|(j, _)| piece.first <= *j && *j <= piece.last)
+            .map(|&(j, v)| {
+                let f = e.project(v, piece.ts[j - piece.first]);
+                (v - e.jet(f.t).0).length_squared()
+            })
+            .sum()
+    }
+}
+
+/// Parameters one more helix adds to a covering: `a`, `b`, `c`, `θ`, the
+/// origin's two coordinates and the junction's place.
+const PARAMS_PER_HELIX: f64 = 7.0;
+
+/// Beyond the paper, for noisy drawings: merge neighbours where one helix
+/// explains the drawn vertices about as well as two, by the Bayesian
+/// information criterion: the merged helix's residual sum of squares over
+/// the drawn vertices may exceed the pair's by up to `k σ² ln n` (`k`
+/// parameters saved, [`PARAMS_PER_HELIX`]; `n` drawn vertices in the
+/// pair). Under noise, the covering's test (every vertex within `E_max`)
+/// fails wherever the noise peaks and cuts a helix in two; the residual
+/// sum weighs all vertices, so a merge is refused only where the two
+/// helices are really different (a corner, a change of radius or pitch).
+pub(super) fn merge_noisy(
+    points: &[DVec2],
+    pieces: &mut Vec<Piece>,
+    opts: &CoverOptions,
+    drawn: &Drawn<'_>,
+) {
+    let s2 = drawn.sigma * drawn.sigma;
+    let count = |first: usize, last: usize| {
+        drawn
+            .vertices
+            .iter()
+            .filter(|(j, _)| first <= *j && *j <= last)
+            .count()
+            .max(2) as f64
+    };
+    absorb_while(points, pieces, opts, |trio, l, r| {
+        let n = count(trio[0].first, trio[2].last);
+        let before: f64 = trio.iter().map(|p| drawn.residual(p)).sum();
+        let cost = drawn.residual(l) + drawn.residual(r) - before;
+        (cost <= PARAMS_PER_HELIX * s2 * n.ln()).then_some(cost)
+    });
+    merge_while(points, pieces, opts, |pair, merged| {
+        let n = count(merged.first, merged.last);
+        let split: f64 = pair.iter().map(|p| drawn.residual(p)).sum();
+        let cost = drawn.residual(merged) - split;
+        (cost <= PARAMS_PER_HELIX * s2 * n.ln()).then_some(cost)
+    });
 }
 
 fn cover_range(
@@ -974,6 +1107,7 @@ mod tests {
             emax: 1e-3,
             nmax: 12,
             end_guard: 3,
+            gain: COVER_GAIN,
         };
         let (h1, h2) = (&truth[0].0, &truth[1].0);
         let mut pieces = vec![
@@ -1000,6 +1134,7 @@ mod tests {
             emax: 1e-3,
             nmax: 12,
             end_guard: 3,
+            gain: COVER_GAIN,
         };
         let mut pieces: Vec<Piece> = truth
             .iter()
@@ -1011,6 +1146,88 @@ mod tests {
         merge(&points, &mut pieces, &opts);
         assert_eq!(pieces, before);
         assert!(pieces.iter().all(|p| p.max_distance(&points) < 1e-12));
+    }
+
+    /// `points` with Gaussian noise of `sigma` on each coordinate.
+    fn noisy(points: &[DVec2], sigma: f64, seed: u64) -> Vec<DVec2> {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut gauss = move || {
+            let u: f64 = rng.gen_range(f64::MIN_POSITIVE..1.0);
+            let v: f64 = rng.gen();
+            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        };
+        points
+            .iter()
+            .map(|&p| p + sigma * DVec2::new(gauss(), gauss()))
+            .collect()
+    }
+
+    #[test]
+    fn noisy_halves_of_one_helix_are_merged_and_two_helices_are_not() {
+        // E_max at 2σ: about one vertex in seven is farther from the true
+        // curve than that, so the covering's test cuts a noisy helix and
+        // refuses to merge it back; the residuals over the drawn vertices
+        // tell one helix from two.
+        let sigma = 2e-3;
+        let opts = CoverOptions {
+            emax: 2.0 * sigma,
+            nmax: 12,
+            end_guard: 3,
+            gain: NOISY_COVER_GAIN,
+        };
+        let obj = Objective {
+            alpha_t: 0.0,
+            emax: opts.emax,
+        };
+        for seed in 0..4 {
+            // One helix, cut at vertex 40 of 80.
+            let (clean, truth) = chain(&[[0.3, 0.1, 0.4]], 80);
+            let points = noisy(&clean, sigma, seed);
+            let h = &truth[0].0;
+            let mut pieces = vec![
+                piece_on(h, &points, 0, 40, 0.0),
+                piece_on(h, &points, 40, 79, 1.0),
+            ];
+            for p in &mut pieces {
+                refine(&points, p, &obj, opts.gain, GROW_ITERATIONS);
+            }
+            let mut strict = pieces.clone();
+            merge(&points, &mut strict, &opts);
+            assert_eq!(strict.len(), 2, "seed {seed}: within E_max");
+            let vertices: Vec<(usize, DVec2)> = points.iter().copied().enumerate().collect();
+            let drawn = Drawn {
+                vertices: &vertices,
+                sigma,
+            };
+            merge_noisy(&points, &mut pieces, &opts, &drawn);
+            assert_eq!(pieces.len(), 1, "seed {seed}");
+            assert_eq!((pieces[0].first, pieces[0].last), (0, 79));
+            // The merged helix fits the drawing to its noise.
+            let rms = (drawn.residual(&pieces[0]) / 80.0).sqrt();
+            assert!(rms < 1.2 * sigma, "seed {seed}: {}", rms / sigma);
+
+            // Two helices with a corner between them stay two, and their
+            // junction stays at the corner.
+            let (clean, truth) = chain(&[[0.3, 0.1, 0.4], [0.2, 0.15, -0.3]], 40);
+            let points = noisy(&clean, sigma, seed);
+            let mut pieces: Vec<Piece> = truth
+                .iter()
+                .enumerate()
+                .map(|(k, (h, _))| piece_on(h, &points, 39 * k, 39 * (k + 1), 0.0))
+                .collect();
+            for p in &mut pieces {
+                refine(&points, p, &obj, opts.gain, GROW_ITERATIONS);
+            }
+            let vertices: Vec<(usize, DVec2)> = points.iter().copied().enumerate().collect();
+            let drawn = Drawn {
+                vertices: &vertices,
+                sigma,
+            };
+            merge_noisy(&points, &mut pieces, &opts, &drawn);
+            assert_eq!(pieces.len(), 2, "seed {seed}");
+            assert_eq!(pieces[0].last, 39, "seed {seed}");
+        }
     }
 
     #[test]

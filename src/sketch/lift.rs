@@ -20,8 +20,13 @@
 
 use glam::{DVec2, DVec3};
 
-use super::cover::{cover, plausible, CoverOptions};
-use super::estimate::{densify, estimate_noise, resample, smoothed, tangents_and_curvatures};
+use super::cover::{
+    cover, merge_noisy, plausible, CoverOptions, Drawn, COVER_GAIN, NOISY_COVER_GAIN,
+};
+use super::estimate::{
+    denoise, densify, estimate_noise, resample, residual_agreement, smoothed,
+    tangents_and_curvatures,
+};
 use super::placed::PlacedHelix;
 use super::refine::{objective, refine, Objective, Piece, RefineReport};
 use super::ProjectedHelix;
@@ -154,6 +159,56 @@ pub const EMAX_FRACTION: f64 = 1e-3;
 /// ```
 pub const NOISE_FACTOR: f64 = 5.0;
 
+/// Drawings whose noise ([`estimate_noise`]) is over this fraction of
+/// their length, and looks like noise ([`WHITE_BELOW`]), are denoised
+/// before the covering (where [`SketchOptions::denoise`]): from there on
+/// the noise moves the curvature estimates of Section 5 by more than the
+/// covering's two-vertex fits tolerate (measured: at 1e-5 of the length,
+/// 4 of 40 drawings were cut in the wrong place, 1 of 40 denoised).
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::{lift::DENOISE_ABOVE, lift_sketch, SketchOptions};
+///
+/// // A clean drawing is fitted as drawn; the same with jitter is denoised.
+/// let clean: Vec<DVec2> = (0..200).map(|k| DVec2::from_angle(k as f64 * 0.02)).collect();
+/// let lift = lift_sketch(&clean, &SketchOptions::default()).unwrap();
+/// assert!(!lift.denoised && lift.noise < DENOISE_ABOVE * lift.length);
+/// let jitter = |k: usize| 0.002 * if (k * 7919) % 5 < 2 { 1.0 } else { -1.0 };
+/// let noisy: Vec<DVec2> = clean.iter().enumerate().map(|(k, p)| *p + DVec2::new(jitter(k), jitter(k + 2))).collect();
+/// let lift = lift_sketch(&noisy, &SketchOptions::default()).unwrap();
+/// assert!(lift.denoised && lift.max_error < lift.drawn_error);
+/// ```
+pub const DENOISE_ABOVE: f64 = 3e-6;
+
+/// The covering's refinements stop early ([`NOISY_COVER_GAIN`]) where the
+/// drawing's noise is over this fraction of `E_max`: no helix fits it
+/// closer than the noise, and the last iterations only crawl. Below, they
+/// run to [`COVER_GAIN`]: at noise 1 % of `E_max` the early stop left fits
+/// 30 σ off, loose enough for the covering to take a wrong helix (3 of 40
+/// noisy drawings at 1e-5 of the length, against 1 of 40 run to
+/// `COVER_GAIN`); at 10 % of `E_max` it brought four more of 40 to the
+/// right helix count, in two thirds of the time.
+pub const NOISY_GAIN_ABOVE: f64 = 0.05;
+
+/// The noise estimate of a clean drawing is the estimator's bias on its
+/// bends (up to 1e-5 of the length on coarse drawings of 40–60 vertices),
+/// which is no noise to remove: a drawing is denoised only where its
+/// neighbouring residuals point the same way in fewer than this fraction
+/// of pairs ([`residual_agreement`]; noise: about 0.4, bias: nearly 1).
+///
+/// ```
+/// use glam::DVec2;
+/// use strandfit::sketch::{lift_sketch, SketchOptions};
+///
+/// // A coarse clean drawing: its estimated noise is bias, and it is fitted
+/// // as drawn.
+/// let coarse: Vec<DVec2> = (0..40).map(|k| DVec2::from_angle(k as f64 * 0.15)).collect();
+/// let lift = lift_sketch(&coarse, &SketchOptions::default()).unwrap();
+/// assert!(!lift.denoised && lift.points_2d == coarse);
+/// ```
+pub const WHITE_BELOW: f64 = 0.65;
+
 /// Options of [`lift_sketch`].
 ///
 /// ```
@@ -200,6 +255,10 @@ pub struct SketchOptions {
     pub fine_iterations: usize,
     /// How an unevenly sampled drawing is evened out.
     pub resampling: Resampling,
+    /// Denoise a drawing whose noise is over [`DENOISE_ABOVE`] of its
+    /// length before the covering ([`denoise`]); `false`: fit the drawn
+    /// vertices as they are (the paper's).
+    pub denoise: bool,
 }
 
 impl Default for SketchOptions {
@@ -211,6 +270,7 @@ impl Default for SketchOptions {
             window: 3,
             fine_iterations: 100,
             resampling: Resampling::Densify,
+            denoise: true,
         }
     }
 }
@@ -520,9 +580,10 @@ pub struct Junction {
 pub struct SketchLift {
     /// The helices, in order along the drawing.
     pub helices: Vec<LiftedHelix>,
-    /// The vertices the fit ran on: the input, or (where `resampled`) the
-    /// input evened out as [`SketchOptions::resampling`] says (densified:
-    /// every input vertex is among them).
+    /// The vertices the fit ran on: the input, denoised where
+    /// `denoised`, and (where `resampled`) evened out as
+    /// [`SketchOptions::resampling`] says (densified: every vertex before
+    /// is among them).
     pub points_2d: Vec<DVec2>,
     /// Whether the input's edges differed by more than [`UNIFORM_RATIO`].
     pub resampled: bool,
@@ -530,8 +591,16 @@ pub struct SketchLift {
     pub points_3d: Vec<DVec3>,
     /// What is left at each junction.
     pub junctions: Vec<Junction>,
-    /// Largest vertex distance from the projected fit.
+    /// Largest distance of a vertex of [`points_2d`](Self::points_2d)
+    /// from the projected fit.
     pub max_error: f64,
+    /// Largest distance of a drawn vertex from the projected fit: the
+    /// same as `max_error` unless the drawing was denoised or resampled.
+    pub drawn_error: f64,
+    /// Whether the drawing was denoised before the covering
+    /// ([`SketchOptions::denoise`]); [`points_2d`](Self::points_2d) are
+    /// then the denoised vertices.
+    pub denoised: bool,
     /// Root-mean-square vertex distance from the projected fit.
     pub rms_error: f64,
     /// Length of the sketch polyline.
@@ -605,6 +674,18 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
         return Err(SketchError::ZeroLength);
     }
     let noise = estimate_noise(&clean);
+    // A noisy drawing is denoised first: its curvatures (Section 5) and the
+    // covering's two-vertex fits then see the stroke, not the jitter, and
+    // E_max follows the noise left, not the noise drawn.
+    // Whether what the estimate found is noise, not a coarse drawing's
+    // bends (see WHITE_BELOW).
+    let white = residual_agreement(&clean) < WHITE_BELOW;
+    let denoised = opts.denoise && white && noise > DENOISE_ABOVE * length;
+    let source = if denoised {
+        denoise(&clean, noise)
+    } else {
+        clean.clone()
+    };
     let emax = opts
         .emax
         .unwrap_or(EMAX_FRACTION.max(NOISE_FACTOR * noise / length));
@@ -613,36 +694,65 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
     // on the drawing smoothed.
     let noisy = NOISE_FACTOR * noise > EMAX_FRACTION * length;
     let judged = if noisy {
-        edge_lengths(&smoothed(&clean))
+        edge_lengths(&smoothed(&source))
     } else {
-        edges.clone()
+        edge_lengths(&source)
     };
     let (shortest, longest) = judged
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
     let resampled = longest > UNIFORM_RATIO * shortest;
     let work = match (resampled, opts.resampling) {
-        (false, _) => clean,
+        (false, _) => source.clone(),
         // At most twice the input's vertices (edges split to the mean
         // length): the cost of the covering grows with the vertex count
         // (resampling at the shortest edge, tried first, made up to 4×
         // more vertices and 10× the time), and the neighbourhoods NMAX
         // and the estimator's window are counted in vertices of the
         // drawing's own density.
-        (true, Resampling::Densify) => densify(&clean, length / edges.len() as f64),
-        (true, Resampling::Uniform) => resample(&clean, clean.len()),
+        (true, Resampling::Densify) => densify(&source, length / edges.len() as f64),
+        (true, Resampling::Uniform) => resample(&source, source.len()),
     };
     // Normalise: centroid to the origin, unit length.
     let centre = work.iter().copied().sum::<DVec2>() / work.len() as f64;
     let unit: Vec<DVec2> = work.iter().map(|&p| (p - centre) / length).collect();
 
-    let geometry = tangents_and_curvatures(&unit, opts.window);
+    // Where the noise sets E_max, what is left of it once denoised is a
+    // slow wobble, which the curvature estimator's window is widened over
+    // (measured on the noisy drawings at 0.1 % and 0.3 %: 3 → 6 vertices
+    // brought four more of 40 to the right helix count).
+    let window = if noisy && white {
+        2 * opts.window
+    } else {
+        opts.window
+    };
+    let geometry = tangents_and_curvatures(&unit, window);
     let cover_opts = CoverOptions {
         emax,
         nmax: opts.nmax,
         end_guard: opts.window,
+        gain: if white && noise > NOISY_GAIN_ABOVE * emax * length {
+            NOISY_COVER_GAIN
+        } else {
+            COVER_GAIN
+        },
     };
     let mut pieces = cover(&unit, &geometry, &cover_opts);
+    let at = counterparts(&source, &work);
+    if denoised {
+        if let Some(at) = &at {
+            let vertices: Vec<(usize, DVec2)> = at
+                .iter()
+                .zip(&clean)
+                .map(|(&j, &p)| (j, (p - centre) / length))
+                .collect();
+            let drawn = Drawn {
+                vertices: &vertices,
+                sigma: noise / length,
+            };
+            merge_noisy(&unit, &mut pieces, &cover_opts, &drawn);
+        }
+    }
     choose_mirrors(&mut pieces);
     let obj = Objective {
         alpha_t: opts.alpha_t,
@@ -700,6 +810,11 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
             max_error = max_error.max(d);
         }
     }
+    let drawn_error = if denoised || resampled {
+        drawn_distance(&clean, at.as_deref(), &work, &pieces, centre, length)
+    } else {
+        max_error
+    };
     let junctions = (1..helices.len())
         .filter(|&i| helices[i - 1].last == helices[i].first)
         .map(|i| {
@@ -720,12 +835,67 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
         points_3d,
         junctions,
         max_error,
+        drawn_error,
+        denoised,
         rms_error: (sum2 / count.max(1) as f64).sqrt(),
         length,
         noise,
         emax: emax * length,
         fine_fit,
     })
+}
+
+/// Where each vertex of `source` is in `work`: densifying keeps them all,
+/// in order, exactly; `None` where `work` does not (uniform resampling).
+fn counterparts(source: &[DVec2], work: &[DVec2]) -> Option<Vec<usize>> {
+    let mut at = Vec::with_capacity(source.len());
+    let mut w = 0;
+    for p in source {
+        while w < work.len() && work[w] != *p {
+            w += 1;
+        }
+        at.push(w);
+    }
+    at.iter().all(|&w| w < work.len()).then_some(at)
+}
+
+/// The largest distance of a drawn vertex (`clean`) from the projected
+/// fit, in the sketch's units. The fit ran on `work`: the drawing, or the
+/// drawing denoised, evened out where it was resampled. Each drawn vertex
+/// is measured by a closest-point search from the parameter of its
+/// counterpart in `work` (`at`, [`counterparts`]), or where there are
+/// none (uniform resampling) from the nearest vertex of `work`.
+fn drawn_distance(
+    clean: &[DVec2],
+    at: Option<&[usize]>,
+    work: &[DVec2],
+    pieces: &[Piece],
+    centre: DVec2,
+    length: f64,
+) -> f64 {
+    let mut worst = 0.0f64;
+    for (i, &p) in clean.iter().enumerate() {
+        let j = if let Some(at) = at {
+            at[i]
+        } else {
+            // Uniform resampling: the nearest vertex of the fit.
+            (0..work.len())
+                .min_by(|&a, &b| {
+                    (work[a] - p)
+                        .length_squared()
+                        .total_cmp(&(work[b] - p).length_squared())
+                })
+                .unwrap_or(0)
+        };
+        let Some(piece) = pieces.iter().find(|q| q.first <= j && j <= q.last) else {
+            continue;
+        };
+        let e = piece.helix.evaluator();
+        let v = (p - centre) / length;
+        let foot = e.project(v, piece.ts[j - piece.first]);
+        worst = worst.max((v - e.jet(foot.t).0).length());
+    }
+    worst * length
 }
 
 /// Section 7: the first helix as is, each next one or its mirror, whichever
