@@ -502,12 +502,14 @@ fn noisy_drawings_are_lifted_to_few_plausible_helices() {
     // paper's E_max equals the noise, and the stroke came back as 34–50
     // helices with depths to 10⁵ times the exact drawing's. Now the
     // drawing is denoised, E_max follows the noise found (5σ̂), helices
-    // seen end-on are refused and neighbours that one helix explains as
-    // well (by the drawn vertices' residuals) are merged. Measured by
+    // seen end-on are refused, the walk takes the nearest foot ahead at a
+    // near-cusp, and neighbours that one helix explains as well (by the
+    // drawn vertices' residuals) are merged. Measured by
     // benches/sketch_noise.rs on 8 seeds of these five drawings (40 at
-    // each noise): at 0.1 % the count exact on 29 (before: 25), the depth
-    // within 2× on 34 (31), the largest depth 8.8× the exact's (99×); at
-    // 0.3 %: 34 and 29 (24 and 23), the largest depth 30× (444×).
+    // each noise level, before → after): at 0.1 % the count exact on
+    // 25 → 32, the depth within 2× on 31 → 36, the largest depth 99× →
+    // 7.7× the exact's; at 0.3 %: 24 → 33, 23 → 30, 444× → 28×. The
+    // misses are near-cusps (helices tilted 1.2 rad) blurred by the noise.
     use rayon::prelude::*;
     use strandfit::synthetic::{synthetic_sketch, synthetic_sketch_curls};
     let drawings: Vec<(usize, Vec<DVec2>)> = vec![

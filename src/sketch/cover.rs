@@ -229,6 +229,26 @@ fn next_parameter(h: &Evaluator, v: DVec2, t: f64) -> f64 {
     h.closest_parameter(v, guess)
 }
 
+/// Parameter steps (radians) of [`forward_parameter`]'s scan.
+const FORWARD_STEPS: usize = 16;
+
+/// The parameter of the point nearest `v` among those ahead of `t` (in the
+/// direction `ahead`, ±1) by at most one radian: the best of a scan of
+/// [`FORWARD_STEPS`] samples, polished by Newton; `None` where the polish
+/// ends behind `t`.
+fn forward_parameter(h: &Evaluator, v: DVec2, t: f64, ahead: f64) -> Option<f64> {
+    let step = ahead / FORWARD_STEPS as f64;
+    let best = (1..=FORWARD_STEPS)
+        .map(|k| t + step * k as f64)
+        .min_by(|&a, &b| {
+            (h.jet(a).0 - v)
+                .length_squared()
+                .total_cmp(&(h.jet(b).0 - v).length_squared())
+        })?;
+    let f = h.closest_parameter(v, best);
+    ((f - t) * ahead > 0.0).then_some(f)
+}
+
 /// Walk from vertex `from` (parameter `t_from`) in direction `dir` within
 /// `[lo, hi]` while vertices stay within `emax` and parameters keep
 /// moving the same way (`t` runs along the sketch if `orient > 0`,
@@ -251,15 +271,25 @@ fn walk(
     while i >= lo as isize && i <= hi as isize {
         let v = points[i as usize];
         let mut tn = next_parameter(&h, v, t);
-        if (tn - t) * dir as f64 * orient <= 0.0 {
-            // A foot behind the last one: the helix turns back, or (on a
-            // noisy drawing, where noise along the stroke is a good part
-            // of an edge) the vertex lies a little behind its predecessor.
-            // The latter goes on from the last foot, if near enough.
-            if (h.jet(tn).0 - h.jet(t).0).length() > emax {
-                break;
+        let ahead = dir as f64 * orient;
+        if (tn - t) * ahead <= 0.0 {
+            // A foot behind the last one: the helix turns back, or the
+            // vertex is nearer the branch the walk came by (at a near-cusp
+            // of the projection under noise), or (on a noisy drawing,
+            // where noise along the stroke is a good part of an edge) it
+            // lies a little behind its predecessor. The nearest foot ahead
+            // is taken where it is within E_max; else the walk goes on
+            // from the last foot, if near enough.
+            match forward_parameter(&h, v, t, ahead).filter(|&f| (h.jet(f).0 - v).length() <= emax)
+            {
+                Some(f) => tn = f,
+                None => {
+                    if (h.jet(tn).0 - h.jet(t).0).length() > emax {
+                        break;
+                    }
+                    tn = t;
+                }
             }
-            tn = t;
         }
         if (h.jet(tn).0 - v).length() > emax {
             break;
@@ -532,21 +562,26 @@ fn stretch(piece: &mut Piece, points: &[DVec2], first: usize, last: usize) {
     let e = piece.helix.evaluator();
     let orient = piece.orientation();
     // As in the walk: a foot behind its predecessor (a loop of the
-    // projection crossed, or noise along the stroke) stays at the
+    // projection crossed, a near-cusp under noise, or noise along the
+    // stroke) is taken at the nearest point ahead, or else stays at the
     // predecessor's parameter, for the fit to move on from.
+    let next = |v: DVec2, t0: f64, ahead: f64| {
+        let t = next_parameter(&e, v, t0);
+        if (t - t0) * ahead > 0.0 {
+            t
+        } else {
+            forward_parameter(&e, v, t0, ahead).unwrap_or(t0)
+        }
+    };
     while piece.first > first {
         piece.first -= 1;
-        let t0 = piece.ts[0];
-        let t = next_parameter(&e, points[piece.first], t0);
-        piece
-            .ts
-            .insert(0, if (t0 - t) * orient > 0.0 { t } else { t0 });
+        let t = next(points[piece.first], piece.ts[0], -orient);
+        piece.ts.insert(0, t);
     }
     while piece.last < last {
         piece.last += 1;
-        let t0 = piece.ts[piece.ts.len() - 1];
-        let t = next_parameter(&e, points[piece.last], t0);
-        piece.ts.push(if (t - t0) * orient > 0.0 { t } else { t0 });
+        let t = next(points[piece.last], piece.ts[piece.ts.len() - 1], orient);
+        piece.ts.push(t);
     }
 }
 
