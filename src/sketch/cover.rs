@@ -1183,20 +1183,7 @@ mod tests {
         assert!(pieces.iter().all(|p| p.max_distance(&points) < 1e-12));
     }
 
-    /// `points` with Gaussian noise of `sigma` on each coordinate.
-    fn noisy(points: &[DVec2], sigma: f64, seed: u64) -> Vec<DVec2> {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let mut gauss = move || {
-            let u: f64 = rng.gen_range(f64::MIN_POSITIVE..1.0);
-            let v: f64 = rng.gen();
-            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-        };
-        points
-            .iter()
-            .map(|&p| p + sigma * DVec2::new(gauss(), gauss()))
-            .collect()
-    }
+    use crate::sketch::testing::with_noise;
 
     #[test]
     fn noisy_halves_of_one_helix_are_merged_and_two_helices_are_not() {
@@ -1218,7 +1205,7 @@ mod tests {
         for seed in 0..4 {
             // One helix, cut at vertex 40 of 80.
             let (clean, truth) = chain(&[[0.3, 0.1, 0.4]], 80);
-            let points = noisy(&clean, sigma, seed);
+            let points = with_noise(&clean, sigma, seed);
             let h = &truth[0].0;
             let mut pieces = vec![
                 piece_on(h, &points, 0, 40, 0.0),
@@ -1245,7 +1232,7 @@ mod tests {
             // Two helices with a corner between them stay two, and their
             // junction stays at the corner.
             let (clean, truth) = chain(&[[0.3, 0.1, 0.4], [0.2, 0.15, -0.3]], 40);
-            let points = noisy(&clean, sigma, seed);
+            let points = with_noise(&clean, sigma, seed);
             let mut pieces: Vec<Piece> = truth
                 .iter()
                 .enumerate()

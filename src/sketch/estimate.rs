@@ -565,20 +565,7 @@ fn end_derivative(q: &[DVec2]) -> DVec2 {
 mod tests {
     use super::*;
 
-    /// Gaussian noise of `sigma` on each coordinate of each point.
-    fn with_noise(points: &[DVec2], sigma: f64, seed: u64) -> Vec<DVec2> {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let mut gauss = move || {
-            let u: f64 = rng.gen_range(f64::MIN_POSITIVE..1.0);
-            let v: f64 = rng.gen();
-            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-        };
-        points
-            .iter()
-            .map(|&p| p + sigma * DVec2::new(gauss(), gauss()))
-            .collect()
-    }
+    use crate::sketch::testing::with_noise;
 
     /// Distance from `p` to the polyline `line`.
     fn to_polyline(p: DVec2, line: &[DVec2]) -> f64 {

@@ -53,3 +53,25 @@ pub use lift::{
 };
 pub use placed::PlacedHelix;
 pub use projected::ProjectedHelix;
+
+/// Helpers of the unit tests.
+#[cfg(test)]
+pub(crate) mod testing {
+    use glam::DVec2;
+
+    /// `points` with Gaussian noise of `sigma` on each coordinate (Box–Muller
+    /// on ChaCha8, the generator of `benches/sketch_noise.rs`).
+    pub(crate) fn with_noise(points: &[DVec2], sigma: f64, seed: u64) -> Vec<DVec2> {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut gauss = move || {
+            let u: f64 = rng.gen_range(f64::MIN_POSITIVE..1.0);
+            let v: f64 = rng.gen();
+            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        };
+        points
+            .iter()
+            .map(|&p| p + sigma * DVec2::new(gauss(), gauss()))
+            .collect()
+    }
+}
