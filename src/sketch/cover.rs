@@ -410,7 +410,9 @@ fn seed_vertex(
         .unwrap_or(lo)
 }
 
-/// Sections 6.1–6.3 on vertices `[lo, hi]`, then refinement and growth.
+/// Sections 6.1–6.3 on vertices `[lo, hi]`, then refinement and growth,
+/// from the seed [`seed_vertex`] picks (and, on a noisy drawing, from a
+/// second seed as well).
 fn fit_one(
     points: &[DVec2],
     geometry: &[(DVec2, f64)],
@@ -418,6 +420,43 @@ fn fit_one(
     opts: &CoverOptions,
 ) -> Piece {
     let s = seed_vertex(points, geometry, (lo, hi), opts.end_guard);
+    if opts.gain <= COVER_GAIN {
+        return fit_at(points, geometry, (lo, hi), opts, s);
+    }
+    // A noisy drawing: its largest curvature can be a near-cusp blurred by
+    // the noise, whose two-vertex fits are the noise's. The next-highest
+    // peak of |κ| at least 2·NMAX vertices away is tried too, and the
+    // piece covering more kept (plausible first).
+    let n = points.len();
+    let guard = opts.end_guard;
+    let curvature = |i: usize| geometry[i].1.abs();
+    let second = (lo.max(guard)..=hi.min(n.saturating_sub(1 + guard)))
+        .filter(|&i| i.abs_diff(s) > 2 * opts.nmax)
+        .filter(|&i| {
+            (i.saturating_sub(guard)..=(i + guard).min(n - 1)).all(|j| curvature(j) <= curvature(i))
+        })
+        .max_by(|&a, &b| curvature(a).total_cmp(&curvature(b)));
+    let first = fit_at(points, geometry, (lo, hi), opts, s);
+    let Some(second) = second else {
+        return first;
+    };
+    let other = fit_at(points, geometry, (lo, hi), opts, second);
+    let longer = |p: &Piece| (plausible(p), p.last - p.first);
+    if longer(&other) > longer(&first) {
+        other
+    } else {
+        first
+    }
+}
+
+/// [`fit_one`] from seed vertex `s`.
+fn fit_at(
+    points: &[DVec2],
+    geometry: &[(DVec2, f64)],
+    (lo, hi): (usize, usize),
+    opts: &CoverOptions,
+    s: usize,
+) -> Piece {
     let (tangent, kappa) = geometry[s];
     // 6.1: R(θ) takes +y to T̂_{v_s}; reflect if the sketch turns right.
     let base = PlacedHelix {
