@@ -69,6 +69,10 @@ pub struct GpuEngine {
 
 impl GpuEngine {
     /// Open the engine on `ctx` with the chosen precision (an error if `F64` is asked for and the adapter lacks it).
+    ///
+    /// Plumbing, not part of the public API: `ctx` is a type of the hidden
+    /// `gpu` module. A program opens the GPU with [`Backend::open`].
+    #[doc(hidden)]
     pub fn new(ctx: GpuContext, precision: PrecisionChoice) -> Result<Self, GpuError> {
         let precision = match precision {
             PrecisionChoice::Auto => ctx.best_precision(),
@@ -80,6 +84,10 @@ impl GpuEngine {
     }
 
     /// The executor the kernels run on.
+    ///
+    /// Plumbing for the GPU kernels (a type of the hidden `gpu` module), not
+    /// part of the public API.
+    #[doc(hidden)]
     pub fn exec(&self) -> Gpu<'_> {
         self.ctx.exec(self.precision).expect("checked when opened")
     }
@@ -106,6 +114,11 @@ impl Backend {
     /// (each curve's search checks its own, in parallel over curves), the
     /// `arc_check` kernel on the GPU (all curves of a block together, one
     /// batch per round; [`crate::codec::batch`]). Both give the same bytes.
+    ///
+    /// Plumbing for the command line's `compress` and
+    /// [`crate::compress_polylines`] (the checker is a type of the hidden
+    /// `kernels` module), not part of the public API.
+    #[doc(hidden)]
     pub fn arc_checker(&self) -> Result<Option<ArcCheckOn<Gpu<'_>>>, GpuError> {
         match self {
             Backend::Cpu => Ok(None),
@@ -220,6 +233,10 @@ impl Backend {
     }
 
     /// [`Backend::interpolate`] reporting where the GPU time went.
+    ///
+    /// Plumbing for the command line's `bench` (`timings` is a type of the
+    /// hidden `kernels` module), not part of the public API.
+    #[doc(hidden)]
     pub fn interpolate_timed(
         &self,
         pairs: &[HermitePair],
@@ -258,6 +275,10 @@ impl Backend {
     }
 
     /// [`Backend::fit`] reporting where the GPU time went.
+    ///
+    /// Plumbing for the command line's `bench` (`timings` is a type of the
+    /// hidden `kernels` module), not part of the public API.
+    #[doc(hidden)]
     pub fn fit_timed(
         &self,
         splines: &[BezierSpline],
@@ -327,6 +348,10 @@ impl Backend {
     }
 
     /// [`Backend::sample`] reporting where the GPU time went.
+    ///
+    /// Plumbing for the command line's `bench` (`timings` is a type of the
+    /// hidden `kernels` module), not part of the public API.
+    #[doc(hidden)]
     pub fn sample_timed(
         &self,
         splines: &[BezierSpline],
@@ -376,6 +401,10 @@ impl Backend {
     }
 
     /// [`Backend::evaluate`] reporting where the GPU time went.
+    ///
+    /// Plumbing for the command line's `bench` (`timings` is a type of the
+    /// hidden `kernels` module), not part of the public API.
+    #[doc(hidden)]
     pub fn evaluate_timed(
         &self,
         chains: &[PiecewiseHelix],
@@ -430,6 +459,10 @@ impl Backend {
     }
 
     /// [`Backend::integrate`] reporting where the GPU time went.
+    ///
+    /// Plumbing for the command line's `bench` (`timings` is a type of the
+    /// hidden `kernels` module), not part of the public API.
+    #[doc(hidden)]
     pub fn integrate_timed(
         &self,
         problems: &[FrenetProblem],
@@ -511,6 +544,10 @@ impl Backend {
     }
 
     /// [`Backend::interpolate_atph`] reporting where the GPU time went.
+    ///
+    /// Plumbing for the command line's `bench` (`timings` is a type of the
+    /// hidden `kernels` module), not part of the public API.
+    #[doc(hidden)]
     pub fn interpolate_atph_timed(
         &self,
         pairs: &[crate::atph::HermitePair],

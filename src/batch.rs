@@ -55,6 +55,18 @@ pub struct Polylines<'a> {
 impl<'a> Polylines<'a> {
     /// Checks that `offsets` start at 0, never decrease and end at
     /// `positions.len()`.
+    ///
+    /// ```
+    /// use strandfit::{DVec3, Polylines};
+    ///
+    /// let positions = [DVec3::ZERO, DVec3::X, DVec3::Y];
+    /// // An empty curve is allowed; no curves at all is `[0]` with no points.
+    /// assert_eq!(Polylines::new(&positions, &[0, 0, 3]).unwrap().len(), 2);
+    /// assert!(Polylines::new(&[], &[0]).unwrap().is_empty());
+    /// // The offsets must end at the number of points.
+    /// let err = Polylines::new(&positions, &[0, 2]).unwrap_err();
+    /// assert!(err.to_string().contains("number of points (3)"));
+    /// ```
     pub fn new(positions: &'a [DVec3], offsets: &'a [usize]) -> Result<Self, BatchError> {
         if offsets.first() != Some(&0) || offsets.last() != Some(&positions.len()) {
             return Err(BatchError::Offsets(format!(

@@ -58,17 +58,62 @@ use crate::spline::BezierSpline;
 /// ```
 pub trait ParamCurve3 {
     /// The point at parameter `t ∈ [0, 1]` (clamped).
+    ///
+    /// On a one-segment Bézier spline `t` is the segment's own parameter
+    /// (the spline's inherent `eval` takes a segment index too, hence the
+    /// trait's name in the call):
+    ///
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3, ParamCurve3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, DVec3::Y, DVec3::new(1.0, 1.0, 0.0), DVec3::X]).unwrap();
+    /// // B(½) = (P₀ + 3P₁ + 3P₂ + P₃)/8
+    /// assert!(ParamCurve3::eval(&s, 0.5).distance(DVec3::new(0.5, 0.75, 0.0)) < 1e-15);
+    /// assert_eq!(ParamCurve3::eval(&s, 7.0), ParamCurve3::eval(&s, 1.0)); // clamped
+    /// ```
     fn eval(&self, t: f64) -> DVec3;
 
     /// The unit tangent at `t ∈ [0, 1]` (clamped), pointing towards
     /// increasing `t`.
+    ///
+    /// Unit whatever the speed of the parametrisation (here 6 at the start):
+    ///
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3, ParamCurve3};
+    ///
+    /// let s = BezierSpline::from_control_points(&[DVec3::ZERO, 2.0 * DVec3::Y, DVec3::new(1.0, 1.0, 0.0), DVec3::X]).unwrap();
+    /// assert!(ParamCurve3::tangent(&s, 0.0).distance(DVec3::Y) < 1e-12);
+    /// assert!(ParamCurve3::tangent(&s, 1.0).distance(-DVec3::Y) < 1e-12);
+    /// ```
     fn tangent(&self, t: f64) -> DVec3;
 
     /// The total arc length `L = ∫₀¹ |dγ/dt| dt`.
+    ///
+    /// A straight spline of length 3 whose parameter is far from arc
+    /// length (its control points bunch at the start):
+    ///
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3, ParamCurve3};
+    ///
+    /// let line = BezierSpline::from_control_points(&[DVec3::ZERO, 0.1 * DVec3::X, 0.2 * DVec3::X, 3.0 * DVec3::X]).unwrap();
+    /// assert!((line.arc_length() - 3.0).abs() < 1e-6);
+    /// ```
     fn arc_length(&self) -> f64;
 
     /// `n` points equally spaced in arc length, both ends included
     /// (`n = 1`: the start; `n = 0`: none).
+    ///
+    /// Equally spaced in arc length even where the parameter is not:
+    ///
+    /// ```
+    /// use strandfit::{BezierSpline, DVec3, ParamCurve3};
+    ///
+    /// let line = BezierSpline::from_control_points(&[DVec3::ZERO, 0.1 * DVec3::X, 0.2 * DVec3::X, 3.0 * DVec3::X]).unwrap();
+    /// let xs: Vec<f64> = ParamCurve3::sample(&line, 4).iter().map(|p| p.x).collect();
+    /// assert!(xs.iter().zip([0.0, 1.0, 2.0, 3.0]).all(|(x, e)| (x - e).abs() < 1e-6), "{xs:?}");
+    /// assert_eq!(ParamCurve3::sample(&line, 1), [DVec3::ZERO]);
+    /// assert!(ParamCurve3::sample(&line, 0).is_empty());
+    /// ```
     fn sample(&self, n: usize) -> Vec<DVec3>;
 }
 

@@ -46,6 +46,20 @@ impl HermitePair {
     }
 
     /// The same data traversed backwards: `(p₁, −t₁) → (p₀, −t₀)`.
+    ///
+    /// Reversing twice gives the pair back, and the reversed pair's helix
+    /// is the same curve:
+    ///
+    /// ```
+    /// use strandfit::{DVec3, HermitePair, ParamCurve3};
+    ///
+    /// let pair = HermitePair::new(DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.5), DVec3::Y);
+    /// assert_eq!(pair.reversed().reversed(), pair);
+    /// let there = pair.interpolate(1e-12).unwrap().element;
+    /// let back = pair.reversed().interpolate(1e-12).unwrap().element;
+    /// assert!((there.arc_length() - back.arc_length()).abs() < 1e-9);
+    /// assert!(there.eval(0.25).distance(back.eval(0.75)) < 1e-9);
+    /// ```
     #[inline]
     pub fn reversed(&self) -> Self {
         HermitePair::new(self.p1, -self.t1, self.p0, -self.t0)

@@ -234,6 +234,10 @@ pub const MAX_DECODED_POINTS: usize = 1 << 28;
 
 /// The ways one curve can be coded, before the block chooses (the choice
 /// depends on the curves before it, through [`reference`](mod@reference)).
+///
+/// Plumbing of [`encode_block`] (what [`curve_options`] returns), not part
+/// of the public API.
+#[doc(hidden)]
 pub struct CurveOptions {
     /// Grid points (points mode), if every point is codable.
     pub points: Option<Vec<[i64; 3]>>,
@@ -242,6 +246,11 @@ pub struct CurveOptions {
 }
 
 /// Fits one curve both ways (no entropy coding; curves in parallel).
+///
+/// Plumbing of [`encode_block`], not part of the public API: `half` is the
+/// block's lattice step, which the block computes from all its curves
+/// (the hidden `quantise` module).
+#[doc(hidden)]
 pub fn curve_options(points: &[DVec3], params: &CodecParams, half: f64) -> CurveOptions {
     match curve_encoder(points, params, half) {
         None => CurveOptions {
@@ -837,6 +846,25 @@ pub const FIELDS: [&str; 13] = [
 
 /// Encodes curves into one block (curves fitted in parallel, then coded in
 /// order).
+///
+/// ```
+/// use strandfit::codec::{decode_block, encode_block, CodecParams, EncodeError};
+/// # use strandfit::DVec3;
+/// # fn helix(r: f64) -> Vec<DVec3> { // a helix of radius r, a point every 0.1 radian
+/// #     (0..100).map(|k| 0.1 * k as f64).map(|s| DVec3::new(r * s.cos(), r * s.sin(), 0.8 * s)).collect()
+/// # }
+///
+/// let params = CodecParams::new(0.05);
+/// let curves = [helix(3.0), vec![], helix(5.0)];
+/// let block = encode_block(&curves, &params).unwrap();
+/// assert_eq!(block.kinds, [2, 0, 2]); // arcs, empty, arcs
+/// assert_eq!(decode_block(&block.bytes, 3, &params).unwrap().len(), 3);
+/// // A point that is not finite is refused, naming the curve and point.
+/// let mut bad = helix(3.0);
+/// bad[7].y = f64::NAN;
+/// let err = encode_block(&[helix(1.0), bad], &params).unwrap_err();
+/// assert!(matches!(err, EncodeError::NonFinite { curve: 1, point: 7 }));
+/// ```
 pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
@@ -846,6 +874,24 @@ pub fn encode_block<C: AsRef<[DVec3]> + Sync>(
 
 /// [`encode_block`], keeping each curve's decoded points in
 /// [`EncodedBlock::decoded`].
+///
+/// The points kept are those [`decode_block`] gives back:
+///
+/// ```
+/// use strandfit::codec::{decode_block, encode_block, encode_block_keeping, CodecParams};
+/// # use strandfit::DVec3;
+/// # fn helix(r: f64) -> Vec<DVec3> { // a helix of radius r, a point every 0.1 radian
+/// #     (0..100).map(|k| 0.1 * k as f64).map(|s| DVec3::new(r * s.cos(), r * s.sin(), 0.8 * s)).collect()
+/// # }
+///
+/// let params = CodecParams::new(0.05);
+/// let curves = [helix(3.0), helix(5.0)];
+/// let block = encode_block_keeping(&curves, &params).unwrap();
+/// assert_eq!(block.decoded, decode_block(&block.bytes, 2, &params).unwrap());
+/// assert_eq!(block.output_points, block.decoded.iter().map(Vec::len).sum::<usize>());
+/// // The same bytes as without keeping.
+/// assert_eq!(block.bytes, encode_block(&curves, &params).unwrap().bytes);
+/// ```
 pub fn encode_block_keeping<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
@@ -855,6 +901,29 @@ pub fn encode_block_keeping<C: AsRef<[DVec3]> + Sync>(
 
 /// [`encode_block`], and with `tally` the ideal bits spent on each of
 /// [`FIELDS`] (to see where a file's bytes go).
+///
+/// ```
+/// use strandfit::codec::{encode_block, encode_block_tallied, CodecParams, FIELDS};
+/// # use strandfit::DVec3;
+/// # fn helix(r: f64) -> Vec<DVec3> { // a helix of radius r, a point every 0.1 radian
+/// #     (0..100).map(|k| 0.1 * k as f64).map(|s| DVec3::new(r * s.cos(), r * s.sin(), 0.8 * s)).collect()
+/// # }
+///
+/// let params = CodecParams::new(0.05);
+/// let curves = [helix(3.0), helix(5.0)];
+/// let (block, bits) = encode_block_tallied(&curves, &params, true).unwrap();
+/// let bits = bits.unwrap();
+/// assert_eq!(bits.len(), FIELDS.len());
+/// // The range coder spends within a few bytes of the ideal bits.
+/// let ideal = bits.iter().sum::<f64>() / 8.0;
+/// assert!((block.bytes.len() as f64 - ideal).abs() < 8.0, "{} B, ideal {ideal:.1} B", block.bytes.len());
+/// // Arcs only: no points-mode field is spent on.
+/// assert_eq!(bits[FIELDS.iter().position(|f| *f == "points residual").unwrap()], 0.0);
+/// // Without the tally: no bits, the same bytes.
+/// let (plain, none) = encode_block_tallied(&curves, &params, false).unwrap();
+/// assert!(none.is_none());
+/// assert_eq!(plain.bytes, block.bytes);
+/// ```
 pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
@@ -867,6 +936,24 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
 /// candidate elements checked in batches on `checker` where one is given
 /// ([`batch`]): the same bytes as without, as the checker's sure verdicts
 /// are the reference's and the reference decides the rest.
+///
+/// Without a checker (the GPU's is the command line's plumbing), every
+/// curve's search checks its own candidates on the CPU:
+///
+/// ```
+/// use strandfit::codec::{encode_block, encode_block_on, CodecParams};
+/// # use strandfit::DVec3;
+/// # fn helix(r: f64) -> Vec<DVec3> { // a helix of radius r, a point every 0.1 radian
+/// #     (0..100).map(|k| 0.1 * k as f64).map(|s| DVec3::new(r * s.cos(), r * s.sin(), 0.8 * s)).collect()
+/// # }
+///
+/// let params = CodecParams::new(0.05);
+/// let curves = [helix(3.0), helix(5.0)];
+/// let block = encode_block_on(&curves, &params, true, None).unwrap();
+/// assert_eq!(block.bytes, encode_block(&curves, &params).unwrap().bytes);
+/// assert_eq!(block.decoded.len(), 2); // `keep`
+/// assert_eq!(block.checks.checked, 0); // nothing asked of a checker
+/// ```
 pub fn encode_block_on<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
@@ -1149,6 +1236,27 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
 
 /// Decodes the `count` curves of a block into the points the guarantee is
 /// about.
+///
+/// ```
+/// use strandfit::codec::{decode_block, encode_block, CodecParams, DecodeError};
+/// use strandfit::metrics::hausdorff;
+/// # use strandfit::DVec3;
+/// # fn helix(r: f64) -> Vec<DVec3> { // a helix of radius r, a point every 0.1 radian
+/// #     (0..100).map(|k| 0.1 * k as f64).map(|s| DVec3::new(r * s.cos(), r * s.sin(), 0.8 * s)).collect()
+/// # }
+///
+/// let params = CodecParams::new(0.05);
+/// let curves = [helix(3.0), helix(5.0)];
+/// let block = encode_block(&curves, &params).unwrap();
+/// let back = decode_block(&block.bytes, 2, &params).unwrap();
+/// for (a, b) in curves.iter().zip(&back) {
+///     assert!(hausdorff(a, b).unwrap() <= 0.05);
+/// }
+/// // The count is the caller's (the container stores it): asking for more
+/// // curves than were coded runs off the end of the stream. (Damaged bytes
+/// // are caught by the container's CRC-32, not here.)
+/// assert_eq!(decode_block(&block.bytes, 3, &params), Err(DecodeError::Truncated));
+/// ```
 pub fn decode_block(
     bytes: &[u8],
     count: usize,

@@ -155,8 +155,8 @@ pub fn compress_to_bytes(
 
 /// Compresses every curve of `reader` into a version-3 container at `out`
 /// (written atomically). `checker`: where the candidate elements are
-/// checked ([`crate::backend::Backend::arc_checker`]; `None`: on the CPU,
-/// curves in parallel); the bytes are the same either way. `progress` gets
+/// checked (the GPU's `arc_check` kernel, as the command line passes it;
+/// `None`: on the CPU, curves in parallel); the bytes are the same either way. `progress` gets
 /// the number of curves done after each block. Errors name the input file
 /// and curve for bad input, the output for write failures.
 ///

@@ -68,6 +68,24 @@ fn epsilon(p: &[f64; 5], sc: &Scaled, integ: PaperIntegrator) -> f64 {
 /// Algorithm 1. The returned `error` is Eq. 9 in the input's units,
 /// re-evaluated with the accurate integrator (so a first-order integrator's
 /// own optimism does not hide in it); `iterations` counts Steps 3–5.
+///
+/// The ends of a known spiral, found again with the fourth-order
+/// integrator (with the paper's explicit Euler the answer is off by about
+/// 1e-2, ERRATA 004.1):
+///
+/// ```
+/// use strandfit::euler::{paper_spiral, FrenetProblem, PaperIntegrator, PaperOptions, SolveError};
+/// use strandfit::DVec3;
+///
+/// let known = FrenetProblem::new(DVec3::ZERO, DVec3::X, DVec3::Y, 2.0, 0.0, 0.8, 0.0, 2.0);
+/// let end = known.integrate(4096).unwrap();
+/// let opts = PaperOptions { integrator: PaperIntegrator::FourthOrder(64), ..Default::default() };
+/// let s = paper_spiral(DVec3::ZERO, DVec3::X, end.point, end.frame[0], &opts).unwrap();
+/// assert!(s.error < 1e-4, "ε = {}", s.error);
+/// // Coincident ends have no spiral.
+/// let err = paper_spiral(DVec3::ONE, DVec3::X, DVec3::ONE, DVec3::Y, &opts).unwrap_err();
+/// assert_eq!(err, SolveError::Coincident);
+/// ```
 pub fn paper_spiral(
     x0: DVec3,
     t0: DVec3,

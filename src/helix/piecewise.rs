@@ -48,6 +48,21 @@ pub struct ChainParams {
 
 impl PiecewiseHelix {
     /// Build from elements (their start points are taken as given).
+    ///
+    /// ```
+    /// use std::f64::consts::{FRAC_PI_2, PI};
+    /// use strandfit::{DVec3, HelixElement, ParamCurve3, PiecewiseHelix};
+    ///
+    /// // Two quarters of the unit circle: a half circle from (1, 0, 0).
+    /// let quarter = |start: DVec3, tangent: DVec3| HelixElement {
+    ///     start, tangent, normal: -start, curvature: 1.0, torsion: 0.0, length: FRAC_PI_2,
+    /// };
+    /// let chain = PiecewiseHelix::new(vec![quarter(DVec3::X, DVec3::Y), quarter(DVec3::Y, -DVec3::X)]);
+    /// assert_eq!(chain.len(), 2);
+    /// assert!((chain.arc_length() - PI).abs() < 1e-15);
+    /// assert!(chain.eval(1.0).distance(-DVec3::X) < 1e-12);
+    /// assert!(PiecewiseHelix::new(vec![]).is_empty());
+    /// ```
     pub fn new(elements: Vec<HelixElement>) -> Self {
         let mut cum = Vec::with_capacity(elements.len() + 1);
         let mut acc = 0.0;

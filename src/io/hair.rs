@@ -92,6 +92,29 @@ pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
 
 impl HairReader {
     /// Open a `.hair` file and read its header.
+    ///
+    /// The header's counts are checked against the file's length up front:
+    ///
+    /// ```
+    /// use strandfit::io::hair::{self, HairReader};
+    /// use strandfit::io::{Curve, CurveReader, Format, Metadata};
+    /// use strandfit::DVec3;
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("two.hair");
+    /// let mut w = hair::create(&path, &Metadata::new(Format::Json)).unwrap();
+    /// for n in [2, 3] {
+    ///     w.write_curve(&Curve::from_points(vec![DVec3::Z; n])).unwrap();
+    /// }
+    /// w.finish().unwrap();
+    /// let reader = HairReader::open(&path).unwrap();
+    /// assert_eq!(reader.metadata().count, Some(2));
+    /// assert_eq!(reader.map(|c| c.unwrap().points.len()).collect::<Vec<_>>(), [2, 3]);
+    /// // The same file cut short by one byte.
+    /// let bytes = std::fs::read(&path).unwrap();
+    /// std::fs::write(&path, &bytes[..bytes.len() - 1]).unwrap();
+    /// assert!(HairReader::open(&path).is_err());
+    /// ```
     pub fn open(path: &Path) -> Result<Self, IoError> {
         let mut src = ByteSource::open(path)?;
         let len = src.len();
@@ -372,6 +395,30 @@ pub struct HairWriter {
 
 impl HairWriter {
     /// Create a `.hair` file at `path` for curves described by `meta`.
+    ///
+    /// Nothing is at `path` until [`CurveWriter::finish`]; the info string
+    /// comes from `meta`'s `hair.info` (or `vtk.title`):
+    ///
+    /// ```
+    /// use strandfit::io::hair::{HairReader, HairWriter};
+    /// use strandfit::io::{Curve, CurveReader, CurveWriter, Format, Metadata};
+    /// use strandfit::DVec3;
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("strand.hair");
+    /// let mut meta = Metadata::new(Format::Json);
+    /// meta.extra.push(("vtk.title".into(), "one strand".into()));
+    /// let mut w = Box::new(HairWriter::new(&path, &meta).unwrap());
+    /// let points = vec![DVec3::ZERO, DVec3::Y, DVec3::new(0.0, 2.0, 0.5)];
+    /// w.write_curve(&Curve::from_points(points.clone())).unwrap();
+    /// assert!(!path.exists());
+    /// w.finish().unwrap();
+    /// let mut reader = HairReader::open(&path).unwrap();
+    /// assert_eq!(reader.metadata().extra("hair.info"), Some("one strand"));
+    /// assert_eq!(reader.next().unwrap().unwrap().points, points);
+    /// // A folder that is not there is an error at once.
+    /// assert!(HairWriter::new(&dir.path().join("no/strand.hair"), &meta).is_err());
+    /// ```
     pub fn new(path: &Path, meta: &Metadata) -> Result<Self, IoError> {
         let out = AtomicFile::create(path)?;
         let col = |n: &str| meta.point_data_names.iter().position(|m| m == n);

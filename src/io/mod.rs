@@ -326,8 +326,44 @@ impl CurveReader for Checked {
 /// completes the file (counts, terminators) and renames it into place.
 pub trait CurveWriter {
     /// Write one curve.
+    ///
+    /// A curve the format cannot store is an error naming the file, the
+    /// curve and the point:
+    ///
+    /// ```
+    /// use strandfit::io::{create_writer, Curve, Format, Metadata};
+    /// use strandfit::DVec3;
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("out.tck");
+    /// let mut w = create_writer(&path, None, &Metadata::new(Format::Json)).unwrap();
+    /// w.write_curve(&Curve::from_points(vec![DVec3::ZERO, DVec3::X])).unwrap();
+    /// let err = w.write_curve(&Curve::from_points(vec![DVec3::ZERO, DVec3::NAN])).unwrap_err();
+    /// assert_eq!((err.path.file_name(), err.curve), (path.file_name(), Some(1)));
+    /// assert!(err.reason.starts_with("point 1"));
+    /// ```
     fn write_curve(&mut self, curve: &Curve) -> Result<(), IoError>;
+
     /// Finish the file (trailers, counts) and move it into place.
+    ///
+    /// Until then nothing is at the path; a writer dropped unfinished
+    /// leaves nothing behind:
+    ///
+    /// ```
+    /// use strandfit::io::{create_writer, read_all, Curve, Format, Metadata};
+    /// use strandfit::DVec3;
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("out.tck");
+    /// let mut w = create_writer(&path, None, &Metadata::new(Format::Json)).unwrap();
+    /// w.write_curve(&Curve::from_points(vec![DVec3::ZERO, DVec3::X])).unwrap();
+    /// assert!(!path.exists());
+    /// w.finish().unwrap();
+    /// let (meta, curves) = read_all(&path, None).unwrap();
+    /// assert_eq!((meta.count, curves.len()), (Some(1), 1));
+    /// drop(create_writer(&dir.path().join("dropped.tck"), None, &Metadata::new(Format::Json)).unwrap());
+    /// assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1); // out.tck only
+    /// ```
     fn finish(self: Box<Self>) -> Result<(), IoError>;
 }
 

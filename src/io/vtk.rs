@@ -846,6 +846,30 @@ pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
 
 impl VtkReader {
     /// Open a `.vtk` file and read its header.
+    ///
+    /// Two lines of an ASCII file (its encoding is kept in `extra`), and a
+    /// file whose `LINES` point past its points:
+    ///
+    /// ```
+    /// use strandfit::io::vtk::VtkReader;
+    /// use strandfit::io::CurveReader;
+    /// use strandfit::DVec3;
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("two.vtk");
+    /// let head = "# vtk DataFile Version 3.0\ntwo lines\nASCII\nDATASET POLYDATA\n\
+    ///             POINTS 5 float\n0 0 0  1 0 0  2 0 0  0 1 0  0 2 0\n";
+    /// std::fs::write(&path, format!("{head}LINES 2 7\n3 0 1 2\n2 3 4\n")).unwrap();
+    /// let reader = VtkReader::open(&path).unwrap();
+    /// assert_eq!(reader.metadata().count, Some(2));
+    /// assert_eq!(reader.metadata().extra("vtk.encoding"), Some("ASCII"));
+    /// let curves: Vec<_> = reader.map(|c| c.unwrap().points).collect();
+    /// assert_eq!(curves[1], [DVec3::Y, 2.0 * DVec3::Y]);
+    /// // Point 5 of 5 points is not there.
+    /// std::fs::write(&path, format!("{head}LINES 1 3\n2 4 5\n")).unwrap();
+    /// let first = VtkReader::open(&path).and_then(|mut r| r.next().unwrap());
+    /// assert!(first.is_err());
+    /// ```
     pub fn open(path: &Path) -> Result<Self, IoError> {
         let mut src = Src::open(path)?;
         let scan = scan(&mut src)?;
@@ -1647,7 +1671,27 @@ pub struct VtkWriter {
 }
 
 impl VtkWriter {
-    /// Create a `.vtk` file at `path` for curves described by `meta`.
+    /// Create a `.vtk` file at `path` for curves described by `meta`
+    /// (BINARY unless `meta.extra` has `vtk.encoding = ASCII`).
+    ///
+    /// ```
+    /// use strandfit::io::vtk::{VtkReader, VtkWriter};
+    /// use strandfit::io::{Curve, CurveReader, CurveWriter, Format, Metadata};
+    /// use strandfit::DVec3;
+    ///
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("line.vtk");
+    /// let mut meta = Metadata::new(Format::Json);
+    /// meta.extra.push(("vtk.encoding".into(), "ASCII".into()));
+    /// let mut w = Box::new(VtkWriter::new(&path, &meta).unwrap());
+    /// let points = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 0.5, 0.0)];
+    /// w.write_curve(&Curve::from_points(points.clone())).unwrap();
+    /// w.finish().unwrap();
+    /// let text = std::fs::read_to_string(&path).unwrap();
+    /// assert!(text.starts_with("# vtk DataFile Version") && text.contains("\nASCII\n"));
+    /// let mut reader = VtkReader::open(&path).unwrap();
+    /// assert_eq!(reader.next().unwrap().unwrap().points, points);
+    /// ```
     pub fn new(path: &Path, meta: &Metadata) -> Result<Self, IoError> {
         let out = AtomicFile::create(path)?;
         let binary = !meta

@@ -29,6 +29,22 @@ use super::error::{check, MetricsError};
 ///
 /// Errors: [`MetricsError::Empty`] if either sequence is empty,
 /// [`MetricsError::NonFinite`] if any coordinate is NaN or infinite.
+///
+/// Order matters, where the Hausdorff distance ignores it: a segment and
+/// the same segment reversed are 0 apart in Hausdorff, their length in
+/// Fréchet.
+///
+/// ```
+/// use strandfit::metrics::{discrete_frechet, hausdorff, MetricsError};
+/// use strandfit::DVec3;
+///
+/// let a = [DVec3::ZERO, DVec3::X, 2.0 * DVec3::X];
+/// let back = [2.0 * DVec3::X, DVec3::X, DVec3::ZERO];
+/// assert_eq!(discrete_frechet(&a, &a).unwrap(), 0.0);
+/// assert_eq!(discrete_frechet(&a, &back).unwrap(), 2.0);
+/// assert_eq!(hausdorff(&a, &back).unwrap(), 0.0);
+/// assert_eq!(discrete_frechet(&a, &[]), Err(MetricsError::Empty));
+/// ```
 pub fn discrete_frechet(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError> {
     let mut row = Vec::new();
     discrete_frechet_with_buf(a, b, &mut row)
