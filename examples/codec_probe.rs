@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use glam::DVec3;
-use strandfit::codec::{decode_block, encode_block_tallied, quantise::Steps, CodecParams, FIELDS};
+use strandfit::codec::{decode_block, encode_block_tallied, CodecParams, Steps, FIELDS};
 
 const USAGE: &str = "usage: codec_probe FILE TOL [OFFSET LENGTH START FIRST SAGITTA]\n\
     FILE: any curve file strandfit reads; TOL: the two-sided tolerance;\n\

@@ -8,7 +8,7 @@
 //! polyline).
 //!
 //! Pipeline per curve: Schneider smoothing to a G1 cubic spline
-//! ([`spline::schneider`](crate::spline::schneider)), then the floating
+//! ([`spline::fit_polyline`](crate::spline::fit_polyline)), then the floating
 //! tangents fit ([`fit`](crate::fit)) with `N` elements, then the check of
 //! the chain against the *input* polyline — not against the spline, so the
 //! smoothing error is inside the tolerance, not added to it.
@@ -40,7 +40,7 @@ use glam::DVec3;
 use crate::fit::{fit_spline_with, FitError, FitOptions, FitScratch};
 use crate::helix::PiecewiseHelix;
 use crate::metrics::{frechet_polyline, frechet_within, ordered_distance, ordered_within};
-use crate::spline::schneider::{fit_polyline, PolylineFitError, SchneiderOptions};
+use crate::spline::{fit_polyline, PolylineFitError, SchneiderOptions};
 use crate::spline::{BezierSpline, SplineError};
 
 /// How many elements per curve.

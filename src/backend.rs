@@ -113,7 +113,7 @@ impl Backend {
     /// Where the codec checks its candidate elements: `None` on the CPU
     /// (each curve's search checks its own, in parallel over curves), the
     /// `arc_check` kernel on the GPU (all curves of a block together, one
-    /// batch per round; [`crate::codec::batch`]). Both give the same bytes.
+    /// batch per round; [`crate::codec::ArcChecker`]). Both give the same bytes.
     ///
     /// Plumbing for the command line's `compress` and
     /// [`crate::compress_polylines`] (the checker is a type of the hidden
@@ -433,7 +433,7 @@ impl Backend {
     }
 
     /// End point and frame of every Euler spiral after `steps` steps of the
-    /// fourth-order scheme of [`crate::euler::frenet`] (order kept; a bad
+    /// fourth-order scheme of [`crate::euler::FrenetProblem`] (order kept; a bad
     /// problem gets its own error).
     ///
     /// A circle of radius 1, half way round, and a problem with a NaN:

@@ -9,11 +9,8 @@ use rayon::prelude::*;
 
 use crate::adaptive::{fit_polyline_chain, AdaptiveError, AdaptiveOptions, ChainFit};
 use crate::backend::{Backend, GpuError};
-use crate::codec::batch::ArcChecker;
-use crate::codec::container::{CodecHeader, CodecReader};
-use crate::codec::stream::{compress_to_bytes, read_range};
-use crate::io::container::SourceMeta;
-use crate::io::{Curve, Format, IoError, Metadata, VecReader};
+use crate::codec::{compress_to_bytes, read_range, ArcChecker, CodecHeader, CodecReader};
+use crate::io::{Curve, Format, IoError, Metadata, SourceMeta, VecReader};
 
 /// What a batch call reports in place of a path for in-memory curves.
 const IN_MEMORY: &str = "<memory>";

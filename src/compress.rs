@@ -32,7 +32,7 @@ use crate::adaptive::{
     ElementCount,
 };
 use crate::helix::PiecewiseHelix;
-use crate::io::container::{encoded_size, QuantChain, Shape, Storage, StoredCurve};
+use crate::io::{encoded_size, QuantChain, Shape, Storage, StoredCurve};
 
 /// Options of [`compress_curve`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,7 +95,7 @@ pub struct CurveOutcome {
 /// Compress one polyline.
 ///
 /// ```
-/// use strandfit::io::container::{Shape, Storage};
+/// use strandfit::io::{Shape, Storage};
 /// use strandfit::{compress_curve, CompressOptions, DVec3, ElementCount};
 ///
 /// let helix: Vec<DVec3> = (0..100)

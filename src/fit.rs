@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use crate::helix::{
-    ghosh, relax_dense, relax_tridiagonal, HelixElement, HelixError, HermitePair, PiecewiseHelix,
+    self, relax_dense, relax_tridiagonal, HelixElement, HelixError, HermitePair, PiecewiseHelix,
     RelaxScratch, Relaxation,
 };
 use crate::spline::{BezierSpline, SplineError};
@@ -19,7 +19,7 @@ pub struct FitOptions {
     pub elements: usize,
     /// Relaxation solver (default: the `O(N)` tridiagonal one).
     pub relaxation: Relaxation,
-    /// Relative co-helicity tolerance passed to [`ghosh::interpolate`]. The
+    /// Relative co-helicity tolerance passed to [`helix::interpolate`]. The
     /// relaxed points satisfy the condition to rounding (≈1e-14 relative),
     /// so this only guards against a broken relaxation.
     pub cohelical_tol: f64,
@@ -31,7 +31,7 @@ impl FitOptions {
         FitOptions {
             elements,
             relaxation: Relaxation::Tridiagonal,
-            cohelical_tol: ghosh::DEFAULT_COHELICAL_TOL,
+            cohelical_tol: helix::DEFAULT_COHELICAL_TOL,
         }
     }
 }
@@ -192,7 +192,7 @@ fn fit_scratch_points(
     } = scratch;
     let mut elements: Vec<HelixElement> = Vec::with_capacity(relaxed.len() - 1);
     for i in 0..relaxed.len() - 1 {
-        let h = ghosh::interpolate(
+        let h = helix::interpolate(
             relaxed[i],
             tangents[i],
             relaxed[i + 1],

@@ -9,7 +9,7 @@
 //!    with their unit tangents ([`spline`]);
 //! 2. relax the points so that every consecutive pair is co-helical,
 //!    `⟨p'ᵢ₊₁ − p'ᵢ, tᵢ₊₁ − tᵢ⟩ = 0` ([`helix::relax()`]);
-//! 3. join each pair by Ghosh's unique short helix ([`helix::ghosh`]),
+//! 3. join each pair by Ghosh's unique short helix ([`helix::interpolate`]),
 //!    giving a G1 piecewise helix of `N` elements ([`PiecewiseHelix`]).
 //!
 //! # The front door

@@ -261,15 +261,15 @@ fn raw() -> bool {
 
 /// A whole-file read with the format's own reader alone.
 fn raw_read(path: &Path, f: Format) -> Result<(Metadata, Vec<Curve>), IoError> {
-    use strandfit::io::{hair, polyline, tck, trk, trx, vtk};
+    use strandfit::io::{open_csv, open_hair, open_json, open_tck, open_trk, open_trx, open_vtk};
     let reader = match f {
-        Format::Tck => tck::open(path),
-        Format::Trk => trk::open(path),
-        Format::Trx => trx::open(path),
-        Format::Vtk => vtk::open(path),
-        Format::Hair => hair::open(path),
-        Format::Json => polyline::open_json(path),
-        Format::Csv => polyline::open_csv(path),
+        Format::Tck => open_tck(path),
+        Format::Trk => open_trk(path),
+        Format::Trx => open_trx(path),
+        Format::Vtk => open_vtk(path),
+        Format::Hair => open_hair(path),
+        Format::Json => open_json(path),
+        Format::Csv => open_csv(path),
     }?;
     let meta = reader.metadata().clone();
     let curves = reader.collect::<Result<Vec<_>, _>>()?;
@@ -773,7 +773,7 @@ fn deflate(b: &[u8]) -> Vec<u8> {
 }
 
 fn parse_sfh(b: &[u8]) -> Option<Sfh> {
-    if b.get(..8)? != strandfit::io::container::MAGIC {
+    if b.get(..8)? != strandfit::io::CONTAINER_MAGIC {
         return None;
     }
     let len = u32_at(b, 16)? as usize;

@@ -10,7 +10,7 @@ use std::path::Path;
 use std::process::Command;
 
 use glam::DVec3;
-use strandfit::codec::batch::ArcChecker;
+use strandfit::codec::ArcChecker;
 use strandfit::codec::{encode_block, encode_block_on, CodecParams};
 use strandfit::gpu::GpuContext;
 use strandfit::{Backend, GpuEngine, PrecisionChoice};

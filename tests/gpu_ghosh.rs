@@ -1,5 +1,5 @@
 //! `ghosh_bisect.wgsl` on the GPU against its CPU twin and the `f64`
-//! reference (`helix::ghosh::interpolate`), over 100,000+ random segments
+//! reference (`helix::interpolate`), over 100,000+ random segments
 //! with every degenerate and near-degenerate branch.
 
 mod common;

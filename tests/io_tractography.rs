@@ -116,9 +116,7 @@ fn trk_metadata_comes_from_the_header() {
     assert_eq!(m.count, Some(300));
     assert_eq!(m.dimensions, Some([50, 50, 50]));
     assert_eq!(m.voxel_size, Some([1.0; 3]));
-    assert!(m
-        .extra(io::trk::HEADER_KEY)
-        .is_some_and(|h| h.len() == 2000));
+    assert!(m.extra(io::TRK_HEADER_KEY).is_some_and(|h| h.len() == 2000));
     let (m, _) = read(&data("nibabel_fixtures/standard.trk"));
     assert_eq!(m.dimensions, Some([4, 5, 7]));
     assert_eq!(m.voxel_size, Some([1.0, 3.0, 2.0]));

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use strandfit::io::{self, trx, Curve, Format, IoError, Metadata};
+use strandfit::io::{self, create_trx, open_trx, Curve, Format, IoError, Metadata};
 use strandfit::DVec3;
 
 fn data(name: &str) -> PathBuf {
@@ -18,7 +18,7 @@ fn data(name: &str) -> PathBuf {
 }
 
 fn read_trx(path: &Path) -> Result<(Metadata, Vec<Curve>), IoError> {
-    let r = trx::open(path)?;
+    let r = open_trx(path)?;
     let meta = r.metadata().clone();
     Ok((meta, r.collect::<Result<Vec<_>, _>>()?))
 }
@@ -286,7 +286,7 @@ fn writer_refuses_what_its_dtypes_cannot_hold_and_leaves_nothing_behind() {
         .push(("trx.positions_dtype".into(), "float16".into()));
     meta.point_data_names = vec!["c".into()];
     meta.extra.push(("trx.dpv.c".into(), "uint8".into()));
-    let mut w = trx::create(&p, &meta).unwrap();
+    let mut w = create_trx(&p, &meta).unwrap();
     let ok = Curve {
         points: vec![DVec3::ONE],
         point_data: vec![3.0],
@@ -554,7 +554,7 @@ fn hand_made_bad_archives_say_why() {
 
 /// Every error, whatever the damage: read all curves or fail, never panic.
 fn survive(path: &Path) -> Result<usize, IoError> {
-    let r = trx::open(path)?;
+    let r = open_trx(path)?;
     let mut n = 0;
     for c in r {
         c?;
@@ -645,7 +645,7 @@ fn corrupted_stored_data_fails_its_crc_on_the_last_curve() {
         .unwrap();
     b[at + 19 + 1000] ^= 0x40;
     std::fs::write(&p, &b).unwrap();
-    let r = trx::open(&p).unwrap();
+    let r = open_trx(&p).unwrap();
     let results: Vec<_> = r.collect();
     assert_eq!(results.len(), 300, "curves stream until the end");
     let e = results.last().unwrap().as_ref().unwrap_err();

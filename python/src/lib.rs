@@ -12,14 +12,13 @@ use pyo3::exceptions::{PyIndexError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
-use strandfit::codec::container::{CodecHeader, CodecReader, DecodedCurve};
-use strandfit::codec::stream::{
-    compress_stream, compress_to_bytes, decompress_stream, output_curve, read_range,
+use strandfit::codec::{
+    compress_stream, compress_to_bytes, decompress_stream, output_curve, read_range, CodecHeader,
+    CodecReader, DecodedCurve,
 };
-use strandfit::io::container::SourceMeta;
 use strandfit::io::{
     create_writer, curve_problem, data_losses, open_reader_with, source_losses, BadCurves, Curve,
-    CurveReader, Format, IoError, Metadata, VecReader,
+    CurveReader, Format, IoError, Metadata, SourceMeta, VecReader,
 };
 use strandfit::DVec3;
 

@@ -9,32 +9,36 @@
 //! with or without a prescribed arc length — is one small linear system
 //! (3.1, 4.1) per pair, with a unique solution.
 //!
-//! * [`moments`]: the trigonometric moments every closed form is made of,
-//!   with the paper's zero-divisor cases (`a₁`, `A₁` or `B₁ = 0`);
-//! * [`tangent`]: the field `T` and the choices Section 3.1 leaves open
-//!   (azimuth branch, poles, equal tangents);
-//! * [`bernstein`]: `ρ` in Bernstein form, and the regularity test;
-//! * [`curve`]: evaluation, curvature, torsion, arc length, sampling;
-//! * [`hermite`]: the interpolation (Sections 3 and 4);
-//! * [`spline`]: G1 splines through points and tangents (Section 5);
-//! * [`batch`]: many pairs in parallel.
+//! * [`trig_moments`]: the trigonometric moments every closed form is made
+//!   of, with the paper's zero-divisor cases (`a₁`, `A₁` or `B₁ = 0`);
+//! * [`SphericalTangent`]: the field `T` and the choices Section 3.1 leaves
+//!   open (azimuth branch, poles, equal tangents);
+//! * [`Bernstein`]: `ρ` in Bernstein form, and the regularity test;
+//! * [`AtphCurve`]: evaluation, curvature, torsion, arc length, sampling;
+//! * [`interpolate`], [`interpolate_with_length`]: the interpolation
+//!   (Sections 3 and 4);
+//! * [`AtphSpline`]: G1 splines through points and tangents (Section 5);
+//! * [`interpolate_pairs`]: many pairs in parallel.
 //!
 //! Corrections to the paper are in `shared/papers/ERRATA.md`, section 002.
 
-pub mod batch;
-pub mod bernstein;
-pub mod curve;
-pub mod hermite;
-pub mod moments;
-pub mod spline;
-pub mod tangent;
+mod batch;
+mod bernstein;
+mod curve;
+mod hermite;
+mod moments;
+mod spline;
+mod tangent;
 
 pub use batch::{interpolate_pairs, HermitePair};
 pub use bernstein::{Bernstein, Sign};
 pub use curve::AtphCurve;
 pub use hermite::{
     check_ends, interpolate, interpolate_field, interpolate_with_length, tangent_field, AtphError,
-    SINGULAR_TOL,
+    OFF_PLANE_TOL, SINGULAR_TOL,
 };
+pub use moments::{trig_moments, Moments, SERIES_BELOW};
 pub use spline::{AtphSpline, SplineError};
-pub use tangent::{FieldKind, SphericalTangent};
+pub use tangent::{
+    spherical_angles, wrap_angle, FieldKind, SphericalTangent, HALF_TURN_TOL, PLANAR_TOL, POLE_TOL,
+};

@@ -38,7 +38,7 @@ pub const SERIES_BELOW: f64 = 2.0;
 /// At `ω = π` (closed form): `M₀ = ∫₀¹ e^{iπt} dt = 2i/π` and
 /// `Re M₁ = ∫₀¹ t cos πt dt = −2/π²`; at `ω = 0` (series): `M_k = 1/(k + 1)`:
 /// ```
-/// use strandfit::atph::moments::trig_moments;
+/// use strandfit::atph::trig_moments;
 /// use std::f64::consts::PI;
 ///
 /// let m = trig_moments(PI, 0.0, 1.0);

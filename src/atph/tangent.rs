@@ -64,7 +64,7 @@ pub enum FieldKind {
 /// `(θ, φ)` of a unit vector; `φ` is `None` at the poles.
 ///
 /// ```
-/// use strandfit::atph::tangent::spherical_angles;
+/// use strandfit::atph::spherical_angles;
 /// use strandfit::DVec3;
 /// use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
 ///
@@ -84,7 +84,7 @@ pub fn spherical_angles(t: DVec3) -> (f64, Option<f64>) {
 /// `x` reduced to `(−π, π]`.
 ///
 /// ```
-/// use strandfit::atph::tangent::wrap_angle;
+/// use strandfit::atph::wrap_angle;
 /// use std::f64::consts::{FRAC_PI_2, PI};
 ///
 /// assert!((wrap_angle(3.0 * FRAC_PI_2) + FRAC_PI_2).abs() < 1e-15);
@@ -215,7 +215,7 @@ impl SphericalTangent {
     /// `V_k(ξ) = ∫₀^ξ tᵏ T(t) dt`, `k = 0..=3`: by the product-to-sum step
     /// of (2.3), `x = ½(Re M_k(A₁, A₀) + Re M_k(B₁, B₀))`,
     /// `y = ½(Im M_k(A₁, A₀) − Im M_k(B₁, B₀))`, `z = Im M_k(a₁, a₀)`, where
-    /// `A = a + b`, `B = a − b` ([`super::moments`]).
+    /// `A = a + b`, `B = a − b` ([`super::trig_moments`]).
     ///
     /// A quarter turn along the equator, `T = (cos πt/2, sin πt/2, 0)`:
     /// `V₀(1) = (2/π, 2/π, 0)` and `V₁(1)ₓ = ∫₀¹ t cos(πt/2) dt = 2/π − 4/π²`:

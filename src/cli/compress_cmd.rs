@@ -16,11 +16,11 @@ use super::usage;
 use super::{CompressArgs, DistanceArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
 use crate::backend::Backend;
-use crate::codec::batch::ArcChecker;
+use crate::codec::ArcChecker;
 use crate::compress::{compress_curve, CompressOptions};
-use crate::io::container::{ContainerWriter, Header, Shape, SourceMeta, Storage, StoredCurve};
 use crate::io::{
-    data_losses, open_reader_with, source_losses, BadCurves, Curve, CurveReader, Metadata,
+    data_losses, open_reader_with, source_losses, BadCurves, ContainerHeader, ContainerWriter,
+    Curve, CurveReader, Metadata, Shape, SourceMeta, Storage, StoredCurve,
 };
 
 /// Curves fitted per parallel batch (bounds memory; keeps order).
@@ -175,7 +175,7 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
     };
     let started = Instant::now();
     let (mut reader, meta, dropped) = open_input(args, false)?;
-    let header = Header {
+    let header = ContainerHeader {
         storage,
         tolerance: args.tolerance,
         mode: match count {
@@ -351,8 +351,7 @@ fn open_input(
 /// within `--tolerance` in the two-sided Hausdorff distance at default
 /// decompression.
 fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
-    use crate::codec::container::CodecHeader;
-    use crate::codec::stream::compress_stream;
+    use crate::codec::{compress_stream, CodecHeader};
 
     let Some(tolerance) = args.tolerance else {
         usage!("give --tolerance (or --elements / --element-length with --distance ordered)");

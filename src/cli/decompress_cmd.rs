@@ -8,8 +8,7 @@ use super::inspect_cmd::parse_format;
 use super::io_util::{check_losses, write_failed};
 use super::usage;
 use super::DecompressArgs;
-use crate::io::container::{ContainerReader, Shape};
-use crate::io::{create_writer, Curve, Format};
+use crate::io::{create_writer, ContainerReader, Curve, Format, Shape};
 
 pub fn run(args: &DecompressArgs) -> Result<()> {
     if let Some(s) = args.step {
@@ -21,7 +20,7 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
         usage!("--points must be at least 2");
     }
     let to = args.to.as_deref().map(parse_format).transpose()?;
-    if crate::codec::container::container_version(&args.input).is_some_and(|v| v >= 2) {
+    if crate::codec::container_version(&args.input).is_some_and(|v| v >= 2) {
         return run_codec(args, to);
     }
     let reader = ContainerReader::open(&args.input)?;
@@ -116,8 +115,7 @@ fn output_writer(
 /// A version-3 container: the codec's points (the guarantee's), or a
 /// resampling of them when asked.
 fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
-    use crate::codec::container::CodecReader;
-    use crate::codec::stream::decompress_range;
+    use crate::codec::{decompress_range, CodecReader};
 
     let mut reader = CodecReader::open(&args.input)?;
     let header = reader.header().clone();
@@ -134,9 +132,8 @@ fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
     let mut writer = output_writer(args, to, &meta)?;
     let (points, step) = (args.points, args.step);
     let width = header.point_data_names.len();
-    let map = move |c: crate::codec::container::DecodedCurve| {
-        crate::codec::stream::output_curve(c, points, step, width)
-    };
+    let map =
+        move |c: crate::codec::DecodedCurve| crate::codec::output_curve(c, points, step, width);
     let total = reader.curve_count();
     let range = match args.curves {
         None => 0..total,

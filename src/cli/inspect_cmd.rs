@@ -7,17 +7,16 @@ use anyhow::Result;
 use serde_json::json;
 
 use super::InspectArgs;
-use crate::io::inspect::CurveStats;
-use crate::io::{open_reader, Format};
+use crate::io::{open_reader, CurveStats, Format};
 
 pub fn run(args: &InspectArgs) -> Result<()> {
     if let (Some(out), Some(source)) = (&args.preview, &args.source) {
         return preview(args, source, out);
     }
-    if crate::codec::container::container_version(&args.input).is_some_and(|v| v >= 2) {
+    if crate::codec::container_version(&args.input).is_some_and(|v| v >= 2) {
         return inspect_codec_container(args);
     }
-    if crate::io::container::is_container(&args.input) {
+    if crate::io::is_container(&args.input) {
         return inspect_container(args);
     }
     let format = args.from.as_deref().map(parse_format).transpose()?;
@@ -140,7 +139,7 @@ fn print_text(path: &Path, bytes: u64, meta: &crate::io::Metadata, s: &CurveStat
 /// Summary of a `.sfh` container: its header, and counts read from every
 /// block (which also verifies every checksum).
 fn inspect_container(args: &InspectArgs) -> Result<()> {
-    use crate::io::container::{ContainerReader, Shape};
+    use crate::io::{ContainerReader, Shape};
     let bytes = std::fs::metadata(&args.input)?.len();
     let mut reader = ContainerReader::open(&args.input)?;
     let header = reader.header().clone();
@@ -224,7 +223,7 @@ fn inspect_container(args: &InspectArgs) -> Result<()> {
 /// Summary of a version-2 container: its header, and counts from decoding
 /// every block (which also verifies every checksum).
 fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
-    use crate::codec::container::CodecReader;
+    use crate::codec::CodecReader;
     let bytes = std::fs::metadata(&args.input)?.len();
     let mut reader = CodecReader::open(&args.input)?;
     let header = reader.header().clone();
@@ -254,7 +253,7 @@ fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
             "version": super::JSON_VERSION,
             "input": args.input.display().to_string(),
             "format": "sfh",
-            "container_version": crate::codec::container::VERSION,
+            "container_version": crate::codec::CONTAINER_VERSION,
             "bytes": bytes,
             "header": header,
             "curve_count": curves,
@@ -269,7 +268,7 @@ fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
         println!(
             "{}: strandfit container version {}, {bytes} bytes",
             args.input.display(),
-            crate::codec::container::VERSION
+            crate::codec::CONTAINER_VERSION
         );
         println!(
             "  codec           arcs (model {}, strandfit {}) within {} (two-sided Hausdorff at default decompression)",
@@ -310,8 +309,7 @@ fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
 /// `inspect CONTAINER --preview OUT.svg --source INPUT`: the picture of
 /// [`crate::metrics::preview_svg`], written atomically.
 fn preview(args: &InspectArgs, source: &std::path::Path, out: &std::path::Path) -> Result<()> {
-    use crate::codec::container::{container_version, CodecReader};
-    use crate::codec::stream::read_range;
+    use crate::codec::{container_version, read_range, CodecReader};
     use std::io::Write;
 
     if let Some(v) = container_version(&args.input).filter(|&v| v != 3) {

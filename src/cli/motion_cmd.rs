@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use super::io_util::{input_name, map_json_lines, read_input, Output};
 use super::usage;
 use super::MotionArgs;
-use crate::io::vtk_frames::{write_framed_paths, FramedPath};
+use crate::io::{write_framed_paths, FramedPath};
 use crate::rrmf::{default_frame, minaj2_references, validate_points, RrmfSpline};
 
 #[derive(Clone, Deserialize)]

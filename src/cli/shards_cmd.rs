@@ -1,11 +1,11 @@
 //! `strandfit split` and `strandfit merge`: containers cut into shards of
-//! whole blocks and joined again ([`crate::codec::shards`]).
+//! whole blocks and joined again ([`crate::codec::split_into_shards`], [`crate::codec::merge_shards`]).
 
 use anyhow::Result;
 use serde::Serialize;
 
 use super::{MergeArgs, SplitArgs};
-use crate::codec::shards::{self, Shard};
+use crate::codec::{merge_shards, split_into_shards, Shard};
 
 #[derive(Serialize)]
 struct Report<'a> {
@@ -17,7 +17,7 @@ struct Report<'a> {
 }
 
 pub fn split(args: &SplitArgs) -> Result<()> {
-    let out = shards::split(&args.input, &args.output, args.curves_per_shard)?;
+    let out = split_into_shards(&args.input, &args.output, args.curves_per_shard)?;
     let curves = out.iter().map(|s| s.curves).sum();
     if args.json {
         let r = Report {
@@ -46,7 +46,7 @@ pub fn split(args: &SplitArgs) -> Result<()> {
 }
 
 pub fn merge(args: &MergeArgs) -> Result<()> {
-    let parts = shards::merge(&args.inputs, &args.output)?;
+    let parts = merge_shards(&args.inputs, &args.output)?;
     let curves = parts.iter().map(|s| s.curves).sum();
     if args.json {
         let r = Report {

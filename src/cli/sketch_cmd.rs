@@ -3,7 +3,7 @@
 //!
 //! Input: a polyline as JSON (`[[x,y],…]` or `{"points":[…]}`), CSV/TXT
 //! (`x,y` per line) or SVG (the first path, polyline or polygon; curves
-//! flattened), by extension ([`crate::io::sketch`]). Output: the helices
+//! flattened), by extension ([`crate::io::read_sketch`]). Output: the helices
 //! (`a`, `b`, `c`, placement, mirror, `z0`, parameter and vertex ranges,
 //! worst vertex distance), the 3D polyline (the drawing's `x, y` with the
 //! lifted `z`), per junction the tangent angle and position gap left, and
@@ -21,7 +21,7 @@ use serde::Serialize;
 use super::io_util::Output;
 use super::usage;
 use super::{ResampleArg, SketchArgs};
-use crate::io::sketch::{read_sketch, write_preview_svg};
+use crate::io::{read_sketch, write_preview_svg};
 use crate::sketch::{lift_sketch, refit_g1, G1Refit, Resampling, SketchLift, SketchOptions};
 
 #[derive(Serialize)]

@@ -52,14 +52,22 @@ pub enum Verdict {
 /// the block's flat points ([`ArcChecker::open`]).
 #[derive(Clone, Copy, Debug)]
 pub struct ArcCandidate {
+    /// Start point of the arc.
     pub start: DVec3,
+    /// Unit tangent at the start.
     pub tangent: DVec3,
+    /// Unit in-plane normal at the start, towards the centre (any
+    /// perpendicular for a straight arc).
     pub normal: DVec3,
+    /// End point of the arc.
     pub end: DVec3,
+    /// Curvature (0 for a straight arc).
     pub curvature: f64,
     /// Arc length of one piece (`length / pieces`).
     pub step: f64,
+    /// Arc length.
     pub length: f64,
+    /// Equal pieces the decoder cuts the arc into.
     pub pieces: u32,
     /// Covered input vertices, first and last (inclusive).
     pub cover: (u32, u32),
@@ -134,7 +142,9 @@ pub fn now<F: Future>(f: F) -> F::Output {
     }
 }
 
-/// What [`search_block`] tells about the checks it ran.
+/// What the batched checks of one block came to: the candidates put to an
+/// [`ArcChecker`], in how many rounds, and how many the reference decided
+/// ([`EncodedBlock::checks`](super::EncodedBlock::checks)).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BatchStats {
     /// Candidates the checker was asked about.

@@ -23,8 +23,8 @@
 //! curves that is a few per cent of the whole.
 //!
 //! ```
-//! use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn, VERSION};
-//! use strandfit::io::{container::{SourceMeta, MAGIC}, Format, Metadata};
+//! use strandfit::codec::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn, CONTAINER_VERSION};
+//! use strandfit::io::{Format, Metadata, SourceMeta, CONTAINER_MAGIC};
 //! use strandfit::DVec3;
 //!
 //! // One block of two curves, in memory.
@@ -36,7 +36,7 @@
 //! let bytes = w.finish_bytes().unwrap();
 //! // The layout: magic, version; at the end the index, its CRC, its length, "SFHE".
 //! let n = bytes.len();
-//! assert_eq!((&bytes[..8], &bytes[8..10]), (&MAGIC[..], &VERSION.to_le_bytes()[..]));
+//! assert_eq!((&bytes[..8], &bytes[8..10]), (&CONTAINER_MAGIC[..], &CONTAINER_VERSION.to_le_bytes()[..]));
 //! assert_eq!(&bytes[n - 4..], b"SFHE");
 //! let index_len = u32::from_le_bytes(bytes[n - 8..n - 4].try_into().unwrap()) as usize;
 //! let index = &bytes[n - 12 - index_len..n - 12];
@@ -54,14 +54,13 @@ use serde::{Deserialize, Serialize};
 
 use super::quantise::Steps;
 use super::{decode_block, CodecParams, EncodedBlock};
-use crate::io::container::{SourceMeta, MAGIC};
-use crate::io::{AtomicFile, IoError};
+use crate::io::{AtomicFile, IoError, SourceMeta, CONTAINER_MAGIC as MAGIC};
 
 /// The container format version this module reads and writes.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -83,7 +82,7 @@ use crate::io::{AtomicFile, IoError};
 ///
 /// // A container says its version in bytes 8–9, after the magic number.
 /// let bytes = container(1);
-/// assert_eq!(bytes[8..10], VERSION.to_le_bytes());
+/// assert_eq!(bytes[8..10], CONTAINER_VERSION.to_le_bytes());
 /// ```
 pub const VERSION: u16 = 3;
 /// The revision of the codec's model (what the geometry streams mean),
@@ -92,8 +91,8 @@ pub const VERSION: u16 = 3;
 /// ([`READ_MODELS`]) and refuses the others by name.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -113,8 +112,8 @@ pub const MODEL: u8 = 8;
 /// ([`CodecParams::model`] carries the differences).
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -140,23 +139,23 @@ const END_LEN: u64 = 12;
 /// busy on files of a few blocks.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
 /// # }
 /// use std::path::Path;
-/// use strandfit::codec::stream::compress_to_bytes;
+/// use strandfit::codec::compress_to_bytes;
 /// use strandfit::io::{Curve, VecReader};
 ///
 /// // One curve more than a block holds: two blocks.
-/// let curves = vec![Curve::default(); BLOCK_CURVES + 1];
+/// let curves = vec![Curve::default(); CONTAINER_BLOCK_CURVES + 1];
 /// let mut reader = VecReader::new(Metadata::new(Format::Json), curves);
 /// let bytes = compress_to_bytes(&mut reader, Path::new("in.json"), &header(), None).unwrap();
 /// let r = CodecReader::from_bytes(bytes).unwrap();
 /// assert_eq!(r.block_count(), 2);
-/// assert_eq!(r.block_span(1), (BLOCK_CURVES as u64, 1));
+/// assert_eq!(r.block_span(1), (CONTAINER_BLOCK_CURVES as u64, 1));
 /// ```
 pub const BLOCK_CURVES: usize = 4096;
 /// Largest header, block part or index accepted.
@@ -165,8 +164,8 @@ const MAX_SECTION: u32 = 1 << 30;
 /// The header of a version-3 container.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -193,7 +192,7 @@ pub struct CodecHeader {
     /// The input's metadata (format, affine, units, per-curve data names).
     pub source: SourceMeta,
     /// Names of the per-point values stored with each curve (on its decoded
-    /// points: [`super::point_data`]).
+    /// points: [`carry_point_data`](super::carry_point_data)).
     pub point_data_names: Vec<String>,
     /// The version of strandfit that wrote the file.
     pub written_by: String,
@@ -205,13 +204,13 @@ impl CodecHeader {
     /// is what the `.tck` writer writes there anyway.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
     /// # }
-    /// use strandfit::codec::quantise::Steps;
+    /// use strandfit::codec::Steps;
     ///
     /// let mut meta = Metadata::new(Format::Tck);
     /// meta.extra = vec![("datatype".into(), "Float32LE".into())];
@@ -247,8 +246,8 @@ impl CodecHeader {
     /// The codec parameters the geometry was written with.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -433,8 +432,8 @@ fn put_str(out: &mut Vec<u8>, s: &str) {
 /// One decoded curve.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -480,8 +479,8 @@ pub struct DecodedCurve {
 /// A curve to store.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -600,8 +599,8 @@ fn inflate(stored: &[u8], len: usize) -> Result<Vec<u8>, String> {
 /// One encoded block, ready to write.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -647,8 +646,8 @@ impl BlockBytes {
     /// can verify one block while the next is fitted.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -694,8 +693,8 @@ impl BlockBytes {
 /// [`BlockBytes::verify`] before writing it.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -735,8 +734,8 @@ pub fn encode_block_bytes(
 /// [`super::encode_block_on`]).
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -853,8 +852,8 @@ pub fn encode_block_bytes_on(
 /// and end record and renames the file into place.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -898,8 +897,8 @@ enum Sink {
 /// The name a container in memory goes by in messages.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -931,8 +930,8 @@ impl CodecWriter {
     /// until [`finish`](Self::finish)).
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -955,8 +954,8 @@ impl CodecWriter {
     /// A container built in memory ([`finish_bytes`](Self::finish_bytes)).
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -977,7 +976,7 @@ impl CodecWriter {
     ///     w.write_block(&b).unwrap();
     /// }
     /// let bytes = w.finish_bytes().unwrap();
-    /// assert_eq!(bytes[..8], strandfit::io::container::MAGIC);
+    /// assert_eq!(bytes[..8], strandfit::io::CONTAINER_MAGIC);
     /// assert_eq!(CodecReader::from_bytes(bytes).unwrap().curve_count(), 4);
     /// ```
     pub fn in_memory(header: &CodecHeader) -> Self {
@@ -1019,8 +1018,8 @@ impl CodecWriter {
     /// Where the container is written (a placeholder path in memory).
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1041,8 +1040,8 @@ impl CodecWriter {
     /// Appends an encoded block.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1074,8 +1073,8 @@ impl CodecWriter {
     /// as it was (no decoding, no re-encoding): its bytes are the same.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1139,8 +1138,8 @@ impl CodecWriter {
     /// Curves written so far.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1170,8 +1169,8 @@ impl CodecWriter {
     /// Completes and commits the file; returns its size in bytes.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1207,8 +1206,8 @@ impl CodecWriter {
     /// read back).
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1272,8 +1271,8 @@ impl CodecWriter {
 /// demand.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1347,7 +1346,7 @@ fn read_varint(file: &mut impl Read) -> std::io::Result<(u64, Vec<u8>)> {
 ///
 /// ```
 /// use std::io::{Read, Seek, SeekFrom};
-/// use strandfit::codec::container::ReadSeek;
+/// use strandfit::codec::ReadSeek;
 ///
 /// // Anything that reads and seeks (and can move between threads).
 /// let mut source: Box<dyn ReadSeek> = Box::new(std::io::Cursor::new(vec![1u8, 2, 3]));
@@ -1364,8 +1363,8 @@ impl CodecReader {
     /// caller's dispatch sends version 1 elsewhere).
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1408,8 +1407,8 @@ impl CodecReader {
     /// [`IN_MEMORY`].
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1579,8 +1578,8 @@ impl CodecReader {
     /// The container's header.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1611,8 +1610,8 @@ impl CodecReader {
     /// The file read (a placeholder for bytes in memory).
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1646,8 +1645,8 @@ impl CodecReader {
     /// Number of curves in the container.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1677,8 +1676,8 @@ impl CodecReader {
     /// Number of blocks in the container.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1708,8 +1707,8 @@ impl CodecReader {
     /// index at opening, then each block read.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1747,8 +1746,8 @@ impl CodecReader {
     /// Size of the container in bytes.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1778,8 +1777,8 @@ impl CodecReader {
     /// First curve and curve count of block `k`.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1811,8 +1810,8 @@ impl CodecReader {
     /// CRC; cheap enough to call from one thread while others decode.
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1894,8 +1893,8 @@ impl CodecReader {
 /// A block's checked bytes, decoded by [`RawBlock::decode`].
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -1935,8 +1934,8 @@ impl RawBlock {
     /// The block's curves (pure computation: run blocks in parallel).
     ///
     /// ```
-    /// # use strandfit::codec::container::*;
-    /// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// # use strandfit::codec::*;
+    /// # use strandfit::io::{Format, Metadata, SourceMeta};
     /// # use strandfit::DVec3;
     /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
     /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -2071,8 +2070,8 @@ impl RawBlock {
 /// The version of the container at `path` (its bytes 8–9), if it is one.
 ///
 /// ```
-/// # use strandfit::codec::container::*;
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::*;
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # fn header() -> CodecHeader { // tolerance 0.01, nothing else
 /// #     CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![])
@@ -2095,7 +2094,7 @@ impl RawBlock {
 /// let dir = tempfile::tempdir().unwrap();
 /// let path = dir.path().join("in.sfh");
 /// std::fs::write(&path, container(1)).unwrap();
-/// assert_eq!(container_version(&path), Some(VERSION));
+/// assert_eq!(container_version(&path), Some(CONTAINER_VERSION));
 /// std::fs::write(&path, "not a container").unwrap();
 /// assert_eq!(container_version(&path), None);
 /// assert_eq!(container_version(&dir.path().join("missing.sfh")), None);
@@ -2112,7 +2111,7 @@ pub fn container_version(path: &Path) -> Option<u16> {
 mod tests {
     use super::*;
     use crate::codec::stream::read_range;
-    use crate::io::container::SourceMeta;
+    use crate::io::SourceMeta;
     use crate::io::{Format, Metadata};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;

@@ -8,26 +8,25 @@
 //! Hausdorff distance ([`crate::metrics::hausdorff`]): every input vertex is
 //! within `T` of an output segment and every output vertex within `T` of an
 //! input segment. The encoder accepts an element only by that test
-//! ([`check`]), on exactly the points the decoder will produce, less a
+//! (`check.rs`), on exactly the points the decoder will produce, less a
 //! margin for writing them as `f32`.
 //!
 //! # The representation
 //!
 //! A curve is a start point, then circular arcs, each fixed by its end
-//! point ([`predict`]): a *G1* arc inherits the tangent of the previous
+//! point (`predict.rs`): a *G1* arc inherits the tangent of the previous
 //! one, a *corner* arc carries a bulge that sets its own. An end point is
 //! coded as its chord length (against the previous chord's) and two
 //! perpendicular offsets from where the previous arc, continued, would have
-//! gone ([`quantise`] holds the steps). Curves too rough for arcs store
+//! gone ([`Steps`]). Curves too rough for arcs store
 //! their points on a body-centred cubic lattice of covering radius `T`,
 //! predicted from their own last steps or from a neighbour's
-//! ([`reference`](mod@reference)): the quantise-and-delta baseline's representation on a
+//! (`reference.rs`): the quantise-and-delta baseline's representation on a
 //! thinner lattice, so no curve costs more than that. Each point is the
 //! lattice point cheapest to code against its prediction among those that
-//! keep the two-sided promise ([`quantise::cheapest_points`]: it may slide
-//! along the curve, where the prediction's error along it would cost
-//! bits). Integers go through adaptive binary contexts, one model per
-//! field ([`entropy`]).
+//! keep the two-sided promise (`quantise.rs`: it may slide along the curve,
+//! where the prediction's error along it would cost bits). Integers go
+//! through adaptive binary contexts, one model per field (`entropy.rs`).
 //!
 //! Decoding needs no search: it replays the arcs and cuts each into equal
 //! pieces whose chords are within `sagitta · T` of it.
@@ -51,24 +50,41 @@
 //! assert!(block.bytes.len() < 200 * 12 / 20); // over 20 times smaller than f32
 //! ```
 
-#[doc(hidden)]
-pub mod batch;
-#[doc(hidden)]
-pub mod check;
-pub mod container;
-#[doc(hidden)]
-pub mod encoder;
+mod batch;
+mod check;
+mod container;
+mod encoder;
+// Kept public (hidden) for its doctests, which exercise the range coder by
+// its own names (`Encoder`, `Decoder`: too generic to sit flat in `codec`).
 #[doc(hidden)]
 pub mod entropy;
-pub mod point_data;
-#[doc(hidden)]
-pub mod predict;
-#[doc(hidden)]
-pub mod quantise;
-#[doc(hidden)]
-pub mod reference;
-pub mod shards;
-pub mod stream;
+mod point_data;
+mod predict;
+mod quantise;
+mod reference;
+mod shards;
+mod stream;
+
+// What a batch checker (the GPU) implements: the types of
+// [`encode_block_on`]'s `checker`.
+pub use batch::{ArcCandidate, ArcCheckBlock, ArcChecker, BatchStats, Verdict};
+// The metrics' preview colours by the encoder's distance.
+pub(crate) use check::dist2_to_segment;
+// The container's generic names get a `CONTAINER_` prefix here.
+pub use container::{
+    container_version, encode_block_bytes, encode_block_bytes_on, BlockBytes, CodecHeader,
+    CodecReader, CodecWriter, CurveIn, DecodedCurve, RawBlock, ReadSeek,
+    BLOCK_CURVES as CONTAINER_BLOCK_CURVES, IN_MEMORY, MODEL, READ_MODELS,
+    VERSION as CONTAINER_VERSION,
+};
+pub use point_data::carry as carry_point_data;
+pub use quantise::Steps;
+pub use reference::Reference;
+pub use shards::{merge as merge_shards, shard_path, split as split_into_shards, Shard};
+pub use stream::{
+    compress_blocks, compress_stream, compress_to_bytes, decompress_range, decompress_stream,
+    output_curve, read_range, resample_polyline, CompressSummary,
+};
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -79,8 +95,8 @@ use encoder::{
 };
 use entropy::{Adaptation, Bit, Decoder, Encoder, IntModel};
 use predict::Arc;
-use quantise::{Quantiser, Steps};
-use reference::{Neighbours, Reference};
+use quantise::Quantiser;
+use reference::Neighbours;
 
 /// How a block is coded: the tolerance and the steps (both stored in the
 /// container's header).
@@ -90,7 +106,7 @@ pub struct CodecParams {
     pub tolerance: f64,
     /// Quantisation steps, as multiples of `T`.
     pub steps: Steps,
-    /// The model revision the stream is coded by ([`container::MODEL`] for
+    /// The model revision the stream is coded by ([`MODEL`] for
     /// new streams; a container's header says which for old ones).
     pub model: u8,
 }
@@ -125,7 +141,7 @@ pub enum ElementKind {
     Jump = 3,
 }
 
-/// One element's code (see [`predict`] for the geometry).
+/// One element's code (the geometry is in `src/codec/predict.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ElementCode {
     /// What the element is (G1 arc, corner arc, jump).
@@ -150,7 +166,7 @@ pub enum CurveCode {
     /// A curve without points.
     Empty,
     /// Points on the grid of step `2T/√3` (indices), predicted from their
-    /// own last step or from a neighbour's ([`reference`](mod@reference)).
+    /// own last step or from a neighbour's (`src/codec/reference.rs`).
     Points {
         /// Grid indices of the points.
         grid: Vec<[i64; 3]>,
@@ -934,7 +950,7 @@ pub fn encode_block_tallied<C: AsRef<[DVec3]> + Sync>(
 
 /// [`encode_block`] (with `keep`, [`encode_block_keeping`]), every curve's
 /// candidate elements checked in batches on `checker` where one is given
-/// ([`batch`]): the same bytes as without, as the checker's sure verdicts
+/// ([`ArcChecker`]): the same bytes as without, as the checker's sure verdicts
 /// are the reference's and the reference decides the rest.
 ///
 /// Without a checker (the GPU's is the command line's plumbing), every

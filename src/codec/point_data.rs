@@ -10,8 +10,8 @@
 //!
 //! ```
 //! use std::path::Path;
-//! use strandfit::codec::{container::{CodecHeader, CodecReader}, stream::{compress_to_bytes, read_range}};
-//! use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+//! use strandfit::codec::{compress_to_bytes, read_range, CodecHeader, CodecReader};
+//! use strandfit::io::{Curve, Format, Metadata, SourceMeta, VecReader};
 //! use strandfit::DVec3;
 //!
 //! // A helix whose one per-point value is its height z, compressed to 0.01:
@@ -38,7 +38,7 @@ use glam::DVec3;
 /// one-point `input` gives its values everywhere.
 ///
 /// ```
-/// use strandfit::codec::point_data::carry;
+/// use strandfit::codec::carry_point_data;
 /// use strandfit::DVec3;
 ///
 /// // A line whose value is x: other points near it get their own x.
@@ -49,10 +49,10 @@ use glam::DVec3;
 ///     DVec3::new(2.25, -0.01, 0.0),
 ///     DVec3::new(4.0, 0.0, 0.01),
 /// ];
-/// assert_eq!(carry(&input, &values, 1, &output), vec![0.5, 2.25, 4.0]);
+/// assert_eq!(carry_point_data(&input, &values, 1, &output), vec![0.5, 2.25, 4.0]);
 /// // No input, no values; a one-point input's values everywhere.
-/// assert!(carry(&[], &[], 1, &output).is_empty());
-/// assert_eq!(carry(&input[..1], &[7.0], 1, &output), vec![7.0; 3]);
+/// assert!(carry_point_data(&[], &[], 1, &output).is_empty());
+/// assert_eq!(carry_point_data(&input[..1], &[7.0], 1, &output), vec![7.0; 3]);
 /// ```
 pub fn carry(input: &[DVec3], values: &[f32], width: usize, output: &[DVec3]) -> Vec<f32> {
     debug_assert_eq!(values.len(), input.len() * width);

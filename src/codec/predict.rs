@@ -70,6 +70,9 @@ pub fn perpendicular_part(n: DVec3, t: DVec3) -> DVec3 {
 impl ChainState {
     /// The state at the start of a curve: the first element is a corner,
     /// so only `point` and the reference direction matter.
+    // Unused in the crate since the module became private (it was
+    // reachable through the public one).
+    #[allow(dead_code)]
     pub fn start(point: DVec3, direction: DVec3) -> Self {
         let tangent = direction;
         ChainState {

@@ -38,7 +38,9 @@ const PAIRED: usize = 3;
 /// a second one, whose steps are averaged with the first's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Reference {
+    /// How many curves before this one it is (1: the previous curve).
     pub back: usize,
+    /// Whether its points run the other way.
     pub reversed: bool,
     /// `(back, reversed)` of the second reference.
     pub second: Option<(usize, bool)>,
@@ -160,6 +162,9 @@ impl Neighbours {
     }
 
     /// Half step of the points lattice.
+    // Unused in the crate since the module became private (it was
+    // reachable through the public one).
+    #[allow(dead_code)]
     pub fn half(&self) -> f64 {
         self.half
     }
@@ -182,6 +187,9 @@ impl Neighbours {
     /// at or beyond it, or the last), relative to that first point: the
     /// prediction of a curve's first chord from the neighbour it is
     /// anchored on.
+    // Unused in the crate since the module became private (it was
+    // reachable through the public one).
+    #[allow(dead_code)]
     pub fn walk(&self, k: usize, at_end: bool, distance: f64) -> Option<DVec3> {
         let p = self.points.get(k)?.as_ref()?;
         if p.len() < 2 {

@@ -18,10 +18,10 @@ use crate::io::IoError;
 /// One output of [`split`] or [`merge`].
 ///
 /// ```
-/// use strandfit::codec::shards::merge;
+/// use strandfit::codec::merge_shards;
 /// # use std::path::Path;
-/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecWriter, CurveIn};
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::{encode_block_bytes, CodecHeader, CodecWriter, CurveIn};
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # /// A container at `path`, coded to `tolerance`, with a block of `n` curves
 /// # /// per entry `n` of `blocks` (three short helices, the rest empty: quick to code).
@@ -51,7 +51,7 @@ use crate::io::IoError;
 /// let dir = tempfile::tempdir().unwrap();
 /// let inputs: Vec<_> = (0..3).map(|k| dir.path().join(format!("in{k}.sfh"))).collect();
 /// let sizes: Vec<u64> = inputs.iter().zip([2, 3, 4]).map(|(p, n)| write(p, 0.01, &[n])).collect();
-/// let parts = merge(&inputs, &dir.path().join("all.sfh")).unwrap();
+/// let parts = merge_shards(&inputs, &dir.path().join("all.sfh")).unwrap();
 /// assert_eq!(parts.iter().map(|s| (s.first, s.curves, s.blocks)).collect::<Vec<_>>(),
 ///            [(0, 2, 1), (2, 3, 1), (5, 4, 1)]);
 /// assert_eq!(parts.iter().map(|s| s.bytes).collect::<Vec<_>>(), sizes);
@@ -77,7 +77,7 @@ pub struct Shard {
 ///
 /// ```
 /// use std::path::Path;
-/// use strandfit::codec::shards::shard_path;
+/// use strandfit::codec::shard_path;
 ///
 /// // The input's stem, then the shard's number in five digits.
 /// let p = shard_path(Path::new("/data/sub-01.sfh"), Path::new("/out"), 12);
@@ -99,11 +99,10 @@ pub fn shard_path(input: &Path, dir: &Path, k: usize) -> PathBuf {
 /// is left half done.
 ///
 /// ```
-/// use strandfit::codec::container::BLOCK_CURVES;
-/// use strandfit::codec::shards::{shard_path, split};
+/// use strandfit::codec::{shard_path, split_into_shards, CONTAINER_BLOCK_CURVES};
 /// # use std::path::Path;
-/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecWriter, CurveIn};
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::{encode_block_bytes, CodecHeader, CodecWriter, CurveIn};
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # /// A container at `path`, coded to `tolerance`, with a block of `n` curves
 /// # /// per entry `n` of `blocks` (three short helices, the rest empty: quick to code).
@@ -132,19 +131,19 @@ pub fn shard_path(input: &Path, dir: &Path, k: usize) -> PathBuf {
 /// // up to one whole block; one of 5,000 curves holds one full block too.
 /// let dir = tempfile::tempdir().unwrap();
 /// let input = dir.path().join("in.sfh");
-/// write(&input, 0.01, &[BLOCK_CURVES, 5, 6]);
+/// write(&input, 0.01, &[CONTAINER_BLOCK_CURVES, 5, 6]);
 /// let parts = dir.path().join("parts");
-/// let shards = split(&input, &parts, 1).unwrap();
+/// let shards = split_into_shards(&input, &parts, 1).unwrap();
 /// assert_eq!(shards.iter().map(|s| (s.first, s.curves)).collect::<Vec<_>>(),
 ///            [(0, 4096), (4096, 11)]);
 /// assert_eq!(shards[1].blocks, 2);
 /// assert_eq!(shards[0].path, shard_path(&input, &parts, 0));
-/// assert_eq!(split(&input, &parts, 5000).unwrap().len(), 2);
+/// assert_eq!(split_into_shards(&input, &parts, 5000).unwrap().len(), 2);
 /// // No shard can hold no curves; a file that is no container is refused
 /// // before anything is made.
-/// assert!(split(&input, &parts, 0).is_err());
+/// assert!(split_into_shards(&input, &parts, 0).is_err());
 /// std::fs::write(dir.path().join("bad.sfh"), b"not a container").unwrap();
-/// assert!(split(&dir.path().join("bad.sfh"), &dir.path().join("none"), 10).is_err());
+/// assert!(split_into_shards(&dir.path().join("bad.sfh"), &dir.path().join("none"), 10).is_err());
 /// assert!(!dir.path().join("none").exists());
 /// ```
 pub fn split(input: &Path, dir: &Path, curves_per_shard: u64) -> Result<Vec<Shard>, IoError> {
@@ -257,10 +256,10 @@ fn header_difference(a: &CodecHeader, b: &CodecHeader) -> Option<&'static str> {
 /// went.
 ///
 /// ```
-/// use strandfit::codec::shards::{merge, split};
+/// use strandfit::codec::{merge_shards, split_into_shards};
 /// # use std::path::Path;
-/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecWriter, CurveIn};
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// # use strandfit::codec::{encode_block_bytes, CodecHeader, CodecWriter, CurveIn};
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # /// A container at `path`, coded to `tolerance`, with a block of `n` curves
 /// # /// per entry `n` of `blocks` (three short helices, the rest empty: quick to code).
@@ -288,19 +287,19 @@ fn header_difference(a: &CodecHeader, b: &CodecHeader) -> Option<&'static str> {
 /// // Split, then merge: the input back, byte for byte.
 /// let dir = tempfile::tempdir().unwrap();
 /// let input = dir.path().join("in.sfh");
-/// write(&input, 0.01, &[strandfit::codec::container::BLOCK_CURVES, 7]);
-/// let shards = split(&input, &dir.path().join("parts"), 1).unwrap();
+/// write(&input, 0.01, &[strandfit::codec::CONTAINER_BLOCK_CURVES, 7]);
+/// let shards = split_into_shards(&input, &dir.path().join("parts"), 1).unwrap();
 /// assert_eq!(shards.len(), 2);
 /// let paths: Vec<_> = shards.iter().map(|s| s.path.clone()).collect();
 /// let joined = dir.path().join("joined.sfh");
-/// merge(&paths, &joined).unwrap();
+/// merge_shards(&paths, &joined).unwrap();
 /// assert_eq!(std::fs::read(&joined).unwrap(), std::fs::read(&input).unwrap());
 /// // Containers of another tolerance are not merged, nor is nothing.
 /// let other = dir.path().join("other.sfh");
 /// write(&other, 0.02, &[3]);
-/// let err = merge(&[input.clone(), other], &joined).unwrap_err();
+/// let err = merge_shards(&[input.clone(), other], &joined).unwrap_err();
 /// assert!(err.to_string().contains("tolerance"), "{err}");
-/// assert!(merge(&[], &joined).is_err());
+/// assert!(merge_shards(&[], &joined).is_err());
 /// ```
 pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Vec<Shard>, IoError> {
     let Some(first) = inputs.first() else {

@@ -6,9 +6,8 @@
 //! callback).
 //!
 //! ```
-//! use strandfit::codec::container::{CodecHeader, CodecReader};
-//! use strandfit::codec::stream::{compress_stream, decompress_stream, output_curve};
-//! use strandfit::io::{container::SourceMeta, create_writer, open_reader, read_all, Curve, Format, Metadata};
+//! use strandfit::codec::{compress_stream, decompress_stream, output_curve, CodecHeader, CodecReader};
+//! use strandfit::io::{create_writer, open_reader, read_all, Curve, Format, Metadata, SourceMeta};
 //! use strandfit::DVec3;
 //!
 //! // A .tck file of 50 helices, compressed to 0.01 and back to .tck.
@@ -58,9 +57,8 @@ use crate::io::{Curve, CurveReader, CurveWriter, IoError};
 ///
 /// ```
 /// use std::path::Path;
-/// use strandfit::codec::container::{CodecHeader, CodecWriter};
-/// use strandfit::codec::stream::compress_blocks;
-/// use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+/// use strandfit::codec::{compress_blocks, CodecHeader, CodecWriter};
+/// use strandfit::io::{Curve, Format, Metadata, SourceMeta, VecReader};
 /// use strandfit::DVec3;
 ///
 /// // An empty curve and a helix: one of each kind counted, every point too.
@@ -111,9 +109,8 @@ pub struct CompressSummary {
 ///
 /// ```
 /// use std::path::Path;
-/// use strandfit::codec::container::{CodecHeader, CodecReader};
-/// use strandfit::codec::stream::{compress_to_bytes, read_range};
-/// use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+/// use strandfit::codec::{compress_to_bytes, read_range, CodecHeader, CodecReader};
+/// use strandfit::io::{Curve, Format, Metadata, SourceMeta, VecReader};
 /// use strandfit::DVec3;
 ///
 /// // Three named helices, and a header for a tolerance of 0.01.
@@ -162,9 +159,8 @@ pub fn compress_to_bytes(
 ///
 /// ```
 /// use std::path::Path;
-/// use strandfit::codec::container::{CodecHeader, CodecReader};
-/// use strandfit::codec::stream::compress_stream;
-/// use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+/// use strandfit::codec::{compress_stream, CodecHeader, CodecReader};
+/// use strandfit::io::{Curve, Format, Metadata, SourceMeta, VecReader};
 /// use strandfit::DVec3;
 ///
 /// // Three named helices, and a header for a tolerance of 0.01.
@@ -213,9 +209,8 @@ pub fn compress_stream(
 ///
 /// ```
 /// use std::path::Path;
-/// use strandfit::codec::container::{CodecHeader, CodecReader, CodecWriter};
-/// use strandfit::codec::stream::compress_blocks;
-/// use strandfit::io::{container::SourceMeta, Curve, Format, Metadata, VecReader};
+/// use strandfit::codec::{compress_blocks, CodecHeader, CodecReader, CodecWriter};
+/// use strandfit::io::{Curve, Format, Metadata, SourceMeta, VecReader};
 /// use strandfit::DVec3;
 ///
 /// // Three named helices, and a header for a tolerance of 0.01.
@@ -337,9 +332,9 @@ const BLOCKS_AT_ONCE: usize = 8;
 /// (e.g. resampling it). Returns the number of curves written.
 ///
 /// ```
-/// use strandfit::codec::stream::{decompress_stream, output_curve};
-/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// use strandfit::codec::{decompress_stream, output_curve};
+/// # use strandfit::codec::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # /// A container in memory of three blocks, one helix each, named c0, c1, c2.
 /// # fn three_blocks() -> CodecReader {
@@ -393,9 +388,9 @@ pub fn decompress_stream(
 /// ([`CodecReader::bytes_read`] says how much).
 ///
 /// ```
-/// use strandfit::codec::stream::{decompress_range, output_curve};
-/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// use strandfit::codec::{decompress_range, output_curve};
+/// # use strandfit::codec::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # /// A container in memory of three blocks, one helix each, named c0, c1, c2.
 /// # fn three_blocks() -> CodecReader {
@@ -486,9 +481,9 @@ pub fn decompress_range(
 /// blocks that hold them (random access through the index).
 ///
 /// ```
-/// use strandfit::codec::stream::read_range;
-/// # use strandfit::codec::container::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
-/// # use strandfit::io::{container::SourceMeta, Format, Metadata};
+/// use strandfit::codec::read_range;
+/// # use strandfit::codec::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
+/// # use strandfit::io::{Format, Metadata, SourceMeta};
 /// # use strandfit::DVec3;
 /// # /// A container in memory of three blocks, one helix each, named c0, c1, c2.
 /// # fn three_blocks() -> CodecReader {
@@ -507,7 +502,7 @@ pub fn decompress_range(
 /// # }
 ///
 /// let mut container = three_blocks();
-/// let ids = |r: Vec<strandfit::codec::container::DecodedCurve>| {
+/// let ids = |r: Vec<strandfit::codec::DecodedCurve>| {
 ///     r.into_iter().map(|c| c.id.unwrap()).collect::<Vec<_>>()
 /// };
 /// assert_eq!(ids(read_range(&mut container, 1, 2).unwrap()), ["c1", "c2"]);
@@ -550,8 +545,7 @@ pub fn read_range(
 /// gives up the guarantee.
 ///
 /// ```
-/// use strandfit::codec::container::DecodedCurve;
-/// use strandfit::codec::stream::output_curve;
+/// use strandfit::codec::{output_curve, DecodedCurve};
 /// use strandfit::DVec3;
 ///
 /// // A straight curve of 3 points whose one per-point value is x.
@@ -600,7 +594,7 @@ pub fn output_curve(
 /// `step` apart, both ends kept).
 ///
 /// ```
-/// use strandfit::codec::stream::resample_polyline;
+/// use strandfit::codec::resample_polyline;
 /// use strandfit::DVec3;
 ///
 /// // An L of length 4: 5 points are a point every unit, the corner among them.

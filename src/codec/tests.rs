@@ -375,7 +375,7 @@ fn coarse_curls_are_coded_by_screw_prediction_and_smaller() {
 /// f64's eight bytes for the usual ones.
 #[test]
 fn the_tolerance_reads_back_exactly_from_its_decimal() {
-    use crate::io::container::SourceMeta;
+    use crate::io::SourceMeta;
     use crate::io::{Format, Metadata};
     use container::{CodecHeader, CodecReader, CodecWriter};
     let source = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);

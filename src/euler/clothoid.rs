@@ -103,7 +103,7 @@ impl Cx {
 /// Published values at 1 (Abramowitz & Stegun, Table 7.7), and the asymptotic
 /// form `C ≈ ½ + sin(πx²/2)/(πx)`, `S ≈ ½ − cos(πx²/2)/(πx)` at 1000:
 /// ```
-/// use strandfit::euler::clothoid::fresnel_cs;
+/// use strandfit::euler::fresnel_cs;
 /// use std::f64::consts::PI;
 ///
 /// let (c, s) = fresnel_cs(1.0);
@@ -232,7 +232,7 @@ const A_SERIES_WIDE: f64 = 12.0;
 /// With `a = 0`, `b = 0`: `X_k = 1/(k + 1)`, `Y_k = 0`; with `a = π` and with
 /// `a = 4π` (the other branch), Fresnel's `C(1)` and `C(2)/2`:
 /// ```
-/// use strandfit::euler::clothoid::{fresnel_cs, generalized_fresnel};
+/// use strandfit::euler::{fresnel_cs, generalized_fresnel};
 /// use std::f64::consts::PI;
 ///
 /// let (x, y) = generalized_fresnel(0.0, 0.0, 0.0);
@@ -315,7 +315,7 @@ impl Clothoid {
     ///
     /// The clothoid `κ(s) = πs` from the origin is Fresnel's `(C(s), S(s))`:
     /// ```
-    /// use strandfit::euler::clothoid::{fresnel_cs, Clothoid};
+    /// use strandfit::euler::{fresnel_cs, Clothoid};
     /// use glam::DVec2;
     /// use std::f64::consts::PI;
     ///
@@ -373,7 +373,7 @@ impl Clothoid {
     ///
     /// The reversed clothoid ends where the original starts, heading back:
     /// ```
-    /// use strandfit::euler::clothoid::{normalize_angle, Clothoid};
+    /// use strandfit::euler::{normalize_angle, Clothoid};
     /// use glam::DVec2;
     /// use std::f64::consts::PI;
     ///
@@ -411,7 +411,7 @@ pub enum ClothoidError {
 /// Reduce an angle to `(−π, π]`.
 ///
 /// ```
-/// use strandfit::euler::clothoid::normalize_angle;
+/// use strandfit::euler::normalize_angle;
 /// use std::f64::consts::{FRAC_PI_2, PI};
 ///
 /// assert!((normalize_angle(3.0 * FRAC_PI_2) + FRAC_PI_2).abs() < 1e-15);

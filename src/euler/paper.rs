@@ -26,7 +26,7 @@ use super::solve::{norm2, Scaled, SolveError, SpiralSolution};
 pub enum PaperIntegrator {
     /// Explicit Euler with this many samples (the paper: 100).
     ExplicitEuler(usize),
-    /// The fourth-order scheme of [`frenet`](super::frenet), this many steps.
+    /// The fourth-order scheme of [`FrenetProblem`](super::FrenetProblem), this many steps.
     FourthOrder(usize),
 }
 
@@ -161,8 +161,8 @@ pub fn paper_spiral(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::euler::solve::{solve_spiral, SolveOptions};
     use crate::euler::FrenetProblem;
+    use crate::euler::{solve_spiral, SolveOptions};
 
     /// Problems from the ends of known spirals with the in-plane normal.
     fn problems() -> Vec<(DVec3, DVec3, DVec3, DVec3)> {

@@ -2,11 +2,12 @@
 //! floating-tangents point relaxation, and G1 piecewise helices.
 
 mod element;
-pub mod ghosh;
+mod ghosh;
 mod piecewise;
-pub mod relax;
+mod relax;
 
 pub use element::{sinc, sinc_defect3, versinc2, Frame, HelixElement};
+pub(crate) use ghosh::ghosh_basis;
 pub use ghosh::{interpolate, HermitePair, ShortHelix, DEFAULT_COHELICAL_TOL, PARALLEL_EPS};
 pub use piecewise::{ChainParams, ElementParams, PiecewiseHelix};
 pub use relax::{relax, relax_dense, relax_tridiagonal, RelaxScratch, Relaxation};

@@ -52,6 +52,9 @@ impl ByteSource {
         self.len
     }
 
+    // Unused in the crate since the module became private (it was
+    // reachable through the public one).
+    #[allow(dead_code)]
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -115,6 +118,9 @@ impl ByteSource {
         Ok(f32::from_bits(self.u32(e, what)?))
     }
 
+    // Unused in the crate since the module became private (it was
+    // reachable through the public one).
+    #[allow(dead_code)]
     pub fn f64(&mut self, e: Endian, what: &str) -> Result<f64, IoError> {
         let b = self.array::<8>(what)?;
         Ok(match e {

@@ -126,7 +126,7 @@ impl SourceMeta {
     ///
     /// ```
     /// use std::path::Path;
-    /// use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// use strandfit::io::{Format, Metadata, SourceMeta};
     ///
     /// let mut meta = Metadata::new(Format::Trk);
     /// meta.vox_to_world.w_axis.x = 90.0; // the x translation
@@ -157,7 +157,7 @@ impl SourceMeta {
     /// unknown format name becomes JSON.
     ///
     /// ```
-    /// use strandfit::io::{container::SourceMeta, Format, Metadata};
+    /// use strandfit::io::{Format, Metadata, SourceMeta};
     ///
     /// let mut meta = Metadata::new(Format::Trk);
     /// meta.voxel_size = Some([2.0, 2.0, 2.5]);
@@ -232,7 +232,7 @@ impl QuantChain {
     /// turning by half a radian on a grid twice as coarse:
     ///
     /// ```
-    /// use strandfit::io::container::QuantChain;
+    /// use strandfit::io::QuantChain;
     /// use strandfit::helix::{ChainParams, ElementParams};
     /// use strandfit::DVec3;
     ///
@@ -284,7 +284,7 @@ impl QuantChain {
     /// The chain these integers stand for.
     ///
     /// ```
-    /// use strandfit::io::container::QuantChain;
+    /// use strandfit::io::QuantChain;
     /// use strandfit::helix::{ChainParams, ElementParams};
     /// use strandfit::DVec3;
     ///
@@ -495,7 +495,7 @@ fn encode(out: &mut [Vec<u8>; STREAMS], c: &StoredCurve, storage: Storage) -> Re
 /// (a byte each), then 2 × 3 coordinates as `f32` or `f64`:
 ///
 /// ```
-/// use strandfit::io::container::{encoded_size, Shape, Storage, StoredCurve};
+/// use strandfit::io::{encoded_size, Shape, Storage, StoredCurve};
 /// use strandfit::DVec3;
 ///
 /// let curve = StoredCurve {
@@ -797,11 +797,10 @@ impl ContainerWriter {
     /// Create a container at `path` with `header`.
     ///
     /// ```
-    /// use strandfit::io::container::{is_container, ContainerWriter, Header, SourceMeta, Storage};
-    /// use strandfit::io::{Format, Metadata};
+    /// use strandfit::io::{is_container, ContainerHeader, ContainerWriter, Format, Metadata, SourceMeta, Storage};
     ///
     /// let path = std::env::temp_dir().join(format!("strandfit-doc-sfh-create-{}.sfh", std::process::id()));
-    /// let header = Header {
+    /// let header = ContainerHeader {
     ///     storage: Storage::F32,
     ///     tolerance: None,
     ///     mode: "doc".into(),
@@ -842,11 +841,10 @@ impl ContainerWriter {
     /// refused, and the writer goes on:
     ///
     /// ```
-    /// use strandfit::io::container::{ContainerWriter, Header, Shape, SourceMeta, Storage, StoredCurve};
-    /// use strandfit::io::{Format, Metadata};
+    /// use strandfit::io::{ContainerHeader, ContainerWriter, Format, Metadata, Shape, SourceMeta, Storage, StoredCurve};
     ///
     /// let path = std::env::temp_dir().join(format!("strandfit-doc-sfh-write-{}.sfh", std::process::id()));
-    /// let header = Header {
+    /// let header = ContainerHeader {
     ///     storage: Storage::F32,
     ///     tolerance: None,
     ///     mode: "doc".into(),
@@ -941,12 +939,11 @@ impl ContainerWriter {
     /// Complete and commit the file; returns its size in bytes.
     ///
     /// ```
-    /// use strandfit::io::container::{ContainerReader, ContainerWriter, Header, Shape, SourceMeta, Storage, StoredCurve};
-    /// use strandfit::io::{Format, Metadata};
+    /// use strandfit::io::{ContainerHeader, ContainerReader, ContainerWriter, Format, Metadata, Shape, SourceMeta, Storage, StoredCurve};
     /// use strandfit::DVec3;
     ///
     /// let path = std::env::temp_dir().join(format!("strandfit-doc-sfh-finish-{}.sfh", std::process::id()));
-    /// let header = Header {
+    /// let header = ContainerHeader {
     ///     storage: Storage::F32,
     ///     tolerance: None,
     ///     mode: "doc".into(),
@@ -997,7 +994,7 @@ impl ContainerReader {
     /// Open a container and read its header.
     ///
     /// ```
-    /// use strandfit::io::container::ContainerReader;
+    /// use strandfit::io::ContainerReader;
     ///
     /// let path = std::env::temp_dir().join(format!("strandfit-doc-sfh-open-{}.sfh", std::process::id()));
     /// std::fs::write(&path, b"mrtrix tracks\n").unwrap();
@@ -1213,12 +1210,12 @@ impl Iterator for ContainerReader {
 /// Is `path` a container (by its magic number)?
 ///
 /// ```
-/// use strandfit::io::container::{is_container, MAGIC};
+/// use strandfit::io::{is_container, CONTAINER_MAGIC};
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-is-container-{}.sfh", std::process::id()));
-/// std::fs::write(&path, MAGIC).unwrap();
+/// std::fs::write(&path, CONTAINER_MAGIC).unwrap();
 /// assert!(is_container(&path)); // by the magic number alone
-/// std::fs::write(&path, &MAGIC[..7]).unwrap();
+/// std::fs::write(&path, &CONTAINER_MAGIC[..7]).unwrap();
 /// assert!(!is_container(&path));
 /// std::fs::remove_file(&path).unwrap();
 /// ```

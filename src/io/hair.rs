@@ -77,11 +77,11 @@ pub struct HairReader {
 /// A file that is not one is an error naming the file and the place:
 ///
 /// ```
-/// use strandfit::io::hair;
+/// use strandfit::io::open_hair;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-hair-open-{}.hair", std::process::id()));
 /// std::fs::write(&path, "HAIR").unwrap();
-/// let err = hair::open(&path).err().unwrap();
+/// let err = open_hair(&path).err().unwrap();
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!((err.path, err.at.as_deref()), (path, Some("byte 4")));
 /// assert!(err.reason.starts_with("file truncated"));
@@ -96,13 +96,12 @@ impl HairReader {
     /// The header's counts are checked against the file's length up front:
     ///
     /// ```
-    /// use strandfit::io::hair::{self, HairReader};
-    /// use strandfit::io::{Curve, CurveReader, Format, Metadata};
+    /// use strandfit::io::{create_hair, Curve, CurveReader, Format, HairReader, Metadata};
     /// use strandfit::DVec3;
     ///
     /// let dir = tempfile::tempdir().unwrap();
     /// let path = dir.path().join("two.hair");
-    /// let mut w = hair::create(&path, &Metadata::new(Format::Json)).unwrap();
+    /// let mut w = create_hair(&path, &Metadata::new(Format::Json)).unwrap();
     /// for n in [2, 3] {
     ///     w.write_curve(&Curve::from_points(vec![DVec3::Z; n])).unwrap();
     /// }
@@ -348,7 +347,7 @@ impl CurveReader for HairReader {
 /// A strand's thickness is kept; other per-point values are dropped:
 ///
 /// ```
-/// use strandfit::io::{hair, Curve, CurveReader, Format, Metadata};
+/// use strandfit::io::{create_hair, open_hair, Curve, CurveReader, Format, Metadata};
 /// use strandfit::DVec3;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-hair-create-{}.hair", std::process::id()));
@@ -356,10 +355,10 @@ impl CurveReader for HairReader {
 /// meta.point_data_names = vec!["thickness".into(), "fa".into()];
 /// let points = vec![DVec3::ZERO, DVec3::Y, DVec3::new(0.0, 2.0, 0.5)];
 /// let data = vec![0.1, 9.0, 0.2, 9.0, 0.3, 9.0]; // (thickness, fa) per point
-/// let mut w = hair::create(&path, &meta).unwrap();
+/// let mut w = create_hair(&path, &meta).unwrap();
 /// w.write_curve(&Curve { point_data: data, ..Curve::from_points(points.clone()) }).unwrap();
 /// w.finish().unwrap();
-/// let reader = hair::open(&path).unwrap();
+/// let reader = open_hair(&path).unwrap();
 /// assert_eq!(reader.metadata().point_data_names, ["thickness"]);
 /// let curves: Vec<Curve> = reader.collect::<Result<_, _>>().unwrap();
 /// std::fs::remove_file(&path).unwrap();
@@ -400,8 +399,7 @@ impl HairWriter {
     /// comes from `meta`'s `hair.info` (or `vtk.title`):
     ///
     /// ```
-    /// use strandfit::io::hair::{HairReader, HairWriter};
-    /// use strandfit::io::{Curve, CurveReader, CurveWriter, Format, Metadata};
+    /// use strandfit::io::{Curve, CurveReader, CurveWriter, Format, HairReader, HairWriter, Metadata};
     /// use strandfit::DVec3;
     ///
     /// let dir = tempfile::tempdir().unwrap();

@@ -76,7 +76,7 @@ impl CurveStats {
     /// Count one curve.
     ///
     /// ```
-    /// use strandfit::io::{inspect::CurveStats, Curve};
+    /// use strandfit::io::{Curve, CurveStats};
     /// use strandfit::DVec3;
     ///
     /// let mut stats = CurveStats::default();
@@ -120,7 +120,7 @@ impl CurveStats {
     /// Complete the order statistics.
     ///
     /// ```
-    /// use strandfit::io::{inspect::CurveStats, Curve};
+    /// use strandfit::io::{Curve, CurveStats};
     /// use strandfit::DVec3;
     ///
     /// let mut stats = CurveStats::default();

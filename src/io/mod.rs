@@ -19,29 +19,47 @@
 //! place in [`CurveWriter::finish`]; dropping a writer without finishing it
 //! (a failed run) leaves nothing behind and never clobbers an existing file.
 
-pub mod atomic;
-#[doc(hidden)]
-pub mod bytes;
-pub mod container;
-pub mod format;
-pub mod hair;
-pub mod inspect;
-pub mod polyline;
-pub mod sketch;
+mod atomic;
+mod bytes;
+mod container;
+mod format;
+mod hair;
+mod inspect;
+mod polyline;
+mod sketch;
 mod spool;
-pub mod tck;
-pub mod trk;
-pub mod trx;
-pub mod vtk;
-pub mod vtk_frames;
+mod tck;
+mod trk;
+mod trx;
+mod vtk;
+mod vtk_frames;
 
 use std::path::{Path, PathBuf};
 
 use glam::{DMat4, DVec3};
 
 pub use atomic::{remove_unfinished_outputs, AtomicFile};
+// The `.sfh` container's generic names get a `Container` prefix here.
+pub use container::{
+    encoded_size, is_container, ContainerReader, ContainerWriter, Header as ContainerHeader,
+    QuantChain, Shape, SourceMeta, Storage, StoredCurve, BLOCK_CURVES as CONTAINER_BLOCK_CURVES,
+    MAGIC as CONTAINER_MAGIC, VERSION as CONTAINER_VERSION,
+};
 pub use format::{data_losses, source_losses, Format};
-pub use polyline::VecReader;
+// Each format's own reader and writer (without the point check of
+// [`open_reader`]), named after the format.
+pub use hair::{create as create_hair, open as open_hair, HairReader, HairWriter};
+pub use inspect::CurveStats;
+pub use polyline::{create_csv, create_json, open_csv, open_json, VecReader};
+pub use sketch::{
+    parse_sketch_csv, parse_sketch_json, parse_sketch_svg, read_sketch, write_preview_svg,
+    FLATTEN_TOLERANCE as SVG_FLATTEN_TOLERANCE, SKETCH_EXTENSIONS,
+};
+pub use tck::{create as create_tck, open as open_tck};
+pub use trk::{create as create_trk, open as open_trk, HEADER_KEY as TRK_HEADER_KEY};
+pub use trx::{create as create_trx, open as open_trx, GROUP_PREFIX as TRX_GROUP_PREFIX};
+pub use vtk::{create as create_vtk, open as open_vtk, VtkReader, VtkWriter};
+pub use vtk_frames::{write_framed_paths, FramedPath};
 
 /// One curve as read from a file: points in world space, plus the per-point
 /// and per-curve values the file carried (carried through to writers of the

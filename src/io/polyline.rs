@@ -62,7 +62,7 @@ struct JsonCurve {
 /// A file that is not one is an error naming the file and the place:
 ///
 /// ```
-/// use strandfit::io::polyline::open_json;
+/// use strandfit::io::open_json;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-open-json-{}.json", std::process::id()));
 /// std::fs::write(&path, r#"{"curves": [{"points": [[0, 0]]}]}"#).unwrap(); // two coordinates
@@ -195,8 +195,7 @@ struct JsonWriter {
 /// Curve names and per-curve values are kept:
 ///
 /// ```
-/// use strandfit::io::polyline::{create_json, open_json};
-/// use strandfit::io::{Curve, Format, Metadata};
+/// use strandfit::io::{create_json, open_json, Curve, Format, Metadata};
 /// use strandfit::DVec3;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-create-json-{}.json", std::process::id()));
@@ -344,7 +343,7 @@ struct CsvReader {
 /// A file that is not one is an error naming the file and the line:
 ///
 /// ```
-/// use strandfit::io::polyline::open_csv;
+/// use strandfit::io::open_csv;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-open-csv-{}.csv", std::process::id()));
 /// std::fs::write(&path, "id,x,y\n").unwrap();
@@ -512,8 +511,7 @@ struct CsvWriter {
 /// curve data are dropped, CSV has no place for them).
 ///
 /// ```
-/// use strandfit::io::polyline::create_csv;
-/// use strandfit::io::{Curve, Format, Metadata};
+/// use strandfit::io::{create_csv, Curve, Format, Metadata};
 /// use strandfit::DVec3;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-create-csv-{}.csv", std::process::id()));

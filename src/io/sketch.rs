@@ -70,7 +70,7 @@ pub const SKETCH_EXTENSIONS: &[&str] = &["json", "csv", "txt", "svg"];
 /// module docs). Points are in the file's own coordinates.
 ///
 /// ```
-/// use strandfit::io::sketch::read_sketch;
+/// use strandfit::io::read_sketch;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-read-sketch-{}.txt", std::process::id()));
 /// std::fs::write(&path, "x y\n0 0\n1 0.5 # a comment\n\n2 2\n").unwrap();
@@ -110,7 +110,7 @@ pub fn read_sketch(path: &Path) -> Result<Vec<DVec2>, IoError> {
 ///
 /// ```
 /// use std::path::Path;
-/// use strandfit::io::sketch::parse_sketch_json;
+/// use strandfit::io::parse_sketch_json;
 ///
 /// let here = Path::new("stroke.json");
 /// let points = parse_sketch_json(r#"{"points": [[0, 0], [0, 0], [1, 1], [2, 0]]}"#, here).unwrap();
@@ -177,7 +177,7 @@ pub fn parse_sketch_json(text: &str, path: &Path) -> Result<Vec<DVec2>, IoError>
 ///
 /// ```
 /// use std::path::Path;
-/// use strandfit::io::sketch::parse_sketch_csv;
+/// use strandfit::io::parse_sketch_csv;
 ///
 /// let here = Path::new("stroke.csv");
 /// let points = parse_sketch_csv("x;y\n0;0\n1;2\n3;1\n", here).unwrap();
@@ -237,7 +237,7 @@ pub fn parse_sketch_csv(text: &str, path: &Path) -> Result<Vec<DVec2>, IoError> 
 ///
 /// ```
 /// use std::path::Path;
-/// use strandfit::io::sketch::parse_sketch_svg;
+/// use strandfit::io::parse_sketch_svg;
 ///
 /// let svg = r#"<svg xmlns="http://www.w3.org/2000/svg"><path d="M 0 0 h 10 v 10 Z"/></svg>"#;
 /// let points = parse_sketch_svg(svg, Path::new("stroke.svg")).unwrap();
@@ -959,7 +959,7 @@ const PIECE_COLOURS: [&str; 3] = ["#d62728", "#1f77b4", "#2ca02c"];
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::io::sketch::{read_sketch, write_preview_svg};
+/// use strandfit::io::{read_sketch, write_preview_svg};
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-preview-{}.svg", std::process::id()));
 /// let sketch = [DVec2::ZERO, DVec2::new(1.0, 0.5), DVec2::new(2.0, 2.0)];

@@ -147,11 +147,11 @@ fn snippet(s: &str) -> String {
 /// A file that is not one is an error naming the file and the place:
 ///
 /// ```
-/// use strandfit::io::tck;
+/// use strandfit::io::open_tck;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-tck-open-{}.tck", std::process::id()));
 /// std::fs::write(&path, "not a tck\n").unwrap();
-/// let err = tck::open(&path).err().unwrap();
+/// let err = open_tck(&path).err().unwrap();
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!((err.path, err.at.as_deref()), (path, Some("byte 0")));
 /// assert!(err.reason.starts_with("not an MRtrix .tck file"));
@@ -466,15 +466,15 @@ impl CurveReader for TckReader {
 /// given (world space, RAS+ mm); per-point and per-curve values are dropped.
 ///
 /// ```
-/// use strandfit::io::{tck, Curve, Format, Metadata};
+/// use strandfit::io::{create_tck, open_tck, Curve, Format, Metadata};
 /// use strandfit::DVec3;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-tck-create-{}.tck", std::process::id()));
-/// let mut w = tck::create(&path, &Metadata::new(Format::Csv)).unwrap();
+/// let mut w = create_tck(&path, &Metadata::new(Format::Csv)).unwrap();
 /// w.write_curve(&Curve::from_points(vec![DVec3::ZERO, DVec3::new(1.0, 2.0, 3.5)])).unwrap();
 /// w.finish().unwrap();
 /// assert!(std::fs::read(&path).unwrap().starts_with(b"mrtrix tracks\n"));
-/// let curves: Vec<Curve> = tck::open(&path).unwrap().collect::<Result<_, _>>().unwrap();
+/// let curves: Vec<Curve> = open_tck(&path).unwrap().collect::<Result<_, _>>().unwrap();
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!(curves[0].points, [DVec3::ZERO, DVec3::new(1.0, 2.0, 3.5)]);
 /// ```

@@ -553,11 +553,11 @@ fn from_hex(s: &str) -> Option<Vec<u8>> {
 /// A file that is not one is an error naming the file and the place:
 ///
 /// ```
-/// use strandfit::io::trk;
+/// use strandfit::io::open_trk;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-trk-open-{}.trk", std::process::id()));
 /// std::fs::write(&path, "TRACK").unwrap();
-/// let err = trk::open(&path).err().unwrap();
+/// let err = open_trk(&path).err().unwrap();
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!((err.path, err.at.as_deref()), (path, Some("byte 0")));
 /// assert!(err.reason.starts_with("file truncated: 5 bytes, shorter than the 1000-byte .trk header"));
@@ -878,16 +878,16 @@ fn header_for(path: &Path, meta: &Metadata) -> Result<[u8; HEADER_SIZE], IoError
 /// (float32); the points read back within float32 rounding.
 ///
 /// ```
-/// use strandfit::io::{trk, Curve, Format, Metadata};
+/// use strandfit::io::{create_trk, open_trk, Curve, Format, Metadata};
 /// use strandfit::DVec3;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-trk-create-{}.trk", std::process::id()));
 /// let p = vec![DVec3::new(10.0, -4.0, 2.0), DVec3::new(11.0, -4.5, 2.25)];
-/// let mut w = trk::create(&path, &Metadata::new(Format::Tck)).unwrap();
+/// let mut w = create_trk(&path, &Metadata::new(Format::Tck)).unwrap();
 /// w.write_curve(&Curve::from_points(p.clone())).unwrap();
 /// w.finish().unwrap();
 /// assert_eq!(std::fs::metadata(&path).unwrap().len(), 1000 + 4 + 2 * 12);
-/// let curves: Vec<Curve> = trk::open(&path).unwrap().collect::<Result<_, _>>().unwrap();
+/// let curves: Vec<Curve> = open_trk(&path).unwrap().collect::<Result<_, _>>().unwrap();
 /// std::fs::remove_file(&path).unwrap();
 /// assert!(curves[0].points.iter().zip(&p).all(|(a, b)| a.distance(*b) < 1e-5));
 /// ```

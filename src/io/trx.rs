@@ -566,11 +566,11 @@ impl EntryReader {
 /// A file that is not one is an error naming the file and the place:
 ///
 /// ```
-/// use strandfit::io::trx;
+/// use strandfit::io::open_trx;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-trx-open-{}.trx", std::process::id()));
 /// std::fs::write(&path, "PK").unwrap();
-/// let err = trx::open(&path).err().unwrap();
+/// let err = open_trx(&path).err().unwrap();
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!((err.path, err.at.as_deref()), (path, None));
 /// assert!(err.reason.starts_with("not a TRX file"));
@@ -1186,17 +1186,17 @@ fn plan_arrays(
 /// Per-point values travel with the points:
 ///
 /// ```
-/// use strandfit::io::{trx, Curve, CurveReader, Format, Metadata};
+/// use strandfit::io::{create_trx, open_trx, Curve, CurveReader, Format, Metadata};
 /// use strandfit::DVec3;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-trx-create-{}.trx", std::process::id()));
 /// let mut meta = Metadata::new(Format::Tck);
 /// meta.point_data_names = vec!["fa".into()];
 /// let curve = Curve { point_data: vec![0.25, 0.5], ..Curve::from_points(vec![DVec3::ZERO, DVec3::X]) };
-/// let mut w = trx::create(&path, &meta).unwrap();
+/// let mut w = create_trx(&path, &meta).unwrap();
 /// w.write_curve(&curve).unwrap();
 /// w.finish().unwrap();
-/// let reader = trx::open(&path).unwrap();
+/// let reader = open_trx(&path).unwrap();
 /// assert_eq!(reader.metadata().point_data_names, ["fa"]);
 /// let curves: Vec<Curve> = reader.collect::<Result<_, _>>().unwrap();
 /// std::fs::remove_file(&path).unwrap();

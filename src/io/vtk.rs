@@ -831,11 +831,11 @@ pub struct VtkReader {
 /// A file that is not one is an error naming the file and the place:
 ///
 /// ```
-/// use strandfit::io::vtk;
+/// use strandfit::io::open_vtk;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-vtk-open-{}.vtk", std::process::id()));
 /// std::fs::write(&path, "# vtk DataFile Version 3.0\n").unwrap();
-/// let err = vtk::open(&path).err().unwrap();
+/// let err = open_vtk(&path).err().unwrap();
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!((err.path, err.at.as_deref()), (path, Some("line 2")));
 /// assert!(err.reason.starts_with("file truncated"));
@@ -851,8 +851,7 @@ impl VtkReader {
     /// file whose `LINES` point past its points:
     ///
     /// ```
-    /// use strandfit::io::vtk::VtkReader;
-    /// use strandfit::io::CurveReader;
+    /// use strandfit::io::{CurveReader, VtkReader};
     /// use strandfit::DVec3;
     ///
     /// let dir = tempfile::tempdir().unwrap();
@@ -1592,19 +1591,19 @@ fn read_field(src: &mut Src, s: &mut Scan, assoc: Assoc) -> Result<(), IoError> 
 /// Per-curve values travel with the curves:
 ///
 /// ```
-/// use strandfit::io::{vtk, Curve, Format, Metadata};
+/// use strandfit::io::{create_vtk, open_vtk, Curve, Format, Metadata};
 /// use strandfit::DVec3;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-vtk-create-{}.vtk", std::process::id()));
 /// let mut meta = Metadata::new(Format::Json);
 /// meta.curve_data_names = vec!["weight".into()];
-/// let mut w = vtk::create(&path, &meta).unwrap();
+/// let mut w = create_vtk(&path, &meta).unwrap();
 /// for k in 0..3 {
 ///     let points = vec![DVec3::ZERO, DVec3::splat(k as f64 + 1.0)];
 ///     w.write_curve(&Curve { curve_data: vec![k as f32], ..Curve::from_points(points) }).unwrap();
 /// }
 /// w.finish().unwrap();
-/// let curves: Vec<Curve> = vtk::open(&path).unwrap().collect::<Result<_, _>>().unwrap();
+/// let curves: Vec<Curve> = open_vtk(&path).unwrap().collect::<Result<_, _>>().unwrap();
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!(curves.len(), 3);
 /// assert_eq!((curves[2].points[1], curves[2].curve_data[0]), (DVec3::splat(3.0), 2.0));
@@ -1675,8 +1674,7 @@ impl VtkWriter {
     /// (BINARY unless `meta.extra` has `vtk.encoding = ASCII`).
     ///
     /// ```
-    /// use strandfit::io::vtk::{VtkReader, VtkWriter};
-    /// use strandfit::io::{Curve, CurveReader, CurveWriter, Format, Metadata};
+    /// use strandfit::io::{Curve, CurveReader, CurveWriter, Format, Metadata, VtkReader, VtkWriter};
     /// use strandfit::DVec3;
     ///
     /// let dir = tempfile::tempdir().unwrap();

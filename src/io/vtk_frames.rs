@@ -23,7 +23,7 @@ pub struct FramedPath {
 /// Write `paths` to `target` (see the module docs).
 ///
 /// ```
-/// use strandfit::io::vtk_frames::{write_framed_paths, FramedPath};
+/// use strandfit::io::{write_framed_paths, FramedPath};
 /// use strandfit::DVec3;
 ///
 /// let path = std::env::temp_dir().join(format!("strandfit-doc-frames-{}.vtk", std::process::id()));

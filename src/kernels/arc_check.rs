@@ -24,7 +24,7 @@ use super::{
     binding, Access, Batch, Binding, Data, Elem, Exec, GpuError, Kernel, Precision, Rng, Timings,
     Twin,
 };
-use crate::codec::batch::{ArcCandidate, ArcCheckBlock, ArcChecker, Verdict};
+use crate::codec::{ArcCandidate, ArcCheckBlock, ArcChecker, Verdict};
 use crate::twin::arc_check::{self as twin, IDX_STRIDE, IN_STRIDE};
 use crate::twin::Real;
 

@@ -1,5 +1,5 @@
 //! `shaders/frenet_integrate.wgsl` (twin: [`crate::twin::frenet_integrate`],
-//! reference: [`crate::euler::frenet`]): 3D Euler spirals, one problem per
+//! reference: [`crate::euler::FrenetProblem`]): 3D Euler spirals, one problem per
 //! invocation.
 //!
 //! The host validates each problem ([`FrenetProblem::validate`]; an invalid

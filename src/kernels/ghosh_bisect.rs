@@ -5,7 +5,7 @@
 //! twin's docs): it reduces each pair to six scalars, and turns the kernel's
 //! answer back into an element with start point, tangent, axis and normal
 //! in `f64` and κ, τ, L, φ* from the kernel. Records the kernel rejects are re-run
-//! through the `f64` reference [`crate::helix::ghosh::interpolate`], which
+//! through the `f64` reference [`crate::helix::interpolate`], which
 //! decides borderline cases (a co-helicity residual at the tolerance, say)
 //! and words the error.
 //!
@@ -17,7 +17,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::{by_precision, map, Exec, GpuError, MapKernel, Rng, Timings, Twin};
-use crate::helix::ghosh::ghosh_basis;
+use crate::helix::ghosh_basis;
 use crate::helix::{HelixElement, HelixError, HermitePair, ShortHelix};
 use crate::twin::ghosh_bisect::{self as twin, status, IN_STRIDE, OUT_STEPS, OUT_STRIDE};
 use crate::twin::Real;

@@ -39,7 +39,7 @@ pub fn distance_to_polyline(p: DVec3, line: &[DVec3]) -> f64 {
         1 => p.distance(line[0]),
         _ => line
             .windows(2)
-            .map(|w| crate::codec::check::dist2_to_segment(p, w[0], w[1]))
+            .map(|w| crate::codec::dist2_to_segment(p, w[0], w[1]))
             .fold(f64::INFINITY, f64::min)
             .sqrt(),
     }

@@ -161,8 +161,7 @@ fn g_functional(cfg: &Config) -> f64 {
 /// At the solved `φ₂` of [`interpolate_local`] it is the chord direction `𝚫𝐮`
 /// (here the data of its example):
 /// ```
-/// use strandfit::rrmf::local::unit_displacement;
-/// use strandfit::rrmf::interpolate_local;
+/// use strandfit::rrmf::{interpolate_local, unit_displacement};
 /// use strandfit::DVec3;
 ///
 /// let (p_f, u_f) = (DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.5, 0.5, -0.5f64.sqrt()));

@@ -266,7 +266,7 @@ impl Neg for Quat {
 /// 𝐰/|𝐰| = 0` (or an input is zero).
 ///
 /// ```
-/// use strandfit::rrmf::quat::bisector;
+/// use strandfit::rrmf::bisector;
 /// use strandfit::DVec3;
 ///
 /// assert!((bisector(DVec3::X, 3.0 * DVec3::Y).unwrap() - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-15);
@@ -279,7 +279,7 @@ pub fn bisector(v: DVec3, w: DVec3) -> Option<DVec3> {
 /// `𝐧(𝐯, 𝐰) = −(𝐯 × 𝐰)/|𝐯 × 𝐰|` (Definition 2.13), `None` when parallel.
 ///
 /// ```
-/// use strandfit::rrmf::quat::neg_cross;
+/// use strandfit::rrmf::neg_cross;
 /// use strandfit::DVec3;
 ///
 /// assert_eq!(neg_cross(DVec3::X, 2.0 * DVec3::Y), Some(-DVec3::Z));
@@ -301,7 +301,7 @@ pub fn neg_cross(v: DVec3, w: DVec3) -> Option<DVec3> {
 ///
 /// `𝒜𝐢𝒜* = 𝐯`, for a general `𝐯` and for the special case `𝐯 ∥ −𝐢`:
 /// ```
-/// use strandfit::rrmf::quat::sqrt_wrt_i;
+/// use strandfit::rrmf::sqrt_wrt_i;
 /// use strandfit::DVec3;
 ///
 /// for v in [DVec3::new(1.0, 2.0, 3.0), DVec3::new(-2.0, 0.0, 0.0)] {

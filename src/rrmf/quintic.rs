@@ -28,7 +28,7 @@ pub struct PhQuintic {
 ///
 /// A partition of unity: at `t = ¼`, `(9, 6, 1)/16`:
 /// ```
-/// use strandfit::rrmf::quintic::bernstein2;
+/// use strandfit::rrmf::bernstein2;
 ///
 /// assert_eq!(bernstein2(0.25), [0.5625, 0.375, 0.0625]);
 /// ```
@@ -296,8 +296,7 @@ impl PhQuintic {
     ///
     /// `𝒜₁ = √(vect(𝒜₂𝐢𝒜₀*))` makes a class I quintic (Eq. 2.17):
     /// ```
-    /// use strandfit::rrmf::quat::sqrt_wrt_i;
-    /// use strandfit::rrmf::{PhQuintic, Quat};
+    /// use strandfit::rrmf::{sqrt_wrt_i, PhQuintic, Quat};
     /// use strandfit::DVec3;
     ///
     /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));

@@ -334,8 +334,7 @@ impl RrmfQuintic {
     /// A class I quintic (`𝒜₁ = √(vect(𝒜₂𝐢𝒜₀*))`) has its rational RMF, starting
     /// as the Euler–Rodrigues frame; a generic PH quintic has none:
     /// ```
-    /// use strandfit::rrmf::quat::sqrt_wrt_i;
-    /// use strandfit::rrmf::{PhQuintic, Quat, RmfError, RrmfQuintic};
+    /// use strandfit::rrmf::{sqrt_wrt_i, PhQuintic, Quat, RmfError, RrmfQuintic};
     /// use strandfit::DVec3;
     ///
     /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
@@ -448,8 +447,7 @@ impl RrmfQuintic {
     ///
     /// `𝒲 = a + 𝐢b` (it commutes with `𝐢`), scaled so that `𝒲(0) = 1`:
     /// ```
-    /// use strandfit::rrmf::quat::sqrt_wrt_i;
-    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::rrmf::{sqrt_wrt_i, PhQuintic, Quat, RrmfQuintic};
     /// use strandfit::DVec3;
     ///
     /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
@@ -472,8 +470,7 @@ impl RrmfQuintic {
     ///
     /// `ℬ = 𝒜𝒲`, so `|ℬ|² = |𝒜|²|𝒲|²`:
     /// ```
-    /// use strandfit::rrmf::quat::sqrt_wrt_i;
-    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::rrmf::{sqrt_wrt_i, PhQuintic, Quat, RrmfQuintic};
     /// use strandfit::DVec3;
     ///
     /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
@@ -490,8 +487,7 @@ impl RrmfQuintic {
     ///
     /// Orthonormal, right-handed, led by the curve's tangent:
     /// ```
-    /// use strandfit::rrmf::quat::sqrt_wrt_i;
-    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::rrmf::{sqrt_wrt_i, PhQuintic, Quat, RrmfQuintic};
     /// use strandfit::DVec3;
     ///
     /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
@@ -515,8 +511,7 @@ impl RrmfQuintic {
     /// about the tangent counted from `𝐞₃` towards `𝐞₂` (here against a
     /// central difference):
     /// ```
-    /// use strandfit::rrmf::quat::sqrt_wrt_i;
-    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::rrmf::{sqrt_wrt_i, PhQuintic, Quat, RrmfQuintic};
     /// use strandfit::DVec3;
     ///
     /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
@@ -542,8 +537,7 @@ impl RrmfQuintic {
     ///
     /// Zero (to rounding) along a class I quintic: `𝐟₂′·𝐟₃ = 0`:
     /// ```
-    /// use strandfit::rrmf::quat::sqrt_wrt_i;
-    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::rrmf::{sqrt_wrt_i, PhQuintic, Quat, RrmfQuintic};
     /// use strandfit::DVec3;
     ///
     /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));
@@ -565,8 +559,7 @@ impl RrmfQuintic {
     ///
     /// It matches a central difference of [`frame`](Self::frame):
     /// ```
-    /// use strandfit::rrmf::quat::sqrt_wrt_i;
-    /// use strandfit::rrmf::{PhQuintic, Quat, RrmfQuintic};
+    /// use strandfit::rrmf::{sqrt_wrt_i, PhQuintic, Quat, RrmfQuintic};
     /// use strandfit::DVec3;
     ///
     /// let (a0, a2) = (Quat::from_array([0.3, 1.0, -0.2, 0.4]), Quat::from_array([1.0, 0.5, 0.2, -0.1]));

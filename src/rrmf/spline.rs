@@ -160,8 +160,7 @@ pub fn minaj2_references(points: &[DVec3]) -> Vec<DVec3> {
 /// The inserted tangent is the chord direction, and the point lies on the line
 /// from `p_i` along the bisector of `u_i` and the chord:
 /// ```
-/// use strandfit::rrmf::quat::bisector;
-/// use strandfit::rrmf::spline::insert_point;
+/// use strandfit::rrmf::{bisector, insert_point};
 /// use strandfit::DVec3;
 ///
 /// let (p_i, p_f, u_i) = (DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0), DVec3::new(-1.0, 1.0, 0.0).normalize());

@@ -88,7 +88,7 @@ pub enum PolylineFitError {
 /// Every input point ends within the tolerance of the fitted spline (here 40
 /// points on a helix, tolerance `10⁻³`):
 /// ```
-/// use strandfit::spline::schneider::{fit_polyline, SchneiderOptions};
+/// use strandfit::spline::{fit_polyline, SchneiderOptions};
 /// use strandfit::{BezierSpline, DVec3};
 ///
 /// let pts: Vec<DVec3> = (0..40).map(|i| {

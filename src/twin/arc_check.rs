@@ -1,9 +1,9 @@
 //! Twin of `shaders/arc_check.wgsl`: the codec's two-sided acceptance test
-//! ([`crate::codec::check`]) for one candidate arc, decided with a band.
+//! (`src/codec/check.rs`) for one candidate arc, decided with a band.
 //!
 //! A candidate is a circular arc (start `q`, unit tangent `t`, unit normal
 //! `n` towards the centre, curvature `κ`, end `e`) cut into `N` equal pieces
-//! of arc length `h`, as the decoder cuts it ([`crate::codec::predict::Arc`]):
+//! of arc length `h`, as the decoder cuts it (`Arc` of `src/codec/predict.rs`):
 //! sample `k` is `q` for `k = 0`, `e` for `k = N`, and otherwise
 //!
 //! ```text
@@ -98,7 +98,7 @@ fn dot<R: Real>(a: [R; 3], b: [R; 3]) -> R {
 }
 
 /// Squared distance from `p` to the segment `[a, b]` (as
-/// [`crate::codec::check::dist2_to_segment`]).
+/// `dist2_to_segment` of `src/codec/check.rs`).
 #[inline]
 pub fn dist2_to_segment<R: Real>(p: [R; 3], a: [R; 3], b: [R; 3]) -> R {
     let d = sub(b, a);

@@ -5,7 +5,7 @@
 //!
 //! Given the field `θ = a₁ξ + a₀`, `φ = b₁ξ + b₀` and the chord, the kernel
 //! forms the moment vectors `V_k = ∫₀¹ tᵏ T` at the three frequencies
-//! `A₁ = a₁ + b₁`, `B₁ = a₁ − b₁`, `a₁` (as [`crate::atph::moments`]: the
+//! `A₁ = a₁ + b₁`, `B₁ = a₁ − b₁`, `a₁` (as [`crate::atph::trig_moments`]: the
 //! power series for `|ω| < 2`, here with a fixed [`SERIES_TERMS`] terms so
 //! invocations do not diverge; the corrected closed form (2.5)–(2.6) above),
 //! the Bernstein columns `∫B_jⁿ T`, and solves system (3.1) (`n = 2`) or
@@ -232,7 +232,7 @@ mod tests {
     fn moments_match_the_reference_in_both_precisions() {
         for &w in &[0.0, 0.5, -1.999, 2.0, 3.5, -9.0] {
             for &al in &[0.0, 1.0, -2.5] {
-                let m = crate::atph::moments::trig_moments(w, al, 1.0);
+                let m = crate::atph::trig_moments(w, al, 1.0);
                 let (re, im) = moments::<f64>(w, al);
                 let (re32, im32) = moments::<f32>(w as f32, al as f32);
                 for k in 0..4 {

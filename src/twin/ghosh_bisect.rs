@@ -1,7 +1,8 @@
 //! Twin of `shaders/ghosh_bisect.wgsl`: one Ghosh short helix per segment by
 //! bisection on `G(φ) = A·N(φ) + B·D(φ) = 0` over the full `I₀` (paper 000,
 //! Algorithm 2 with the ERRATA corrections; the `f64` reference with Brent's
-//! method is [`crate::helix::ghosh`], whose module docs derive the formulas).
+//! method is [`crate::helix::interpolate`]; `src/helix/ghosh.rs` derives the
+//! formulas).
 //!
 //! Split of the work. The host, in `f64`, reduces each segment to five
 //! scalars — `|d|`, `|t₁ − t₀| = 2 sin(θ/2)`, `|t₁ + t₀| = 2 cos(θ/2)` and
@@ -291,7 +292,7 @@ pub fn ghosh_bisect_batch<R: Real>(input: &[R], tol: R, out: &mut [R]) {
 
 #[cfg(test)]
 mod tests {
-    use crate::helix::{ghosh, HermitePair};
+    use crate::helix::{self, HermitePair};
     use crate::kernels::ghosh_bisect::interpolate_twin;
     use glam::DVec3;
 
@@ -312,7 +313,7 @@ mod tests {
             p1: e.end_point(),
             t1: e.end_frame().tangent,
         };
-        let h = ghosh::interpolate(pair.p0, pair.t0, pair.p1, pair.t1, 1e-6).unwrap();
+        let h = helix::interpolate(pair.p0, pair.t0, pair.p1, pair.t1, 1e-6).unwrap();
         let o = interpolate_twin::<f64>(&[pair], 1e-6)[0].unwrap();
         assert!((o.phi - h.phi).abs() < 1e-13, "{} {}", o.phi, h.phi);
         assert!((o.element.curvature - 0.8).abs() < 1e-12);

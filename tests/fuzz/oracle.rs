@@ -15,10 +15,9 @@
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
-use strandfit::codec::container::{container_version, CodecReader};
+use strandfit::codec::{container_version, CodecReader};
 use strandfit::helix::PiecewiseHelix;
-use strandfit::io::container::{ContainerReader, Shape};
-use strandfit::io::{self, Curve, Format, IoError, Metadata};
+use strandfit::io::{self, ContainerReader, Curve, Format, IoError, Metadata, Shape};
 use strandfit::DVec3;
 
 /// What is read: a curve format through `io::read_all`, or the container.
