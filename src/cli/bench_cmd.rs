@@ -198,8 +198,9 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     let missed = solved
         .iter()
         .filter(|r| {
-            r.as_ref()
-                .map_or(true, |s| s.error > crate::euler::CONVERGED)
+            r.as_ref().map_or(true, |s| {
+                s.error > opts.for_backend(backend).converged_below()
+            })
         })
         .count();
     drop(solved);

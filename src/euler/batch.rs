@@ -219,6 +219,8 @@ pub fn solve_spirals_lockstep(
     opts: &SolveOptions,
     backend: &Backend,
 ) -> Result<Vec<Result<SpiralSolution, SolveError>>, GpuError> {
+    // Convergence as the backend's arithmetic allows (f32: CONVERGED_F32).
+    let opts = &opts.for_backend(backend);
     let max_rounds = 4 * opts.max_iterations.max(1);
     let mut states: Vec<Result<State, SolveError>> = pairs
         .iter()

@@ -25,5 +25,6 @@ pub use clothoid::{
 pub use frenet::{FrenetEnd, FrenetError, FrenetProblem, FRAME_TOL};
 pub use paper::{paper_spiral, PaperIntegrator, PaperOptions};
 pub use solve::{
-    solve_spiral, Restart, SolveError, SolveOptions, SpiralSolution, CONVERGED, DEFAULT_RESTARTS,
+    solve_spiral, Restart, SolveError, SolveOptions, SpiralSolution, CONVERGED, CONVERGED_F32,
+    DEFAULT_RESTARTS,
 };

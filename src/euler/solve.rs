@@ -71,6 +71,10 @@ pub struct SolveOptions {
     pub max_iterations: usize,
     /// Stop when `ε` (Eq. 9, in the scaled problem) falls below this.
     pub tolerance: f64,
+    /// `ε` at or below which a run counts as converged (for the restarts,
+    /// the truncation check and the caller): [`CONVERGED`] by default,
+    /// [`CONVERGED_F32`] on an `f32` GPU ([`for_backend`](Self::for_backend)).
+    pub converged: f64,
     /// `N₀`; default (`None`): the in-plane normal of the paper's Step 1.
     /// The five parameters and the two end conditions leave the start frame's
     /// rotation about `T₀` free; the paper fixes it by the plane.
@@ -126,6 +130,68 @@ pub const DEFAULT_RESTARTS: [Restart; 8] = [
 /// truncation error of any step count used.
 pub const CONVERGED: f64 = 1e-20;
 
+/// [`CONVERGED`] where the spirals are integrated in single precision
+/// (the GPU backend in `f32`): `|r| ≤ 1e-5 |x_f − x₀|`. Rounding in `f32`
+/// leaves `ε` far above [`CONVERGED`]: measured on lavapipe, 200 random
+/// pairs ([`random_spirals`](crate::synthetic::random_spirals) seed 9)
+/// settle between 2e-16 and 6e-14 (median 5e-15), and some runs stop
+/// improving at 1e-12 to 2.3e-12; with [`CONVERGED`] every run went on to
+/// the iteration cap and through every restart (112,584 iterations,
+/// against 2,247 in `f64`) and still reported failure to converge.
+pub const CONVERGED_F32: f64 = 1e-10;
+
+impl SolveOptions {
+    /// These options for a solve on `backend`: [`converged`] raised to
+    /// what its arithmetic can reach ([`CONVERGED_F32`] on an `f32` GPU,
+    /// and [`tolerance`] to a thousandth of it; unchanged otherwise). [`solve_spirals`](super::solve_spirals) uses
+    /// them; a caller checking [`SpiralSolution::error`] should compare it
+    /// with [`converged_below`](Self::converged_below) of these.
+    ///
+    /// [`tolerance`]: Self::tolerance
+    /// [`converged`]: Self::converged
+    ///
+    /// ```
+    /// use strandfit::euler::{SolveOptions, CONVERGED};
+    /// use strandfit::Backend;
+    ///
+    /// let opts = SolveOptions::default().for_backend(&Backend::Cpu);
+    /// assert_eq!(opts, SolveOptions::default());
+    /// assert_eq!(opts.converged_below(), CONVERGED);
+    /// ```
+    pub fn for_backend(&self, backend: &crate::Backend) -> SolveOptions {
+        let floor = match backend {
+            crate::Backend::Gpu(g) if g.precision == crate::gpu::Precision::F32 => CONVERGED_F32,
+            _ => return *self,
+        };
+        SolveOptions {
+            // Iterate down to f32's rounding (runs that stagnate before
+            // stop on their own, measured between 1e-12 and 2.3e-12),
+            // count success at the floor: the end checked at another step
+            // count may land a little above where the iteration stopped.
+            // Measured (100 pairs, lavapipe): stopping at 1e-12 took 1,829
+            // iterations, at 1e-13 2,409, at 1e-14 5,925 (f64: 1,201).
+            tolerance: self.tolerance.max(floor * 1e-3),
+            converged: self.converged.max(floor),
+            ..*self
+        }
+    }
+
+    /// The `ε` at or below which a run counts as converged under these
+    /// options: [`tolerance`](Self::tolerance) or
+    /// [`converged`](Self::converged), whichever is larger.
+    ///
+    /// ```
+    /// use strandfit::euler::{SolveOptions, CONVERGED};
+    ///
+    /// assert_eq!(SolveOptions::default().converged_below(), CONVERGED);
+    /// let loose = SolveOptions { tolerance: 1e-12, ..Default::default() };
+    /// assert_eq!(loose.converged_below(), 1e-12);
+    /// ```
+    pub fn converged_below(&self) -> f64 {
+        self.tolerance.max(self.converged)
+    }
+}
+
 impl Default for SolveOptions {
     fn default() -> Self {
         SolveOptions {
@@ -134,6 +200,7 @@ impl Default for SolveOptions {
             truncation: 1e-7,
             max_iterations: 30,
             tolerance: 1e-24,
+            converged: CONVERGED,
             start_normal: None,
             restarts: &DEFAULT_RESTARTS,
         }
@@ -446,7 +513,7 @@ pub(crate) struct Run {
 
 /// `ε` at or below which a run has converged under `opts`.
 pub(crate) fn converged(err: f64, opts: &SolveOptions) -> bool {
-    err <= opts.tolerance.max(CONVERGED)
+    err <= opts.converged_below()
 }
 
 /// The first step count of a solve.
