@@ -1,5 +1,5 @@
 //! The JSON outputs against their schemas (`docs/schemas/<command>.schema.json`,
-//! `docs/json.md`): every command that writes JSON has a schema, every
+//! `docs/json.md`): every command writes JSON and has a schema, every
 //! output of the commands validates against it (failures and optional
 //! parts included), the schemas are valid JSON Schema (draft 2020-12), and
 //! a key names one kind of value in every schema.
@@ -25,7 +25,7 @@ const JSON_OUTPUT: [&str; 8] = [
     "sketch",
 ];
 /// Commands that write no JSON.
-const NO_JSON: [&str; 3] = ["decompress", "convert", "bench"];
+const NO_JSON: [&str; 0] = [];
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -309,6 +309,117 @@ fn every_json_output_matches_its_schema() {
     args.extend(parts.iter().map(String::as_str));
     args.extend(["-o", &merged, "--json"]);
     check("merge", &documents(&run_ok(&args, ""), false));
+
+    // decompress: version 3 at its points (the guarantee holds), resampled
+    // (it does not), a range of curves, and version 1; a container cut
+    // short fails (exit 1) with a report that says why.
+    let back = tmp("back.tck");
+    for extra in [
+        &[][..],
+        &["-m", "20"],
+        &["--step", "2"],
+        &["--curves", "10:20"],
+    ] {
+        let mut args = vec!["decompress", &sfh, "-o", &back, "--json"];
+        args.extend_from_slice(extra);
+        let docs = documents(&run_ok(&args, ""), false);
+        let resampled = matches!(extra.first(), Some(&"-m" | &"--step"));
+        assert_eq!(docs[0]["guaranteed"], !resampled, "{extra:?}");
+        assert!(docs[0]["output_point_count"].as_u64() > Some(0));
+        check("decompress", &docs);
+    }
+    let v1 = "tests/data/sfh/fornix_v1_ordered_0.5.sfh";
+    let docs = documents(
+        &run_ok(&["decompress", v1, "-o", &tmp("v1.json"), "--json"], ""),
+        false,
+    );
+    assert_eq!(docs[0]["container_version"], 1);
+    check("decompress", &docs);
+    let bytes = std::fs::read(&sfh).unwrap();
+    let short = tmp("short.sfh");
+    std::fs::write(&short, &bytes[..bytes.len() / 2]).unwrap();
+    let never = tmp("never.tck");
+    let (code, out) = run(&["decompress", &short, "-o", &never, "--json"], "");
+    assert_eq!(code, Some(1));
+    let docs = documents(&out, false);
+    assert!(docs[0]["failure"].is_string(), "{}", docs[0]);
+    check("decompress", &docs);
+
+    // convert: per-point and per-curve data carried and dropped, curves
+    // left out by --skip-bad; a file cut short fails (exit 1) with a
+    // report.
+    let complex = "tests/data/fibres/nibabel_fixtures/complex.trk";
+    let bad = tmp("bad.csv");
+    std::fs::write(
+        &bad,
+        "curve,x,y,z\na,0,0,0\na,1,0,0\nb,0,0,0\nb,1,NaN,0\nc,0,0,1\nc,1,0,1\n",
+    )
+    .unwrap();
+    for (input, output, extra) in [
+        (fornix, tmp("f.json"), &[][..]),
+        (complex, tmp("c.csv"), &[][..]),
+        (complex, tmp("c.tck"), &[][..]),
+        (&bad, tmp("b.json"), &["--skip-bad"][..]),
+    ] {
+        let mut args = vec!["convert", input, "-o", &output, "--json"];
+        args.extend_from_slice(extra);
+        let docs = documents(&run_ok(&args, ""), false);
+        check("convert", &docs);
+    }
+    let (code, out) = run(&["convert", &cut, "-o", &never, "--json"], "");
+    assert_eq!(code, Some(1));
+    let docs = documents(&out, false);
+    assert!(docs[0]["failure"].is_string(), "{}", docs[0]);
+    check("convert", &docs);
+
+    // bench, small: every stage once, on the CPU, and on a GPU where there
+    // is one (lavapipe will do: its rows have the GPU split), else a
+    // failure; with a GPU adapter that does not exist it fails (exit 1)
+    // with a report.
+    let bench = |backend| {
+        let args = [
+            "bench",
+            "--backend",
+            backend,
+            "--splines",
+            "40",
+            "-n",
+            "4",
+            "--segments",
+            "2",
+            "--repeat",
+            "1",
+            "--json",
+        ];
+        run(&args, "")
+    };
+    let (code, out) = bench("cpu");
+    assert_eq!(code, Some(0));
+    let docs = documents(&out, false);
+    assert_eq!(docs[0]["stages"].as_array().map(Vec::len), Some(12));
+    check("bench", &docs);
+    let (code, out) = bench("gpu");
+    let docs = documents(&out, false);
+    match code {
+        Some(0) => assert!(docs[0]["stages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|s| s["gpu_split"].is_object())),
+        _ => assert!(docs[0]["failure"].is_string(), "{}", docs[0]),
+    }
+    check("bench", &docs);
+    let out = Command::new(env!("CARGO_BIN_EXE_strandfit"))
+        .current_dir(root())
+        .args(["bench", "--backend", "gpu", "--repeat", "1", "--json"])
+        .env("STRANDFIT_ADAPTER", "no such adapter, json_schemas.rs")
+        .stderr(Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let docs = documents(&out.stdout, false);
+    assert!(docs[0]["failure"].is_string(), "{}", docs[0]);
+    check("bench", &docs);
 }
 
 /// The checks can fail: outputs with a renamed, missing, mistyped or extra
@@ -418,7 +529,8 @@ fn json_type(v: &Value) -> String {
 /// A key holds one kind of value in every command: `curves` is never a
 /// count in one and a list in another, `error` never a number here and a
 /// string there; counts are `*_count`, residuals `residual`, failures
-/// `failure`.
+/// `failure`, times `*seconds` and rates `*_per_second` numbers, paths and
+/// formats strings.
 #[test]
 fn a_key_means_one_thing_in_every_schema() {
     let mut all: BTreeMap<String, BTreeMap<String, BTreeSet<String>>> = BTreeMap::new();
@@ -454,6 +566,21 @@ fn a_key_means_one_thing_in_every_schema() {
         if k.ends_with("_count") {
             assert!(by_type.keys().eq(["integer"]), "{k}: a count is an integer");
         }
+        if k.ends_with("seconds") || k.ends_with("_per_second") {
+            assert!(
+                by_type.keys().eq(["number"]),
+                "{k}: a time or a rate is a number"
+            );
+        }
+    }
+    for k in [
+        "input",
+        "output",
+        "input_format",
+        "output_format",
+        "backend",
+    ] {
+        assert!(all[k].keys().eq(["string"]), "{k}");
     }
     assert!(all["residual"].keys().eq(["number"]));
     assert!(all["failure"].keys().eq(["string"]));

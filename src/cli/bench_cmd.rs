@@ -6,7 +6,8 @@
 //! (completions/s: the default solver on the chosen backend, the paper's
 //! Algorithm 1 on a few pairs on the CPU), ATPH Hermite interpolation
 //! (interpolations/s, on the backend) and RRMF motions on the CPU (local
-//! interpolations/s, whole-spline points/s).
+//! interpolations/s, whole-spline points/s). `--json`: the same rows on
+//! standard output instead of the table (`docs/schemas/bench.schema.json`).
 
 use std::time::Instant;
 
@@ -23,6 +24,7 @@ use crate::synthetic::{
 };
 use anyhow::Result;
 use rayon::prelude::*;
+use serde::Serialize;
 
 /// Steps per spiral in the Frenet–Serret benchmark.
 const FRENET_STEPS: usize = 64;
@@ -60,24 +62,145 @@ const SKETCH_VERTICES: usize = 500;
 /// Points per element in the decompression benchmark.
 const EVAL_POINTS_PER_ELEMENT: usize = 8;
 
-fn report(label: &str, items: f64, unit: &str, times: &mut [(f64, Timings)]) {
-    times.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let (best, bt) = times[0];
-    let (median, _) = times[times.len() / 2];
-    println!(
-        "{label}: best {best:.4} s {:>13.0} {unit}/s | median {median:.4} s {:>13.0} {unit}/s",
-        items / best,
-        items / median
-    );
-    if bt.chunks > 0 {
-        println!(
-            "    gpu split (best run): prepare {:.4} s, upload {:.4} s, wait {:.4} s, readback {:.4} s, {} chunks",
-            bt.prepare.as_secs_f64(),
-            bt.upload.as_secs_f64(),
-            bt.wait.as_secs_f64(),
-            bt.readback.as_secs_f64(),
-            bt.chunks
-        );
+/// The `--json` report; `docs/schemas/bench.schema.json`.
+#[derive(Debug, Serialize)]
+pub struct BenchReport {
+    /// The JSON schema version ([`super::JSON_VERSION`]).
+    pub version: u32,
+    /// The chosen backend: `cpu` or `gpu`.
+    pub backend: &'static str,
+    /// Its precision (the CPU's is `f64`).
+    pub precision: &'static str,
+    /// The GPU adapter (name, type, driver); `null` on the CPU.
+    pub adapter: Option<String>,
+    /// Worker threads (rayon).
+    pub thread_count: usize,
+    /// `--splines`.
+    pub spline_count: usize,
+    /// `--elements`.
+    pub elements_per_curve: usize,
+    /// `--segments`.
+    pub segments_per_spline: usize,
+    /// `--repeat`: timed runs per stage.
+    pub run_count: usize,
+    /// One per stage, in the order of the table.
+    pub stages: Vec<Stage>,
+}
+
+/// One stage measured: a row of the table.
+#[derive(Debug, Serialize)]
+pub struct Stage {
+    /// Its name, without the parameters (`whole_fit`, `sketch_lift`, …).
+    pub stage: &'static str,
+    /// The row's label in the table, with its parameters.
+    pub label: String,
+    /// Where it ran: the chosen backend, or `cpu` for the CPU-only stages.
+    pub backend: &'static str,
+    pub precision: &'static str,
+    /// Items processed per run, in `unit`.
+    pub item_count: u64,
+    /// What an item is: `elements`, `points`, `spirals`, `completions`,
+    /// `interpolations`, `vertices`.
+    pub unit: &'static str,
+    pub best_seconds: f64,
+    pub median_seconds: f64,
+    pub best_items_per_second: f64,
+    pub median_items_per_second: f64,
+    /// Items that failed (curves not fitted, pairs not converged or not
+    /// interpolated), where the stage counts them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failed_count: Option<u64>,
+    /// The GPU time of the best run, where the stage ran on the GPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu_split: Option<GpuSplit>,
+}
+
+/// A GPU stage's time, split.
+#[derive(Debug, Serialize)]
+pub struct GpuSplit {
+    pub prepare_seconds: f64,
+    pub upload_seconds: f64,
+    pub wait_seconds: f64,
+    pub readback_seconds: f64,
+    pub chunk_count: u64,
+}
+
+/// The rows measured so far, printed as they come unless `--json`.
+struct Table {
+    json: bool,
+    backend: &'static str,
+    precision: &'static str,
+    stages: Vec<Stage>,
+}
+
+impl Table {
+    /// A row: `items` per run, `times` of the runs; `cpu_only` for the
+    /// stages that run on the CPU whatever the backend.
+    fn report(
+        &mut self,
+        stage: &'static str,
+        label: &str,
+        items: f64,
+        unit: &'static str,
+        cpu_only: bool,
+        times: &mut [(f64, Timings)],
+    ) {
+        times.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (best, bt) = times[0];
+        let (median, _) = times[times.len() / 2];
+        if !self.json {
+            println!(
+                "{label}: best {best:.4} s {:>13.0} {unit}/s | median {median:.4} s {:>13.0} {unit}/s",
+                items / best,
+                items / median
+            );
+            if bt.chunks > 0 {
+                println!(
+                    "    gpu split (best run): prepare {:.4} s, upload {:.4} s, wait {:.4} s, readback {:.4} s, {} chunks",
+                    bt.prepare.as_secs_f64(),
+                    bt.upload.as_secs_f64(),
+                    bt.wait.as_secs_f64(),
+                    bt.readback.as_secs_f64(),
+                    bt.chunks
+                );
+            }
+        }
+        let (backend, precision) = if cpu_only {
+            ("cpu", "f64")
+        } else {
+            (self.backend, self.precision)
+        };
+        self.stages.push(Stage {
+            stage,
+            label: label.trim_end().to_string(),
+            backend,
+            precision,
+            item_count: items as u64,
+            unit,
+            best_seconds: best,
+            median_seconds: median,
+            best_items_per_second: items / best,
+            median_items_per_second: items / median,
+            failed_count: None,
+            gpu_split: (bt.chunks > 0).then_some(GpuSplit {
+                prepare_seconds: bt.prepare.as_secs_f64(),
+                upload_seconds: bt.upload.as_secs_f64(),
+                wait_seconds: bt.wait.as_secs_f64(),
+                readback_seconds: bt.readback.as_secs_f64(),
+                chunk_count: bt.chunks as u64,
+            }),
+        });
+    }
+
+    /// The last row's failures, and in the table the note `  ({n} {what})`
+    /// when there are any.
+    fn failed(&mut self, n: usize, what: &str) {
+        if let Some(s) = self.stages.last_mut() {
+            s.failed_count = Some(n as u64);
+        }
+        if n > 0 && !self.json {
+            println!("  ({n} {what})");
+        }
     }
 }
 
@@ -99,21 +222,38 @@ fn time_runs<T>(
     Ok((times, last))
 }
 
-pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let result = args.engine.open().and_then(|b| bench(args, &b));
+    super::io_util::failure_report(result, args.json, None, None)
+}
+
+fn bench(args: &BenchArgs, backend: &Backend) -> Result<()> {
     if args.splines == 0 || args.elements == 0 || args.segments == 0 || args.repeat == 0 {
         super::usage!("--splines, --elements, --segments and --repeat must be at least 1");
     }
     let splines = synthetic_splines(args.splines, args.segments);
     let opts = FitOptions::new(args.elements);
     let elements = (splines.len() * args.elements) as f64;
-    println!(
-        "{} curves x {} elements ({} cubic segments each); backend {}; {} threads",
-        splines.len(),
-        args.elements,
-        args.segments,
-        backend.describe(),
-        rayon::current_num_threads()
-    );
+    if !args.json {
+        println!(
+            "{} curves x {} elements ({} cubic segments each); backend {}; {} threads",
+            splines.len(),
+            args.elements,
+            args.segments,
+            backend.describe(),
+            rayon::current_num_threads()
+        );
+    }
+    let (name, precision, adapter) = match backend {
+        Backend::Cpu => ("cpu", "f64", None),
+        Backend::Gpu(g) => ("gpu", g.precision.name(), Some(g.ctx.describe())),
+    };
+    let mut table = Table {
+        json: args.json,
+        backend: name,
+        precision,
+        stages: Vec::new(),
+    };
 
     // Interpolation alone, on the relaxed pairs of the synthetic fit.
     let mut pairs: Vec<HermitePair> = Vec::with_capacity(splines.len() * args.elements);
@@ -125,10 +265,12 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     let (mut times, _) = time_runs(args.repeat, |t| {
         Ok(backend.interpolate_timed(&pairs, opts.cohelical_tol, t)?)
     })?;
-    report(
+    table.report(
+        "ghosh_interpolation",
         "ghosh interpolation",
         pairs.len() as f64,
         "elements",
+        false,
         &mut times,
     );
     drop(pairs);
@@ -137,10 +279,15 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         time_runs(args.repeat, |t| Ok(backend.fit_timed(&splines, &opts, t)?))?;
     let failures = results.iter().filter(|r| r.is_err()).count();
     drop(results);
-    report("whole fit          ", elements, "elements", &mut times);
-    if failures > 0 {
-        println!("  ({failures} curves failed to fit)");
-    }
+    table.report(
+        "whole_fit",
+        "whole fit          ",
+        elements,
+        "elements",
+        false,
+        &mut times,
+    );
+    table.failed(failures, "curves failed to fit");
 
     // Arc-length sampling of the input splines (spline_sample), at the
     // fit's `2N + 1` points.
@@ -149,10 +296,12 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     let (mut times, _) = time_runs(args.repeat, |t| {
         Ok(backend.sample_timed(&splines, n_samples, t)?)
     })?;
-    report(
+    table.report(
+        "spline_sampling",
         &format!("spline sampling ({} points/curve)", n_samples + 1),
         (splines.len() * (n_samples + 1)) as f64,
         "points",
+        false,
         &mut times,
     );
 
@@ -165,10 +314,12 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     let m = EVAL_POINTS_PER_ELEMENT * args.elements + 1;
     let _ = backend.evaluate(&chains[..chains.len().min(16)], m)?; // warm-up, compile
     let (mut times, _) = time_runs(args.repeat, |t| Ok(backend.evaluate_timed(&chains, m, t)?))?;
-    report(
+    table.report(
+        "helix_evaluation",
         &format!("helix evaluation ({m} points/curve)"),
         (chains.len() * m) as f64,
         "points",
+        false,
         &mut times,
     );
 
@@ -179,10 +330,12 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     let (mut times, _) = time_runs(args.repeat, |t| {
         Ok(backend.integrate_timed(&problems, FRENET_STEPS, t)?)
     })?;
-    report(
+    table.report(
+        "frenet_integration",
         &format!("frenet integration ({FRENET_STEPS} steps)"),
         problems.len() as f64,
         "spirals",
+        false,
         &mut times,
     );
 
@@ -204,15 +357,15 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
         })
         .count();
     drop(solved);
-    report(
+    table.report(
+        "euler_completion",
         "euler completion (LM)",
         pairs.len() as f64,
         "completions",
+        false,
         &mut times,
     );
-    if missed > 0 {
-        println!("  ({missed} pairs did not converge)");
-    }
+    table.failed(missed, "pairs did not converge");
     let few = &pairs[..pairs.len().min(PAPER_PAIRS)];
     let paper = PaperOptions::default();
     let (mut times, _) = time_runs(args.repeat, |_| {
@@ -221,10 +374,12 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
             .map(|p| paper_spiral(p.p0, p.t0, p.p1, p.t1, &paper))
             .collect::<Vec<_>>())
     })?;
-    report(
+    table.report(
+        "euler_completion_paper",
         &format!("euler completion (paper Alg. 1, cpu, {} pairs)", few.len()),
         few.len() as f64,
         "completions",
+        true,
         &mut times,
     );
 
@@ -237,15 +392,15 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     })?;
     let failed = solved.iter().filter(|r| r.is_err()).count();
     drop(solved);
-    report(
+    table.report(
+        "atph_interpolation",
         "atph interpolation",
         atph_pairs.len() as f64,
         "interpolations",
+        false,
         &mut times,
     );
-    if failed > 0 {
-        println!("  ({failed} pairs could not be interpolated)");
-    }
+    table.failed(failed, "pairs could not be interpolated");
     drop(atph_pairs);
 
     // RRMF motions (paper 001), on the CPU with rayon whatever the backend:
@@ -259,10 +414,12 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
             .filter(|p| interpolate_local(p.0, p.1, p.2, p.3).is_ok())
             .count())
     })?;
-    report(
+    table.report(
+        "rrmf_local_interpolation",
         "rrmf local interpolation (cpu)",
         local.len() as f64,
         "interpolations",
+        true,
         &mut times,
     );
     let streams = synthetic_streams(args.splines.div_ceil(100), MOTION_STREAM_POINTS);
@@ -277,12 +434,14 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
             })
             .sum::<Result<usize>>()
     })?;
-    report(
+    table.report(
+        "rrmf_spline",
         &format!(
             "rrmf spline ({MOTION_STREAM_POINTS}-point streams, build + {MOTION_SAMPLES} samples, cpu)"
         ),
         (streams.len() * MOTION_SAMPLES) as f64,
         "points",
+        true,
         &mut times,
     );
 
@@ -290,28 +449,50 @@ pub fn run(args: &BenchArgs, backend: &Backend) -> Result<()> {
     // helices; then four curls), rayon inside the lift (the paper: about a
     // minute in Matlab).
     let drawings = [
-        ("", crate::synthetic::synthetic_sketch(SKETCH_VERTICES)),
         (
+            "sketch_lift",
+            "",
+            crate::synthetic::synthetic_sketch(SKETCH_VERTICES),
+        ),
+        (
+            "sketch_lift_curls",
             "4 curls: ",
             crate::synthetic::synthetic_sketch_curls(SKETCH_VERTICES, 4),
         ),
     ];
-    for (kind, drawing) in &drawings {
+    for (stage, kind, drawing) in &drawings {
         let (mut times, lifted) = time_runs(args.repeat, |_| {
             Ok(crate::sketch::lift_sketch(
                 drawing,
                 &crate::sketch::SketchOptions::default(),
             )?)
         })?;
-        report(
+        table.report(
+            stage,
             &format!(
                 "sketch lift ({SKETCH_VERTICES} vertices, {kind}{} helices, cpu)",
                 lifted.helices.len()
             ),
             SKETCH_VERTICES as f64,
             "vertices",
+            true,
             &mut times,
         );
+    }
+    if args.json {
+        let report = BenchReport {
+            version: super::JSON_VERSION,
+            backend: table.backend,
+            precision: table.precision,
+            adapter,
+            thread_count: rayon::current_num_threads(),
+            spline_count: args.splines,
+            elements_per_curve: args.elements,
+            segments_per_spline: args.segments,
+            run_count: args.repeat,
+            stages: table.stages,
+        };
+        println!("{}", serde_json::to_string_pretty(&report)?);
     }
     Ok(())
 }

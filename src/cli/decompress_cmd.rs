@@ -1,16 +1,71 @@
 //! `strandfit decompress IN.sfh -o OUT`: the container's helices back to
 //! polylines in any supported format, in the source's coordinate convention
-//! (the writer gets the source's affine and header back).
+//! (the writer gets the source's affine and header back). `--json`: the
+//! report on standard output (`docs/schemas/decompress.schema.json`).
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
 
 use anyhow::{bail, Result};
+use serde::Serialize;
 
 use super::inspect_cmd::parse_format;
-use super::io_util::{check_losses, write_failed};
+use super::io_util::{carried_data, check_losses, failure_report, size_on_disk, write_failed};
 use super::usage;
 use super::DecompressArgs;
-use crate::io::{create_writer, ContainerReader, Curve, Format, Shape};
+use crate::io::{create_writer, ContainerReader, Curve, Format, Metadata, Shape};
+
+/// The `--json` report; `docs/schemas/decompress.schema.json`.
+#[derive(Debug, Serialize)]
+pub struct DecompressReport {
+    /// The JSON schema version ([`super::JSON_VERSION`]).
+    pub version: u32,
+    pub input: String,
+    pub output: String,
+    /// Always `sfh`.
+    pub input_format: &'static str,
+    pub output_format: &'static str,
+    /// 3: the arc codec; 1: helix chains.
+    pub container_version: u16,
+    /// The container's tolerance (version 3: two-sided Hausdorff; version
+    /// 1: as compressed, absent with a fixed element count).
+    pub tolerance: Option<f64>,
+    /// Every curve written is within `tolerance` of its input, two-sided:
+    /// a version-3 container at its default points (not with
+    /// `--points`/`--step`, nor for version 1).
+    pub guaranteed: bool,
+    /// `--points`, when given.
+    pub points_per_curve: Option<usize>,
+    /// `--step`, when given.
+    pub step: Option<f64>,
+    /// Index in the container of the first curve written (`--curves A:`).
+    pub first: u64,
+    /// Curves written.
+    pub curve_count: u64,
+    /// Curves in the container.
+    pub container_curve_count: u64,
+    /// Points written.
+    pub output_point_count: u64,
+    /// Per-point and per-curve values written to the output, by name.
+    pub point_data_carried: Vec<String>,
+    pub curve_data_carried: Vec<String>,
+    /// What the output format does not hold (warned about on stderr).
+    pub dropped: Vec<String>,
+    /// Bytes read from the container (with `--curves`, only the blocks
+    /// holding the range, its header and its index).
+    pub bytes_in: u64,
+    pub bytes_out: u64,
+    pub seconds: f64,
+    pub curves_per_second: f64,
+    pub points_per_second: f64,
+}
 
 pub fn run(args: &DecompressArgs) -> Result<()> {
+    let result = decompress(args);
+    failure_report(result, args.json, Some(&args.input), Some(&args.output))
+}
+
+fn decompress(args: &DecompressArgs) -> Result<()> {
     if let Some(s) = args.step {
         if !(s > 0.0 && s.is_finite()) {
             usage!("--step must be positive, got {s}");
@@ -23,6 +78,7 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
     if crate::codec::container_version(&args.input).is_some_and(|v| v >= 2) {
         return run_codec(args, to);
     }
+    let started = Instant::now();
     let reader = ContainerReader::open(&args.input)?;
     if args.curves.is_some() {
         bail!(
@@ -31,11 +87,15 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
             args.input.display()
         );
     }
-    let mut writer = output_writer(args, to, &reader.header().source.to_metadata())?;
+    let header = reader.header().clone();
+    let meta = header.source.to_metadata();
+    let (mut writer, target, dropped) = output_writer(args, to, &meta)?;
     let mut n = 0u64;
+    let mut points_out = 0u64;
     for c in reader {
         let c = c?;
         let points = shape_points(&c.shape, args.points, args.step, c.source_points);
+        points_out += points.len() as u64;
         writer
             .write_curve(&Curve {
                 id: c.id,
@@ -47,11 +107,64 @@ pub fn run(args: &DecompressArgs) -> Result<()> {
         n += 1;
     }
     writer.finish()?;
-    eprintln!(
-        "{} -> {}: {n} curves",
-        args.input.display(),
-        args.output.display()
-    );
+    let (point_data_carried, curve_data_carried) = carried_data(&meta, target);
+    let report = DecompressReport {
+        container_version: 1,
+        tolerance: header.tolerance,
+        guaranteed: false,
+        first: 0,
+        curve_count: n,
+        container_curve_count: n,
+        output_point_count: points_out,
+        point_data_carried,
+        curve_data_carried,
+        dropped,
+        bytes_in: size_on_disk(&args.input),
+        ..base_report(args, target, started)
+    };
+    finish(args, report, format!("{n} curves"))
+}
+
+/// A report with the paths, formats, sampling and output size filled in
+/// (and the clock read); the counts are the caller's.
+fn base_report(args: &DecompressArgs, target: Format, started: Instant) -> DecompressReport {
+    DecompressReport {
+        version: super::JSON_VERSION,
+        input: args.input.display().to_string(),
+        output: args.output.display().to_string(),
+        input_format: "sfh",
+        output_format: target.extension(),
+        container_version: 0,
+        tolerance: None,
+        guaranteed: false,
+        points_per_curve: args.points,
+        step: args.step,
+        first: 0,
+        curve_count: 0,
+        container_curve_count: 0,
+        output_point_count: 0,
+        point_data_carried: Vec::new(),
+        curve_data_carried: Vec::new(),
+        dropped: Vec::new(),
+        bytes_in: 0,
+        bytes_out: size_on_disk(&args.output),
+        seconds: started.elapsed().as_secs_f64(),
+        curves_per_second: 0.0,
+        points_per_second: 0.0,
+    }
+}
+
+/// The report's rates; then the report on standard output (`--json`) or
+/// the summary `{input} -> {output}: {what}` on stderr.
+fn finish(args: &DecompressArgs, mut report: DecompressReport, what: String) -> Result<()> {
+    let s = report.seconds.max(1e-9);
+    report.curves_per_second = report.curve_count as f64 / s;
+    report.points_per_second = report.output_point_count as f64 / s;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        eprintln!("{} -> {}: {what}", report.input, report.output);
+    }
     Ok(())
 }
 
@@ -98,18 +211,23 @@ fn sample_chain(
 
 /// The writer of the output, in the source's convention, after the check of
 /// what the target format cannot hold (warned about, or an error with
-/// `--strict`).
+/// `--strict`); with the target format and what it drops.
 fn output_writer(
     args: &DecompressArgs,
     to: Option<Format>,
-    meta: &crate::io::Metadata,
-) -> Result<Box<dyn crate::io::CurveWriter>> {
+    meta: &Metadata,
+) -> Result<(Box<dyn crate::io::CurveWriter>, Format, Vec<String>)> {
     let target = match to {
         Some(f) => f,
         None => Format::from_path(&args.output)?,
     };
-    check_losses(&args.input, &args.output, &target.losses(meta), args.strict)?;
-    Ok(create_writer(&args.output, Some(target), meta)?)
+    let dropped = target.losses(meta);
+    check_losses(&args.input, &args.output, &dropped, args.strict)?;
+    Ok((
+        create_writer(&args.output, Some(target), meta)?,
+        target,
+        dropped,
+    ))
 }
 
 /// A version-3 container: the codec's points (the guarantee's), or a
@@ -117,9 +235,11 @@ fn output_writer(
 fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
     use crate::codec::{decompress_range, CodecReader};
 
+    let started = Instant::now();
     let mut reader = CodecReader::open(&args.input)?;
     let header = reader.header().clone();
-    if args.points.is_some() || args.step.is_some() {
+    let resampled = args.points.is_some() || args.step.is_some();
+    if resampled {
         eprintln!(
             "warning: {}: resampling with --points/--step gives up the guarantee that every \
              curve is within {} of its input (it holds for the default points)",
@@ -129,11 +249,15 @@ fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
     }
     let mut meta = header.source.to_metadata();
     meta.point_data_names = header.point_data_names.clone();
-    let mut writer = output_writer(args, to, &meta)?;
+    let (mut writer, target, dropped) = output_writer(args, to, &meta)?;
     let (points, step) = (args.points, args.step);
     let width = header.point_data_names.len();
-    let map =
-        move |c: crate::codec::DecodedCurve| crate::codec::output_curve(c, points, step, width);
+    let points_out = AtomicU64::new(0);
+    let map = |c: crate::codec::DecodedCurve| {
+        let c = crate::codec::output_curve(c, points, step, width);
+        points_out.fetch_add(c.points.len() as u64, Ordering::Relaxed);
+        c
+    };
     let total = reader.curve_count();
     let range = match args.curves {
         None => 0..total,
@@ -146,22 +270,31 @@ fn run_codec(args: &DecompressArgs, to: Option<Format>) -> Result<()> {
     .map_err(|e| anyhow::anyhow!("{e}"))?;
     bar.finish();
     writer.finish()?;
-    if args.curves.is_some() {
-        eprintln!(
-            "{} -> {}: curves {}..{} of {total} ({n} curves; read {} of {} bytes)",
-            args.input.display(),
-            args.output.display(),
+    let (point_data_carried, curve_data_carried) = carried_data(&meta, target);
+    let report = DecompressReport {
+        container_version: crate::codec::CONTAINER_VERSION,
+        tolerance: Some(header.tolerance),
+        guaranteed: !resampled,
+        first: range.start,
+        curve_count: n,
+        container_curve_count: total,
+        output_point_count: points_out.into_inner(),
+        point_data_carried,
+        curve_data_carried,
+        dropped,
+        bytes_in: reader.bytes_read(),
+        ..base_report(args, target, started)
+    };
+    let what = if args.curves.is_some() {
+        format!(
+            "curves {}..{} of {total} ({n} curves; read {} of {} bytes)",
             range.start,
             range.end,
             reader.bytes_read(),
             reader.size()
-        );
+        )
     } else {
-        eprintln!(
-            "{} -> {}: {n} curves",
-            args.input.display(),
-            args.output.display()
-        );
-    }
-    Ok(())
+        format!("{n} curves")
+    };
+    finish(args, report, what)
 }

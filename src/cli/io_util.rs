@@ -329,3 +329,75 @@ impl DelayedBar {
         self.bar.finish_and_clear();
     }
 }
+
+/// The names of `meta`'s per-point and per-curve values that a writer of
+/// `target` keeps (the others are in [`crate::io::Format::losses`]).
+pub fn carried_data(
+    meta: &crate::io::Metadata,
+    target: crate::io::Format,
+) -> (Vec<String>, Vec<String>) {
+    let point = meta
+        .point_data_names
+        .iter()
+        .filter(|n| target.keeps_point_data(n))
+        .cloned()
+        .collect();
+    let curve = if target.keeps_curve_data() {
+        meta.curve_data_names.clone()
+    } else {
+        Vec::new()
+    };
+    (point, curve)
+}
+
+#[derive(Serialize)]
+struct RunFailure {
+    version: u32,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    input: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    output: Option<String>,
+    failure: String,
+}
+
+/// `--json` for a run that failed (exit status 1): `{"version", "input",
+/// "output", "failure"}` on standard output (`input` and `output` when the
+/// command has them), the failure as it is also written on stderr; then
+/// the error itself. A usage error (exit status 2) writes nothing, as
+/// without `--json`.
+pub fn failure_report(
+    result: Result<()>,
+    json: bool,
+    input: Option<&std::path::Path>,
+    output: Option<&std::path::Path>,
+) -> Result<()> {
+    if let Err(e) = &result {
+        if json && e.downcast_ref::<super::UsageError>().is_none() {
+            let doc = RunFailure {
+                version: super::JSON_VERSION,
+                input: input.map(|p| p.display().to_string()),
+                output: output.map(|p| p.display().to_string()),
+                failure: format!("{e:#}"),
+            };
+            println!("{}", serde_json::to_string_pretty(&doc)?);
+        }
+    }
+    result
+}
+
+/// The bytes of a file, or of the files in a folder (a TRX folder), at
+/// any depth; 0 when it cannot be read.
+pub fn size_on_disk(path: &std::path::Path) -> u64 {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => std::fs::read_dir(path)
+            .map(|entries| {
+                entries
+                    .filter_map(|e| e.ok())
+                    .map(|e| size_on_disk(&e.path()))
+                    .sum()
+            })
+            .unwrap_or(0),
+        Ok(m) => m.len(),
+        Err(_) => 0,
+    }
+}

@@ -427,6 +427,10 @@ pub struct DecompressArgs {
     /// instead of a warning.
     #[arg(long)]
     pub strict: bool,
+    /// Machine-readable report on standard output (curves, points, bytes,
+    /// whether the tolerance guarantee holds, points/s).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `A:B`, `A:` or `:B` (curve indices).
@@ -616,6 +620,10 @@ pub struct ConvertArgs {
     /// Output format (default: from the extension).
     #[arg(long)]
     pub to: Option<String>,
+    /// Machine-readable report on standard output (curves, points, data
+    /// carried and dropped).
+    #[arg(long)]
+    pub json: bool,
     #[command(flatten)]
     pub care: CareArgs,
 }
@@ -634,6 +642,10 @@ pub struct BenchArgs {
     /// Timed repetitions (the best is reported with the median).
     #[arg(long, default_value_t = 5)]
     pub repeat: usize,
+    /// Machine-readable report on standard output (one row per stage)
+    /// instead of the table.
+    #[arg(long)]
+    pub json: bool,
     #[command(flatten)]
     pub engine: BackendArgs,
 }
@@ -712,7 +724,7 @@ pub fn main() -> ExitCode {
         Command::Convert(a) => convert_cmd::run(a),
         Command::Split(a) => shards_cmd::split(a),
         Command::Merge(a) => shards_cmd::merge(a),
-        Command::Bench(a) => a.engine.open().and_then(|b| bench_cmd::run(a, &b)),
+        Command::Bench(a) => bench_cmd::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
