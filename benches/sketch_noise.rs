@@ -69,6 +69,10 @@ fn main() {
         "| drawing | noise σ/L | seed | helices | depth / exact's | drawn err / σ | noise found / L | E_max / L | ms |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
+    // One drawing only: SKETCH_DRAWING="3 curls".
+    if let (true, Ok(only)) = (full, std::env::var("SKETCH_DRAWING")) {
+        drawings.retain(|(name, _)| *name == only);
+    }
     for (name, d) in &drawings {
         let l = length(d);
         let exact = lift_sketch(d, &SketchOptions::default()).expect("exact drawing");
