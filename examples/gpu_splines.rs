@@ -9,9 +9,8 @@
 
 use std::error::Error;
 
-use strandfit::synthetic::synthetic_splines;
-use strandfit::FitOptions;
-use strandfit::{Backend, BackendChoice, ParamCurve3, PrecisionChoice};
+use strandfit::{Backend, BackendChoice, BezierSpline, DVec3, FitOptions};
+use strandfit::{ParamCurve3, PrecisionChoice};
 
 fn main() -> Result<(), Box<dyn Error>> {
     run(std::env::args().skip(1).collect())
@@ -34,8 +33,7 @@ pub fn run(args: Vec<String>) -> Result<(), Box<dyn Error>> {
         }
     };
 
-    // Four-segment cubic splines, deterministic.
-    let splines = synthetic_splines(curves, 4);
+    let splines = (0..curves).map(strand).collect::<Result<Vec<_>, _>>()?;
     let opts = FitOptions::new(elements);
     let fitted = backend.fit(&splines, &opts)?;
     let reference = Backend::Cpu.fit(&splines, &opts)?;
@@ -68,4 +66,23 @@ pub fn run(args: Vec<String>) -> Result<(), Box<dyn Error>> {
         return Err("the backend's fits differ from the CPU reference".into());
     }
     Ok(())
+}
+
+/// Strand `c`: a four-segment cubic spline through five points of a
+/// wandering helix (its radius varying slowly), about the shape of a hair,
+/// each segment the Hermite cubic of the helix's points and derivatives.
+fn strand(c: usize) -> Result<BezierSpline, strandfit::spline::SplineError> {
+    let phase = c as f64 * 0.618;
+    let pos = |u: f64| {
+        let r = 1.0 + 0.3 * (0.7 * u + phase).sin();
+        let a = 2.0 * u + phase;
+        DVec3::new(r * a.cos(), r * a.sin(), 0.8 * u + 0.2 * (1.3 * u).sin())
+    };
+    let vel = |u: f64| (pos(u + 1e-6) - pos(u - 1e-6)) / 2e-6;
+    let h = 1.5; // four segments of u ∈ [0, 6]
+    let mut control = vec![pos(0.0)];
+    for (a, b) in (0..4).map(|k| (k as f64 * h, (k + 1) as f64 * h)) {
+        control.extend([pos(a) + vel(a) * h / 3.0, pos(b) - vel(b) * h / 3.0, pos(b)]);
+    }
+    BezierSpline::from_control_points(&control)
 }

@@ -477,7 +477,7 @@ fn depth(r: &strandfit::sketch::SketchLift) -> f64 {
 
 #[test]
 fn the_noise_of_a_drawing_is_estimated() {
-    use strandfit::sketch::estimate::estimate_noise;
+    use strandfit::sketch::estimate_noise;
     use strandfit::synthetic::synthetic_sketch_curls;
     for k in 1..=4 {
         let d = synthetic_sketch_curls(500, k);

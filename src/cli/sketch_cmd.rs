@@ -9,7 +9,7 @@
 //! lifted `z`), per junction the tangent angle and position gap left, and
 //! the projection error; `--preview` writes an SVG of the drawing with the
 //! projected fit over it. `--g1` adds the lift re-fitted exactly G1 by the
-//! floating-tangents fitter ([`crate::sketch::g1`]): its chain in compact
+//! floating-tangents fitter ([`crate::sketch::refit_g1`]): its chain in compact
 //! form, samples of it, and how far its projection moved from the drawing.
 
 use std::f64::consts::PI;

@@ -1,49 +1,6 @@
 //! The `.sfh` container, version 3: codec blocks with an index at the end.
-//!
-//! Layout (`docs/container.md` has the details; `v` is a LEB128 varint,
-//! fixed-size integers are little endian):
-//!
-//! ```text
-//! 0   8  magic 89 53 46 48 0D 0A 1A 0A
-//! 8   2  version = 3
-//! 10  v  header length H, then H bytes: encoding (0 raw, 1 DEFLATE),
-//!        the binary header ([`CodecHeader`]), then u32 CRC-32 of the H bytes
-//!     …  blocks: v curves, v geometry length, v side length (then v side
-//!        inflated length if not 0), the geometry (the codec's range-coded
-//!        stream) and the side data (DEFLATE: per curve its id and
-//!        per-curve values), u32 CRC-32 of all of the block's bytes before it
-//!     …  index: v blocks, per block v bytes and v curves
-//! end-12 u32 CRC-32 of the index, u32 index length, "SFHE"
-//! ```
-//!
-//! Every block decodes alone (its entropy models start afresh), so blocks
-//! are encoded and decoded in parallel and a range of curves is read by
-//! seeking to its blocks through the index. The framing costs about 40
-//! bytes and the header about as much again: on a file of a few hundred
-//! curves that is a few per cent of the whole.
-//!
-//! ```
-//! use strandfit::codec::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn, CONTAINER_VERSION};
-//! use strandfit::io::{Format, Metadata, SourceMeta, CONTAINER_MAGIC};
-//! use strandfit::DVec3;
-//!
-//! // One block of two curves, in memory.
-//! let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&Metadata::new(Format::Json), None), vec![]);
-//! let helix: Vec<DVec3> = (0..30).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s)).collect();
-//! let curves = [&helix, &helix].map(|points| CurveIn { id: None, points, point_data: &[], curve_data: &[] });
-//! let mut w = CodecWriter::in_memory(&header);
-//! w.write_block(&encode_block_bytes(&curves, &header.params(), 0, 0).unwrap()).unwrap();
-//! let bytes = w.finish_bytes().unwrap();
-//! // The layout: magic, version; at the end the index, its CRC, its length, "SFHE".
-//! let n = bytes.len();
-//! assert_eq!((&bytes[..8], &bytes[8..10]), (&CONTAINER_MAGIC[..], &CONTAINER_VERSION.to_le_bytes()[..]));
-//! assert_eq!(&bytes[n - 4..], b"SFHE");
-//! let index_len = u32::from_le_bytes(bytes[n - 8..n - 4].try_into().unwrap()) as usize;
-//! let index = &bytes[n - 12 - index_len..n - 12];
-//! assert_eq!(crc32fast::hash(index).to_le_bytes(), bytes[n - 12..n - 8]);
-//! assert_eq!((index[0], index[index_len - 1]), (1, 2)); // 1 block, of 2 curves
-//! assert_eq!(CodecReader::from_bytes(bytes).unwrap().curve_count(), 2);
-//! ```
+//! Its layout is described in the codec's module documentation (and in
+//! `docs/container.md`, in full).
 
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom, Write};
@@ -56,7 +13,7 @@ use super::quantise::Steps;
 use super::{decode_block, CodecParams, EncodedBlock};
 use crate::io::{AtomicFile, IoError, SourceMeta, CONTAINER_MAGIC as MAGIC};
 
-/// The container format version this module reads and writes.
+/// The container format version this crate reads and writes.
 ///
 /// ```
 /// # use strandfit::codec::*;

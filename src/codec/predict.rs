@@ -68,23 +68,6 @@ pub fn perpendicular_part(n: DVec3, t: DVec3) -> DVec3 {
 }
 
 impl ChainState {
-    /// The state at the start of a curve: the first element is a corner,
-    /// so only `point` and the reference direction matter.
-    // Unused in the crate since the module became private (it was
-    // reachable through the public one).
-    #[allow(dead_code)]
-    pub fn start(point: DVec3, direction: DVec3) -> Self {
-        let tangent = direction;
-        ChainState {
-            point,
-            tangent,
-            normal: any_perpendicular(tangent),
-            curvature: 0.0,
-            chord_steps: 0,
-            bend: any_perpendicular(tangent),
-        }
-    }
-
     /// Chord length the prediction assumes: the previous chord's (at least
     /// one length step).
     pub fn frame_chord(&self, length_step: f64) -> f64 {

@@ -161,14 +161,6 @@ impl Neighbours {
         }
     }
 
-    /// Half step of the points lattice.
-    // Unused in the crate since the module became private (it was
-    // reachable through the public one).
-    #[allow(dead_code)]
-    pub fn half(&self) -> f64 {
-        self.half
-    }
-
     /// A points curve, on the lattice (its points are `k · half`).
     pub fn push_lattice(&mut self, g: Vec<[i64; 3]>) {
         let p: Vec<DVec3> = g.iter().map(|&k| bcc_point(k, self.half)).collect();
@@ -186,29 +178,9 @@ impl Neighbours {
     /// walking `distance` along it from its first point (the first vertex
     /// at or beyond it, or the last), relative to that first point: the
     /// prediction of a curve's first chord from the neighbour it is
-    /// anchored on.
-    // Unused in the crate since the module became private (it was
-    // reachable through the public one).
-    #[allow(dead_code)]
-    pub fn walk(&self, k: usize, at_end: bool, distance: f64) -> Option<DVec3> {
-        let p = self.points.get(k)?.as_ref()?;
-        if p.len() < 2 {
-            return None;
-        }
-        let at = |i: usize| if at_end { p[p.len() - 1 - i] } else { p[i] };
-        let mut walked = 0.0;
-        for i in 1..p.len() {
-            walked += at(i).distance(at(i - 1));
-            if walked >= distance {
-                return Some(at(i) - at(0));
-            }
-        }
-        Some(at(p.len() - 1) - at(0))
-    }
-
-    /// [`walk`](Self::walk), and the first vertex at or beyond half the
-    /// distance (relative to the same first point): the walked stretch's
-    /// middle, from which its bulge is estimated.
+    /// anchored on; and the first vertex at or beyond half the distance
+    /// (relative to the same first point): the walked stretch's middle,
+    /// from which its bulge is estimated.
     pub fn walk_with_middle(
         &self,
         k: usize,

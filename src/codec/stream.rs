@@ -1,45 +1,5 @@
-//! Whole files through the codec: [`compress_stream`] reads curves from any
-//! [`CurveReader`] into a version-3 container, block by block;
-//! [`decompress_stream`] writes a container's curves to any
-//! [`CurveWriter`], decoding several blocks at once. Memory is bounded by a
-//! few blocks whatever the file's size; neither prints (progress goes to a
-//! callback).
-//!
-//! ```
-//! use strandfit::codec::{compress_stream, decompress_stream, output_curve, CodecHeader, CodecReader};
-//! use strandfit::io::{create_writer, open_reader, read_all, Curve, Format, Metadata, SourceMeta};
-//! use strandfit::DVec3;
-//!
-//! // A .tck file of 50 helices, compressed to 0.01 and back to .tck.
-//! let dir = tempfile::tempdir().unwrap();
-//! let [input, packed, output] = ["in.tck", "in.sfh", "out.tck"].map(|f| dir.path().join(f));
-//! let mut w = create_writer(&input, None, &Metadata::new(Format::Tck)).unwrap();
-//! for k in 0..50 {
-//!     let s = (0..40).map(|i| 0.2 * i as f64);
-//!     w.write_curve(&Curve::from_points(s.map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s + k as f64)).collect()))
-//!         .unwrap();
-//! }
-//! w.finish().unwrap();
-//!
-//! let mut reader = open_reader(&input, None).unwrap();
-//! let source = SourceMeta::from_metadata(reader.metadata(), Some(&input));
-//! let header = CodecHeader::new(0.01, source, vec![]);
-//! let summary = compress_stream(&mut *reader, &input, &packed, &header, None, &mut |_| {}).unwrap();
-//! assert_eq!(summary.curves, 50);
-//! assert!(summary.bytes * 5 < std::fs::metadata(&input).unwrap().len());
-//!
-//! let mut container = CodecReader::open(&packed).unwrap();
-//! let mut w = create_writer(&output, None, &container.header().source.to_metadata()).unwrap();
-//! let as_decoded = |c| output_curve(c, None, None, 0);
-//! assert_eq!(decompress_stream(&mut container, &mut *w, &as_decoded, &mut |_| {}).unwrap(), 50);
-//! w.finish().unwrap();
-//! // Every curve within the tolerance of the one read.
-//! let ((_, before), (_, after)) = (read_all(&input, None).unwrap(), read_all(&output, None).unwrap());
-//! assert_eq!(after.len(), 50);
-//! for (a, b) in before.iter().zip(&after) {
-//!     assert!(strandfit::metrics::hausdorff(&a.points, &b.points).unwrap() <= 0.01);
-//! }
-//! ```
+//! Whole files through the codec, block by block (described in the codec's
+//! module documentation).
 
 use std::path::Path;
 

@@ -1,69 +1,7 @@
 //! Frenet–Serret integration of a 3D Euler spiral, in `f64` (the reference).
-//!
-//! Definition 4.1 of paper 004: from `x(0) = x₀` and the frame
-//! `F = [T N B]` (columns, orthonormal, right-handed),
-//!
-//! ```text
-//! x′ = T,   T′ = κN,   N′ = −κT + τB,   B′ = −τN,   κ = κ₀ + γs,  τ = τ₀ + δs.
-//! ```
-//!
-//! In matrix form `F′ = F Ŵ`, where `Ŵ` is the cross-product matrix of the
-//! Darboux vector in body coordinates `W = (τ, 0, κ)` (so `F Ŵ e₁ = κN`
-//! and so on). The frame is a path in SO(3), and this module integrates it
-//! there:
-//!
-//! **Scaling.** With `u = s/L ∈ [0, 1]` the rates become dimensionless,
-//! `ω(u) = (t₀ + d u, 0, k₀ + g u)` with `k₀ = κ₀L`, `g = γL²`, `t₀ = τ₀L`,
-//! `d = δL²` ([`FrenetProblem::rates`]), and the offset `(x − x₀)/L` is
-//! `O(1)`. The GPU kernel works in exactly these variables (its `f32` values
-//! stay `O(1)`); the host multiplies by `L` in `f64`.
-//!
-//! **Frame: fourth-order Magnus steps.** Over an interval `[u, u + ℓ]` the
-//! frame obeys `F(u + ℓ) = F(u) exp(Ω̂)`. Since `ω` is linear, write
-//! `ω = a + b(u − u_m)` about the interval's midpoint `u_m`; the first two
-//! Magnus terms (for the right action `F′ = F Ŵ` the commutator enters with
-//! a `+`) are, in closed form,
-//!
-//! ```text
-//! Ω = ∫ω du + ½ ∫∫_{u₂<u₁} ω(u₂) × ω(u₁) = ℓ a + ℓ³/12 a × b
-//!   = ( ℓ(t₀ + d u_m),  ℓ³ c / 12,  ℓ(k₀ + g u_m) ),     c = k₀d − t₀g,
-//! ```
-//!
-//! (`a × b` has only an `N` component, and `c` is the same everywhere).
-//! This is what the two-Gauss-point Magnus method of Iserles and Nørsett
-//! evaluates for linear `ω`; the dropped terms are `O(ℓ⁵)`, so the rotation
-//! is locally fifth and globally **fourth order**. `exp` is taken as a unit
-//! quaternion `r = (cos φ/2, sinc(φ/2) Ω/2)`, `φ = |Ω|` (Rodrigues); the
-//! frame is read off the accumulated quaternion normalised, so it is
-//! orthonormal to a few `ε` whatever the step count (the paper's explicit
-//! Euler drifts off SO(3) linearly in `h`, `ERRATA.md` §004). The
-//! accumulated quaternion is updated as `q + q(r − 1)` in two words, so
-//! that rounding does not drift linearly in the step count either
-//! (`TwoQuat::rotate`). Each step of
-//! `h = 1/N` is taken as two such rotations of `ℓ = h/2`, so the frame is
-//! also known at the step's midpoint.
-//!
-//! **Position: Simpson on the tangent.** `(x_{k+1} − x_k)/L =
-//! h/6 (T_k + 4 T_{k+½} + T_{k+1})` with the tangents of the marched frames
-//! (errors `O(h⁴)` globally, and the rule integrates cubics exactly), so the
-//! position is globally `O(h⁴)` too. The increments are summed with
-//! Neumaier's compensated sum, so the sum adds `O(ε)` rather than `O(Nε)`.
-//! Cost per step: two `exp`s (one `sincos` each) and two quaternion
-//! products.
-//!
-//! **Error.** Truncation: `≈ C (Θ/N)⁴` relative, with `Θ = ∫|ω| du` the total
-//! turning; the tests measure order 4 (halving `h` divides the error by 16).
-//! Rounding: `O(εφ)` per rotation in the accumulated quaternion (two-word
-//! update), so `O(εΘ)` in all, plus `O(ε)` per step, independent from step
-//! to step, in the tangents read off it (`≈ √N ε` in the position).
-//!
-//! **Symmetry.** The scheme is self-adjoint: stepping the reversed spiral
-//! ([`FrenetProblem::reversed`], Prop. 5.2) undoes each rotation exactly in
-//! exact arithmetic (the reversed interval's `Ω` is `−D Ω D` with
-//! `D = diag(−1, 1, −1)`, the frame flip `(T, N, B) → (−T, N, −B)`: the
-//! reversed rates have the same mean on the interval and `c̃ = −c`), and
-//! Simpson's nodes are the same frames, so a round trip returns to the start
-//! up to rounding, at any step count.
+//! The scheme and its error are described on `FrenetProblem`. Here: the
+//! two-word quaternion update is `TwoQuat::rotate`, Neumaier's sum
+//! `CompSum`, and `march` the loop that every integration drives.
 
 use glam::{DQuat, DVec3};
 use thiserror::Error;
@@ -97,6 +35,72 @@ pub enum FrenetError {
 }
 
 /// A 3D Euler spiral given by its start (Definition 4.1 of paper 004).
+///
+/// # Integration
+///
+/// Definition 4.1 of paper 004: from `x(0) = x₀` and the frame
+/// `F = [T N B]` (columns, orthonormal, right-handed),
+///
+/// ```text
+/// x′ = T,   T′ = κN,   N′ = −κT + τB,   B′ = −τN,   κ = κ₀ + γs,  τ = τ₀ + δs.
+/// ```
+///
+/// In matrix form `F′ = F Ŵ`, where `Ŵ` is the cross-product matrix of the
+/// Darboux vector in body coordinates `W = (τ, 0, κ)` (so `F Ŵ e₁ = κN`
+/// and so on). The frame is a path in SO(3), and [`integrate`](Self::integrate)
+/// integrates it there:
+///
+/// **Scaling.** With `u = s/L ∈ [0, 1]` the rates become dimensionless,
+/// `ω(u) = (t₀ + d u, 0, k₀ + g u)` with `k₀ = κ₀L`, `g = γL²`, `t₀ = τ₀L`,
+/// `d = δL²` ([`FrenetProblem::rates`]), and the offset `(x − x₀)/L` is
+/// `O(1)`. The GPU kernel works in exactly these variables (its `f32` values
+/// stay `O(1)`); the host multiplies by `L` in `f64`.
+///
+/// **Frame: fourth-order Magnus steps.** Over an interval `[u, u + ℓ]` the
+/// frame obeys `F(u + ℓ) = F(u) exp(Ω̂)`. Since `ω` is linear, write
+/// `ω = a + b(u − u_m)` about the interval's midpoint `u_m`; the first two
+/// Magnus terms (for the right action `F′ = F Ŵ` the commutator enters with
+/// a `+`) are, in closed form,
+///
+/// ```text
+/// Ω = ∫ω du + ½ ∫∫_{u₂<u₁} ω(u₂) × ω(u₁) = ℓ a + ℓ³/12 a × b
+///   = ( ℓ(t₀ + d u_m),  ℓ³ c / 12,  ℓ(k₀ + g u_m) ),     c = k₀d − t₀g,
+/// ```
+///
+/// (`a × b` has only an `N` component, and `c` is the same everywhere).
+/// This is what the two-Gauss-point Magnus method of Iserles and Nørsett
+/// evaluates for linear `ω`; the dropped terms are `O(ℓ⁵)`, so the rotation
+/// is locally fifth and globally **fourth order**. `exp` is taken as a unit
+/// quaternion `r = (cos φ/2, sinc(φ/2) Ω/2)`, `φ = |Ω|` (Rodrigues); the
+/// frame is read off the accumulated quaternion normalised, so it is
+/// orthonormal to a few `ε` whatever the step count (the paper's explicit
+/// Euler drifts off SO(3) linearly in `h`, `ERRATA.md` §004). The
+/// accumulated quaternion is updated as `q + q(r − 1)` in two words, so
+/// that rounding does not drift linearly in the step count either. Each
+/// step of `h = 1/N` is taken as two such rotations of `ℓ = h/2`, so the frame is
+/// also known at the step's midpoint.
+///
+/// **Position: Simpson on the tangent.** `(x_{k+1} − x_k)/L =
+/// h/6 (T_k + 4 T_{k+½} + T_{k+1})` with the tangents of the marched frames
+/// (errors `O(h⁴)` globally, and the rule integrates cubics exactly), so the
+/// position is globally `O(h⁴)` too. The increments are summed with
+/// Neumaier's compensated sum, so the sum adds `O(ε)` rather than `O(Nε)`.
+/// Cost per step: two `exp`s (one `sincos` each) and two quaternion
+/// products.
+///
+/// **Error.** Truncation: `≈ C (Θ/N)⁴` relative, with `Θ = ∫|ω| du` the total
+/// turning; the tests measure order 4 (halving `h` divides the error by 16).
+/// Rounding: `O(εφ)` per rotation in the accumulated quaternion (two-word
+/// update), so `O(εΘ)` in all, plus `O(ε)` per step, independent from step
+/// to step, in the tangents read off it (`≈ √N ε` in the position).
+///
+/// **Symmetry.** The scheme is self-adjoint: stepping the reversed spiral
+/// ([`FrenetProblem::reversed`], Prop. 5.2) undoes each rotation exactly in
+/// exact arithmetic (the reversed interval's `Ω` is `−D Ω D` with
+/// `D = diag(−1, 1, −1)`, the frame flip `(T, N, B) → (−T, N, −B)`: the
+/// reversed rates have the same mean on the interval and `c̃ = −c`), and
+/// Simpson's nodes are the same frames, so a round trip returns to the start
+/// up to rounding, at any step count.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrenetProblem {
     /// `x₀`.
@@ -252,7 +256,8 @@ impl FrenetProblem {
     }
 
     /// Point and frame at `s = L` after `steps` steps of the fourth-order
-    /// scheme (module docs): error `≈ C (Θ/steps)⁴` plus rounding.
+    /// scheme ([integration](FrenetProblem#integration)): error
+    /// `≈ C (Θ/steps)⁴` plus rounding.
     ///
     /// ```
     /// use strandfit::{DVec3, FrenetProblem};

@@ -1,34 +1,6 @@
-//! Ghosh's unique short helix through two points and two tangents
-//! (paper 000, Theorem 5.1, Lemma 5.2 and Algorithm 2, with the corrections
-//! of `shared/papers/ERRATA.md`).
-//!
-//! Given `p₀ ≠ p₁` and unit `t₀, t₁` with `⟨p₁ − p₀, t₁ − t₀⟩ = 0`, there is
-//! exactly one helix that starts at `p₀` with tangent `t₀`, ends at `p₁` with
-//! tangent `t₁`, and turns by `φ* ∈ I₀ = [θ, 2π − θ]` about its axis, where
-//! `θ = arccos⟨t₀, t₁⟩`. `φ*` is the root of `H(φ) = N(φ)/D(φ) = −χ`.
-//!
-//! ## Numerical formulation
-//! `H` has poles at both ends of `I₀`, so we solve the equivalent
-//! `G(φ) = A·N(φ) + B·D(φ) = 0` (ERRATA, "numerical advice"), finite on the
-//! closed interval, with `G(θ) > 0 > G(2π − θ)` whenever `A > 0`. With Ghosh's
-//! orthonormal basis `e₁ ∝ t₁ + t₀`, `e₂ ∝ t₁ × t₀`, `e₃ ∝ t₁ − t₀` and
-//! `d = p₁ − p₀`, dividing `A = √2|⟨d, t₁×t₀⟩|`, `B = (1−t₀·t₁)⟨d, t₁+t₀⟩` by
-//! `sin θ > 0` gives `A = √2|d·e₂|`, `B = 2 sin(θ/2) d·e₁`.
-//!
-//! The unknown is measured from the nearer end of `I₀` (`φ = θ + w` or
-//! `φ = 2π − θ − w`, `w ∈ [0, β]`, `β = π − θ`), so that the factors that
-//! vanish at the ends keep full relative precision:
-//! `t₀·t₁ − cos φ = 2 sin(β − w/2) sin(w/2)` on both sides, and the half-angle
-//! quantities `sin(θ/2) = |t₁ − t₀|/2`, `cos(θ/2) = |t₁ + t₀|/2` come straight
-//! from the data. The root is bracketed and found by Brent's method to full
-//! `f64` precision in `w`.
-//!
-//! Results (Lemma 5.2, corrected):
-//! `τ̄ = sign⟨d, e₂⟩ √((t₀·t₁ − cos φ*)/(1 − cos φ*))`,
-//! `κ̄ = sin(θ/2)/sin(φ*/2)` (so `κ̄² + τ̄² = 1`),
-//! `ω = √(4 sin²(θ/2) + (τ̄φ*)²)/|d|`,
-//! `Ω̄ = τ̄/cos(θ/2) e₁ − tan(θ/2) cot(φ*/2) e₂` (ERRATA 1: minus sign), and
-//! `κ = ωκ̄`, `τ = ωτ̄`, `L = φ*/ω`.
+//! Ghosh's unique short helix through two points and two tangents (paper
+//! 000): `interpolate`, whose documentation states the theorem and the
+//! numerical formulation, and Ghosh's basis for the GPU kernel's host side.
 
 use glam::DVec3;
 
@@ -102,6 +74,40 @@ pub struct ShortHelix {
 /// assert!((h.element.curvature - 0.8).abs() < 1e-12 && (h.element.torsion - 0.4).abs() < 1e-12);
 /// assert!((h.phi - FRAC_PI_2).abs() < 1e-12 && (h.axis - DVec3::Z).length() < 1e-12);
 /// ```
+///
+/// # Method
+///
+/// Ghosh's unique short helix through two points and two tangents
+/// (paper 000, Theorem 5.1, Lemma 5.2 and Algorithm 2, with the corrections
+/// of `shared/papers/ERRATA.md`).
+///
+/// Given `p₀ ≠ p₁` and unit `t₀, t₁` with `⟨p₁ − p₀, t₁ − t₀⟩ = 0`, there is
+/// exactly one helix that starts at `p₀` with tangent `t₀`, ends at `p₁` with
+/// tangent `t₁`, and turns by `φ* ∈ I₀ = [θ, 2π − θ]` about its axis, where
+/// `θ = arccos⟨t₀, t₁⟩`. `φ*` is the root of `H(φ) = N(φ)/D(φ) = −χ`.
+///
+/// ## Numerical formulation
+/// `H` has poles at both ends of `I₀`, so we solve the equivalent
+/// `G(φ) = A·N(φ) + B·D(φ) = 0` (ERRATA, "numerical advice"), finite on the
+/// closed interval, with `G(θ) > 0 > G(2π − θ)` whenever `A > 0`. With Ghosh's
+/// orthonormal basis `e₁ ∝ t₁ + t₀`, `e₂ ∝ t₁ × t₀`, `e₃ ∝ t₁ − t₀` and
+/// `d = p₁ − p₀`, dividing `A = √2|⟨d, t₁×t₀⟩|`, `B = (1−t₀·t₁)⟨d, t₁+t₀⟩` by
+/// `sin θ > 0` gives `A = √2|d·e₂|`, `B = 2 sin(θ/2) d·e₁`.
+///
+/// The unknown is measured from the nearer end of `I₀` (`φ = θ + w` or
+/// `φ = 2π − θ − w`, `w ∈ [0, β]`, `β = π − θ`), so that the factors that
+/// vanish at the ends keep full relative precision:
+/// `t₀·t₁ − cos φ = 2 sin(β − w/2) sin(w/2)` on both sides, and the half-angle
+/// quantities `sin(θ/2) = |t₁ − t₀|/2`, `cos(θ/2) = |t₁ + t₀|/2` come straight
+/// from the data. The root is bracketed and found by Brent's method to full
+/// `f64` precision in `w`.
+///
+/// Results (Lemma 5.2, corrected):
+/// `τ̄ = sign⟨d, e₂⟩ √((t₀·t₁ − cos φ*)/(1 − cos φ*))`,
+/// `κ̄ = sin(θ/2)/sin(φ*/2)` (so `κ̄² + τ̄² = 1`),
+/// `ω = √(4 sin²(θ/2) + (τ̄φ*)²)/|d|`,
+/// `Ω̄ = τ̄/cos(θ/2) e₁ − tan(θ/2) cot(φ*/2) e₂` (ERRATA 1: minus sign), and
+/// `κ = ωκ̄`, `τ = ωτ̄`, `L = φ*/ω`.
 pub fn interpolate(
     p0: DVec3,
     t0: DVec3,

@@ -52,13 +52,6 @@ impl ByteSource {
         self.len
     }
 
-    // Unused in the crate since the module became private (it was
-    // reachable through the public one).
-    #[allow(dead_code)]
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
     /// Bytes left after the current offset.
     pub fn remaining(&self) -> u64 {
         self.len.saturating_sub(self.pos)
@@ -116,17 +109,6 @@ impl ByteSource {
 
     pub fn f32(&mut self, e: Endian, what: &str) -> Result<f32, IoError> {
         Ok(f32::from_bits(self.u32(e, what)?))
-    }
-
-    // Unused in the crate since the module became private (it was
-    // reachable through the public one).
-    #[allow(dead_code)]
-    pub fn f64(&mut self, e: Endian, what: &str) -> Result<f64, IoError> {
-        let b = self.array::<8>(what)?;
-        Ok(match e {
-            Endian::Little => f64::from_le_bytes(b),
-            Endian::Big => f64::from_be_bytes(b),
-        })
     }
 
     /// One text line (without the line ending), at most `max` bytes; `None`

@@ -1,58 +1,6 @@
-//! TRX tractograms (tee-ar-ex, <https://github.com/tee-ar-ex/trx-spec>): a
-//! zip archive (entries stored or deflated) or a plain folder holding
-//! `header.json` (`VOXEL_TO_RASMM`, `DIMENSIONS`, `NB_VERTICES`,
-//! `NB_STREAMLINES`), `positions.3.{float16,float32,float64}` (RAS+ mm,
-//! little endian), `offsets.{uint32,uint64}`, and optionally `dpv/NAME.[K.]DTYPE`
-//! (data per vertex), `dps/NAME.[K.]DTYPE` (data per streamline), `groups/`
-//! and `dpg/` (data per group). An entry's name carries its component count
-//! (`K`, 1 when absent) and its dtype.
-//!
-//! Where the format leaves room, the reader decides:
-//! - **Offsets**: trx-python (0.6) writes `NB_STREAMLINES + 1` offsets, the
-//!   last being `NB_VERTICES`, and requires that on load; the spec's text
-//!   describes `NB_STREAMLINES` start indices. Both are accepted (a sentinel,
-//!   when present, must equal `NB_VERTICES`). Offsets must start at 0, never
-//!   decrease and stay within `NB_VERTICES`; an error names the curve.
-//! - **Streaming**: the offsets (8 bytes a streamline) are read at open; the
-//!   positions and each dpv/dps array are then streamed through a reader of
-//!   their own — for a zip, a separate file handle positioned at the entry's
-//!   data (found via the central directory), inflated on the fly for deflated
-//!   entries and CRC-checked when its last byte has been read. Nothing is
-//!   extracted to disk and memory does not grow with the file.
-//! - Every array's size is checked against the header counts before anything
-//!   is read, and a deflated entry's announced size against the most deflate
-//!   can expand its compressed bytes, so no header count sizes an allocation.
-//! - Points come out as stored (TRX positions are RAS+ mm already);
-//!   `VOXEL_TO_RASMM` and `DIMENSIONS` go to [`Metadata::vox_to_world`] and
-//!   [`Metadata::dimensions`]. dpv arrays become [`Curve::point_data`], dps
-//!   arrays [`Curve::curve_data`] (as f32: 64-bit integers or floats beyond
-//!   f32's precision lose it), an array of K > 1 components named `NAME_0`…
-//!   `NAME_{K-1}`, arrays in name order.
-//! - [`Metadata::extra`] records the dtypes so that TRX → TRX writes the
-//!   same ones: `trx.positions_dtype`, `trx.offsets_dtype`, and
-//!   `trx.dpv.NAME` / `trx.dps.NAME` = the entry's suffix (`3.uint8`,
-//!   `float16`).
-//! - **Groups** (`groups/NAME.DTYPE`, lists of streamline indices) become
-//!   per-curve values `group:NAME`, 1 for a member and 0 otherwise, after
-//!   the dps values; the writer turns such columns back into
-//!   `groups/NAME.uint32` entries, so TRX → TRX keeps them, and formats
-//!   with per-curve values (`.trk` properties, VTK cell data, JSON, the
-//!   container) carry the membership. Each group's membership is held as a
-//!   bit set (`NB_STREAMLINES / 8` bytes).
-//! - **Data per group** (`dpg/GROUP/NAME.DTYPE`, a few values each) are
-//!   kept verbatim, hex-encoded in `extra` under `trx.entry.dpg/…` (at most
-//!   1 MiB an entry), and written back by the writer. Any other entry
-//!   outside the layout is not read: `trx.dropped` lists it.
-//!
-//! The writer spools positions, lengths and data to unnamed temporary files
-//! (counts are known only at the end) and assembles a **stored**
-//! (uncompressed) zip in [`finish`](CurveWriter::finish), as trx-python does
-//! by default: stored entries can be memory-mapped by other readers. It
-//! writes float32 positions (float16/float64 when the source TRX had them),
-//! uint32 offsets with the `NB_VERTICES` sentinel (as trx-python does;
-//! uint64 when the source had them or the vertices do not fit), and dpv/dps
-//! arrays in the source TRX dtypes (float32 otherwise). An empty tractogram
-//! is `header.json` alone, as trx-python writes it.
+//! TRX tractograms: the reader and the writer. The format and what the
+//! reader makes of it are described on `open` (`io::open_trx`), what the
+//! writer writes on `create` (`io::create_trx`).
 
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom, Write};
@@ -575,6 +523,54 @@ impl EntryReader {
 /// assert_eq!((err.path, err.at.as_deref()), (path, None));
 /// assert!(err.reason.starts_with("not a TRX file"));
 /// ```
+///
+/// # Format
+///
+/// TRX tractograms (tee-ar-ex, <https://github.com/tee-ar-ex/trx-spec>): a
+/// zip archive (entries stored or deflated) or a plain folder holding
+/// `header.json` (`VOXEL_TO_RASMM`, `DIMENSIONS`, `NB_VERTICES`,
+/// `NB_STREAMLINES`), `positions.3.{float16,float32,float64}` (RAS+ mm,
+/// little endian), `offsets.{uint32,uint64}`, and optionally `dpv/NAME.[K.]DTYPE`
+/// (data per vertex), `dps/NAME.[K.]DTYPE` (data per streamline), `groups/`
+/// and `dpg/` (data per group). An entry's name carries its component count
+/// (`K`, 1 when absent) and its dtype.
+///
+/// Where the format leaves room, the reader decides:
+/// - **Offsets**: trx-python (0.6) writes `NB_STREAMLINES + 1` offsets, the
+///   last being `NB_VERTICES`, and requires that on load; the spec's text
+///   describes `NB_STREAMLINES` start indices. Both are accepted (a sentinel,
+///   when present, must equal `NB_VERTICES`). Offsets must start at 0, never
+///   decrease and stay within `NB_VERTICES`; an error names the curve.
+/// - **Streaming**: the offsets (8 bytes a streamline) are read at open; the
+///   positions and each dpv/dps array are then streamed through a reader of
+///   their own — for a zip, a separate file handle positioned at the entry's
+///   data (found via the central directory), inflated on the fly for deflated
+///   entries and CRC-checked when its last byte has been read. Nothing is
+///   extracted to disk and memory does not grow with the file.
+/// - Every array's size is checked against the header counts before anything
+///   is read, and a deflated entry's announced size against the most deflate
+///   can expand its compressed bytes, so no header count sizes an allocation.
+/// - Points come out as stored (TRX positions are RAS+ mm already);
+///   `VOXEL_TO_RASMM` and `DIMENSIONS` go to [`Metadata::vox_to_world`] and
+///   [`Metadata::dimensions`]. dpv arrays become [`Curve::point_data`], dps
+///   arrays [`Curve::curve_data`] (as f32: 64-bit integers or floats beyond
+///   f32's precision lose it), an array of K > 1 components named `NAME_0`…
+///   `NAME_{K-1}`, arrays in name order.
+/// - [`Metadata::extra`] records the dtypes so that TRX → TRX writes the
+///   same ones: `trx.positions_dtype`, `trx.offsets_dtype`, and
+///   `trx.dpv.NAME` / `trx.dps.NAME` = the entry's suffix (`3.uint8`,
+///   `float16`).
+/// - **Groups** (`groups/NAME.DTYPE`, lists of streamline indices) become
+///   per-curve values `group:NAME`, 1 for a member and 0 otherwise, after
+///   the dps values; the writer turns such columns back into
+///   `groups/NAME.uint32` entries, so TRX → TRX keeps them, and formats
+///   with per-curve values (`.trk` properties, VTK cell data, JSON, the
+///   container) carry the membership. Each group's membership is held as a
+///   bit set (`NB_STREAMLINES / 8` bytes).
+/// - **Data per group** (`dpg/GROUP/NAME.DTYPE`, a few values each) are
+///   kept verbatim, hex-encoded in `extra` under `trx.entry.dpg/…` (at most
+///   1 MiB an entry), and written back by the writer. Any other entry
+///   outside the layout is not read: `trx.dropped` lists it.
 pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     Ok(Box::new(TrxReader::open(path)?))
 }
@@ -1181,7 +1177,7 @@ fn plan_arrays(
 }
 
 /// Create a TRX writer (a stored zip). A TRX source's dtypes are kept (see
-/// the module documentation); other sources get float32 throughout.
+/// [Output](#output)); other sources get float32 throughout.
 ///
 /// Per-point values travel with the points:
 ///
@@ -1202,6 +1198,18 @@ fn plan_arrays(
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!((curves[0].points[1], &curves[0].point_data[..]), (DVec3::X, &[0.25f32, 0.5][..]));
 /// ```
+///
+/// # Output
+///
+/// The writer spools positions, lengths and data to unnamed temporary files
+/// (counts are known only at the end) and assembles a **stored**
+/// (uncompressed) zip in [`finish`](CurveWriter::finish), as trx-python does
+/// by default: stored entries can be memory-mapped by other readers. It
+/// writes float32 positions (float16/float64 when the source TRX had them),
+/// uint32 offsets with the `NB_VERTICES` sentinel (as trx-python does;
+/// uint64 when the source had them or the vertices do not fit), and dpv/dps
+/// arrays in the source TRX dtypes (float32 otherwise). An empty tractogram
+/// is `header.json` alone, as trx-python writes it.
 pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     let from_trx = meta.format == Format::Trx;
     let recorded = |key: &str| -> Option<String> {

@@ -1,51 +1,5 @@
-//! VTK legacy POLYDATA (`# vtk DataFile Version x.y`), ASCII or BINARY
-//! (big-endian), with the curves in `LINES`: the classic layout (per line a
-//! count, then point indices) and the 5.1 layout (`OFFSETS` and
-//! `CONNECTIVITY` arrays).
-//!
-//! # Reading
-//!
-//! A line may use any point of the `POINTS` array, which comes first, so the
-//! points are held in memory as stored (f32 or f64: 12 or 24 bytes a point)
-//! and the lines are streamed, one curve built at a time from its indices.
-//! `CELL_DATA` follows the lines, so [`open`] makes one pass over the file
-//! (skipping the line section: a seek in BINARY files, a token scan in ASCII
-//! ones), keeps the attribute arrays it can carry (4 bytes a value), then
-//! seeks back to the lines. Header counts are checked against the bytes left
-//! before anything is allocated by them.
-//!
-//! Carried, as f32 (integers beyond 2^24 and doubles are rounded), under
-//! their names in [`Metadata::point_data_names`] / `curve_data_names`: the
-//! numeric arrays of `POINT_DATA` and `CELL_DATA` (`SCALARS`, `VECTORS`,
-//! `NORMALS`, `TENSORS`, `TENSORS6`, `TEXTURE_COORDINATES`, `GLOBAL_IDS`,
-//! `PEDIGREE_IDS`, `EDGE_FLAGS`, and `FIELD` arrays with one tuple per point
-//! or cell). An array of k > 1 components becomes k names `name_0`, ….
-//! VTK numbers cells vertices first, then lines, polygons and strips, so the
-//! curve data of line i is cell `n_vertices + i`. The stored type of each
-//! carried array is kept in `extra` as `vtk.dtype.<name>`.
-//!
-//! Dropped, and named in `extra` under `vtk.dropped`: `COLOR_SCALARS`,
-//! `LOOKUP_TABLE`s, dataset-level `FIELD` data, `FIELD` arrays of another
-//! tuple count, arrays whose names repeat, and arrays of type `bit`,
-//! `string`, `utf8_string` or `variant`; the last ones also end the scan,
-//! because their size cannot be known without decoding them, so everything
-//! after them is dropped too (the geometry before is complete). `METADATA`
-//! blocks and the `VERTICES`, `POLYGONS` and `TRIANGLE_STRIPS` cells are
-//! skipped.
-//!
-//! # Writing
-//!
-//! The header needs the point and line counts, so points (and per-point
-//! values) are spooled to unnamed scratch files next to the target and the
-//! file is assembled at [`CurveWriter::finish`] through an [`AtomicFile`].
-//! The output is the classic `LINES n size` layout (version 3.0, readable by
-//! every VTK since 2000), BINARY unless `extra` has `vtk.encoding = ASCII`
-//! (a VTK source's own encoding is kept that way), float points unless
-//! `vtk.points_type = double`. Carried arrays go to `CELL_DATA` /
-//! `POINT_DATA`: one array as `SCALARS` (VTK's active scalars), several as
-//! one `FIELD` (VTK's reader keeps only the first `SCALARS` of a section), as
-//! float unless `vtk.dtype.<name>` names a type every value fits. The title
-//! line is `vtk.title` (else `hair.info`, else a default).
+//! VTK legacy POLYDATA: the reader and the writer. What each reads and
+//! writes is described on `VtkReader` and `VtkWriter`.
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom, Write};
@@ -812,6 +766,41 @@ struct Scan {
 }
 
 /// Reader of legacy VTK polydata files (`.vtk`, ASCII or binary).
+///
+/// The files are VTK legacy POLYDATA (`# vtk DataFile Version x.y`), ASCII
+/// or BINARY (big-endian), with the curves in `LINES`: the classic layout
+/// (per line a count, then point indices) and the 5.1 layout (`OFFSETS` and
+/// `CONNECTIVITY` arrays).
+///
+/// # Reading
+///
+/// A line may use any point of the `POINTS` array, which comes first, so the
+/// points are held in memory as stored (f32 or f64: 12 or 24 bytes a point)
+/// and the lines are streamed, one curve built at a time from its indices.
+/// `CELL_DATA` follows the lines, so [`open`](Self::open) makes one pass
+/// over the file (skipping the line section: a seek in BINARY files, a token
+/// scan in ASCII ones), keeps the attribute arrays it can carry (4 bytes a value), then
+/// seeks back to the lines. Header counts are checked against the bytes left
+/// before anything is allocated by them.
+///
+/// Carried, as f32 (integers beyond 2^24 and doubles are rounded), under
+/// their names in [`Metadata::point_data_names`] / `curve_data_names`: the
+/// numeric arrays of `POINT_DATA` and `CELL_DATA` (`SCALARS`, `VECTORS`,
+/// `NORMALS`, `TENSORS`, `TENSORS6`, `TEXTURE_COORDINATES`, `GLOBAL_IDS`,
+/// `PEDIGREE_IDS`, `EDGE_FLAGS`, and `FIELD` arrays with one tuple per point
+/// or cell). An array of k > 1 components becomes k names `name_0`, ….
+/// VTK numbers cells vertices first, then lines, polygons and strips, so the
+/// curve data of line i is cell `n_vertices + i`. The stored type of each
+/// carried array is kept in `extra` as `vtk.dtype.<name>`.
+///
+/// Dropped, and named in `extra` under `vtk.dropped`: `COLOR_SCALARS`,
+/// `LOOKUP_TABLE`s, dataset-level `FIELD` data, `FIELD` arrays of another
+/// tuple count, arrays whose names repeat, and arrays of type `bit`,
+/// `string`, `utf8_string` or `variant`; the last ones also end the scan,
+/// because their size cannot be known without decoding them, so everything
+/// after them is dropped too (the geometry before is complete). `METADATA`
+/// blocks and the `VERTICES`, `POLYGONS` and `TRIANGLE_STRIPS` cells are
+/// skipped.
 pub struct VtkReader {
     src: Src,
     meta: Metadata,
@@ -826,7 +815,8 @@ pub struct VtkReader {
     idx: Vec<i64>,
 }
 
-/// Open a VTK legacy POLYDATA file for streaming its `LINES` as curves.
+/// Open a VTK legacy POLYDATA file for streaming its `LINES` as curves (see
+/// [`VtkReader`] for what is read).
 ///
 /// A file that is not one is an error naming the file and the place:
 ///
@@ -1586,7 +1576,7 @@ fn read_field(src: &mut Src, s: &mut Scan, assoc: Assoc) -> Result<(), IoError> 
 // ---------------------------------------------------------------------------
 // Writer
 
-/// Create a VTK legacy POLYDATA file (see the module docs for the layout).
+/// Create a VTK legacy POLYDATA file (see [`VtkWriter`] for the layout).
 ///
 /// Per-curve values travel with the curves:
 ///
@@ -1651,6 +1641,18 @@ impl OutArray {
 }
 
 /// Writer of legacy VTK polydata files.
+///
+/// The header needs the point and line counts, so points (and per-point
+/// values) are spooled to unnamed scratch files next to the target and the
+/// file is assembled at [`CurveWriter::finish`] through an [`AtomicFile`].
+/// The output is the classic `LINES n size` layout (version 3.0, readable by
+/// every VTK since 2000), BINARY unless `extra` has `vtk.encoding = ASCII`
+/// (a VTK source's own encoding is kept that way), float points unless
+/// `vtk.points_type = double`. Carried arrays go to `CELL_DATA` /
+/// `POINT_DATA`: one array as `SCALARS` (VTK's active scalars), several as
+/// one `FIELD` (VTK's reader keeps only the first `SCALARS` of a section), as
+/// float unless `vtk.dtype.<name>` names a type every value fits. The title
+/// line is `vtk.title` (else `hair.info`, else a default).
 pub struct VtkWriter {
     path: PathBuf,
     out: AtomicFile,

@@ -1,56 +1,5 @@
-//! Covering the sketch with projected helices (Sections 6.1–6.4).
-//!
-//! One helix, around the vertex `v_s` of largest curvature (Proposition 1
-//! puts `t = 0` there):
-//! 1. **Alignment (6.1).** The helix frame at `t = 0` has its `y` axis along
-//!    `T̂_H(0)` and the curve bending towards `−x` (`H″(0) = (−a, 0)`); the
-//!    sketch is put in that frame by the translation to `v_s`, the rotation
-//!    taking `T̂_{v_s}` to `+y`, and a reflection if the sketch turns right
-//!    at `v_s`.
-//! 2. **Two-vertex fit (6.2).** For each of the `2·NMAX` neighbours `v_n`,
-//!    `(a, b, c)` minimising
-//!    `E = β_D ‖v_n − H(α)‖²/‖v_n‖² + (1 − β_D) ‖T̂_{v_n} − T̂_H(α)‖²`
-//!    by Nelder–Mead, `α = ±π/4` (the sign of the side of `v_n`). The paper
-//!    leaves `β_D` open and its point term has units; dividing by `‖v_n‖²`
-//!    makes the fit scale-free, `β_D = ½`. Helices whose tangent at `t = 0`
-//!    points along `−y` are rejected (a penalty), as are `a, b < 0` (the
-//!    search runs on `|a|`, `|b|`).
-//! 3. **Coverage (6.3).** Walk from `v_s` both ways while each vertex is
-//!    within `E_max` of the curve (its closest point, followed from the
-//!    previous vertex's parameter). The paper compares the *squared*
-//!    distance with a length (0.1 % of the curve length); we compare the
-//!    distance, which is what a threshold in length units means. The
-//!    candidate covering most vertices wins.
-//!
-//! Beyond the paper, the winner is then refined by least squares on the
-//! vertices it covers ([`refine`](super::refine), placement included) and
-//! the walk resumed from its ends, until the coverage stops growing: the
-//! two-vertex fit fixes `t = 0` at a vertex, which is exact only where the
-//! sketch's curvature maximum falls on a vertex.
-//!
-//! **Several helices (6.4).** The parts left on either side are covered
-//! recursively (each from its own largest-curvature vertex), each new helix
-//! sharing the junction vertex with its neighbour. A leftover of fewer than
-//! [`MIN_VERTICES`] vertices is absorbed by the helix next to it.
-//!
-//! **Segmentation (beyond the paper).** A walk stops where the *next*
-//! vertex leaves `E_max`, so a helix can end a vertex or two off the
-//! true junction, or stop short inside its own stretch (a local minimum of
-//! the fit). After the covering, in passes until the count of pieces
-//! stops dropping: each junction is slid to where its two helices, refitted,
-//! leave the least `E_D` (`polish_junctions`); neighbours that one helix
-//! fits within `E_max` are merged; a piece whose neighbours can meet inside
-//! it is absorbed. Measured on projections of 2–4 helices with a corner at
-//! each join: every junction at the corner vertex, none spurious
-//! (`tests/sketch.rs`).
-//!
-//! The two sides of a seed's helix, the two-vertex fits, the candidates'
-//! refinements and their restarts, and the junction trials run in parallel
-//! (rayon); choices are made in a fixed order, so the result does not
-//! depend on the number of threads. Merges and absorptions are first
-//! probed cheaply (a few iterations, or the neighbours extended without a
-//! refit): most neighbours are different helices, and the full fits with
-//! their restarts are kept for the pairs that come close.
+//! Covering the sketch with projected helices (Sections 6.1–6.4); the
+//! method is described on `cover`.
 
 use std::f64::consts::FRAC_PI_4;
 
@@ -92,7 +41,7 @@ use super::ProjectedHelix;
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # use strandfit::sketch::{resample, PlacedHelix};
 /// # /// The projections of two helices, the second starting where the first
 /// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
 /// # /// 43 vertices, the corner at vertex 24.
@@ -116,10 +65,10 @@ use super::ProjectedHelix;
 /// # fn unit(d: &[DVec2]) -> (Vec<DVec2>, Vec<(DVec2, f64)>) {
 /// #     let length: f64 = d.windows(2).map(|w| (w[1] - w[0]).length()).sum();
 /// #     let unit: Vec<DVec2> = d.iter().map(|p| *p / length).collect();
-/// #     let geometry = strandfit::sketch::estimate::tangents_and_curvatures(&unit, 3);
+/// #     let geometry = strandfit::sketch::tangents_and_curvatures(&unit, 3);
 /// #     (unit, geometry)
 /// # }
-/// use strandfit::sketch::cover::{cover, CoverOptions, COVER_GAIN, MIN_VERTICES};
+/// use strandfit::sketch::{cover, CoverOptions, COVER_GAIN, MIN_VERTICES};
 ///
 /// // Every helix of a covering fits at least MIN_VERTICES vertices.
 /// let (points, geometry) = unit(&two_helices());
@@ -189,10 +138,10 @@ const REFINED_CANDIDATES: usize = 3;
 /// # fn unit(d: &[DVec2]) -> (Vec<DVec2>, Vec<(DVec2, f64)>) {
 /// #     let length: f64 = d.windows(2).map(|w| (w[1] - w[0]).length()).sum();
 /// #     let unit: Vec<DVec2> = d.iter().map(|p| *p / length).collect();
-/// #     let geometry = strandfit::sketch::estimate::tangents_and_curvatures(&unit, 3);
+/// #     let geometry = strandfit::sketch::tangents_and_curvatures(&unit, 3);
 /// #     (unit, geometry)
 /// # }
-/// use strandfit::sketch::cover::{cover, CoverOptions, COVER_GAIN};
+/// use strandfit::sketch::{cover, CoverOptions, COVER_GAIN};
 ///
 /// // One helix drawn: one piece, every vertex within E_max of it.
 /// let (points, geometry) = unit(&one_helix());
@@ -721,13 +670,13 @@ fn polish_junctions(points: &[DVec2], pieces: &mut [Piece], opts: &CoverOptions)
 const POLISH_ITERATIONS: usize = 30;
 
 /// Cover all the vertices of `points` (Section 6.4; `geometry`: their
-/// tangents and curvatures, [`tangents_and_curvatures`](super::estimate::tangents_and_curvatures));
-/// pieces in order along the sketch, consecutive ones sharing their
-/// junction vertex.
+/// tangents and curvatures,
+/// [`tangents_and_curvatures`](super::tangents_and_curvatures)); pieces in
+/// order along the sketch, consecutive ones sharing their junction vertex.
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # use strandfit::sketch::{resample, PlacedHelix};
 /// # /// The projections of two helices, the second starting where the first
 /// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
 /// # /// 43 vertices, the corner at vertex 24.
@@ -751,10 +700,10 @@ const POLISH_ITERATIONS: usize = 30;
 /// # fn unit(d: &[DVec2]) -> (Vec<DVec2>, Vec<(DVec2, f64)>) {
 /// #     let length: f64 = d.windows(2).map(|w| (w[1] - w[0]).length()).sum();
 /// #     let unit: Vec<DVec2> = d.iter().map(|p| *p / length).collect();
-/// #     let geometry = strandfit::sketch::estimate::tangents_and_curvatures(&unit, 3);
+/// #     let geometry = strandfit::sketch::tangents_and_curvatures(&unit, 3);
 /// #     (unit, geometry)
 /// # }
-/// use strandfit::sketch::cover::{cover, CoverOptions, COVER_GAIN};
+/// use strandfit::sketch::{cover, CoverOptions, COVER_GAIN};
 ///
 /// // Two helices drawn: two pieces, joined at the corner, each within E_max.
 /// let (points, geometry) = unit(&two_helices());
@@ -764,6 +713,62 @@ const POLISH_ITERATIONS: usize = 30;
 /// assert_eq!(spans, [(0, 24), (24, 42)]);
 /// assert!(pieces.iter().all(|p| p.max_distance(&points) <= opts.emax));
 /// ```
+///
+/// # Method
+///
+/// Covering the sketch with projected helices (Sections 6.1–6.4).
+///
+/// One helix, around the vertex `v_s` of largest curvature (Proposition 1
+/// puts `t = 0` there):
+/// 1. **Alignment (6.1).** The helix frame at `t = 0` has its `y` axis along
+///    `T̂_H(0)` and the curve bending towards `−x` (`H″(0) = (−a, 0)`); the
+///    sketch is put in that frame by the translation to `v_s`, the rotation
+///    taking `T̂_{v_s}` to `+y`, and a reflection if the sketch turns right
+///    at `v_s`.
+/// 2. **Two-vertex fit (6.2).** For each of the `2·NMAX` neighbours `v_n`,
+///    `(a, b, c)` minimising
+///    `E = β_D ‖v_n − H(α)‖²/‖v_n‖² + (1 − β_D) ‖T̂_{v_n} − T̂_H(α)‖²`
+///    by Nelder–Mead, `α = ±π/4` (the sign of the side of `v_n`). The paper
+///    leaves `β_D` open and its point term has units; dividing by `‖v_n‖²`
+///    makes the fit scale-free, `β_D = ½`. Helices whose tangent at `t = 0`
+///    points along `−y` are rejected (a penalty), as are `a, b < 0` (the
+///    search runs on `|a|`, `|b|`).
+/// 3. **Coverage (6.3).** Walk from `v_s` both ways while each vertex is
+///    within `E_max` of the curve (its closest point, followed from the
+///    previous vertex's parameter). The paper compares the *squared*
+///    distance with a length (0.1 % of the curve length); we compare the
+///    distance, which is what a threshold in length units means. The
+///    candidate covering most vertices wins.
+///
+/// Beyond the paper, the winner is then refined by least squares on the
+/// vertices it covers ([`refine`](super::refine()), placement included) and
+/// the walk resumed from its ends, until the coverage stops growing: the
+/// two-vertex fit fixes `t = 0` at a vertex, which is exact only where the
+/// sketch's curvature maximum falls on a vertex.
+///
+/// **Several helices (6.4).** The parts left on either side are covered
+/// recursively (each from its own largest-curvature vertex), each new helix
+/// sharing the junction vertex with its neighbour. A leftover of fewer than
+/// [`MIN_VERTICES`] vertices is absorbed by the helix next to it.
+///
+/// **Segmentation (beyond the paper).** A walk stops where the *next*
+/// vertex leaves `E_max`, so a helix can end a vertex or two off the
+/// true junction, or stop short inside its own stretch (a local minimum of
+/// the fit). After the covering, in passes until the count of pieces
+/// stops dropping: each junction is slid to where its two helices, refitted,
+/// leave the least `E_D` (`polish_junctions`); neighbours that one helix
+/// fits within `E_max` are merged; a piece whose neighbours can meet inside
+/// it is absorbed. Measured on projections of 2–4 helices with a corner at
+/// each join: every junction at the corner vertex, none spurious
+/// (`tests/sketch.rs`).
+///
+/// The two sides of a seed's helix, the two-vertex fits, the candidates'
+/// refinements and their restarts, and the junction trials run in parallel
+/// (rayon); choices are made in a fixed order, so the result does not
+/// depend on the number of threads. Merges and absorptions are first
+/// probed cheaply (a few iterations, or the neighbours extended without a
+/// refit): most neighbours are different helices, and the full fits with
+/// their restarts are kept for the pairs that come close.
 pub fn cover(points: &[DVec2], geometry: &[(DVec2, f64)], opts: &CoverOptions) -> Vec<Piece> {
     let mut out = if points.len() >= 2 {
         cover_range(points, geometry, (0, points.len() - 1), opts)

@@ -1,11 +1,5 @@
-//! Tangent and curvature of a polyline by local quadratic fitting (Section
-//! 5, after Lewiner, Gomes, Lopes & Craizer 2005): around vertex `vᵢ`, fit
-//! `Cᵢ(t) = vᵢ + vᵢ′t + ½vᵢ″t²` by least squares to the neighbours
-//! `v_{i+j}`, `|j| ≤ q`, with `t` the signed arc length along the polyline
-//! from `vᵢ` (so uneven sampling is accounted for), then
-//! `κ = (x′y″ − y′x″)/|v′|³` (signed) and `T̂ = v′/|v′|`. At the ends the
-//! window is one-sided. [`resample`] (the paper's) or [`densify`] evens
-//! out the sampling first, as Section 6 assumes.
+//! Tangents and curvatures of a polyline (Section 5; the method is described
+//! on `tangents_and_curvatures`), resampling, smoothing and noise.
 
 use glam::DVec2;
 
@@ -13,9 +7,18 @@ use glam::DVec2;
 /// (clamped to the polyline). Needs at least 3 vertices and no zero-length
 /// edges (checked by the callers).
 ///
+/// By local quadratic fitting (Section 5, after Lewiner, Gomes, Lopes &
+/// Craizer 2005): around vertex `vᵢ`, fit `Cᵢ(t) = vᵢ + vᵢ′t + ½vᵢ″t²` by
+/// least squares to the neighbours
+/// `v_{i+j}`, `|j| ≤ q`, with `t` the signed arc length along the polyline
+/// from `vᵢ` (so uneven sampling is accounted for), then
+/// `κ = (x′y″ − y′x″)/|v′|³` (signed) and `T̂ = v′/|v′|`. At the ends the
+/// window is one-sided. [`resample`] (the paper's) or [`densify`] evens
+/// out the sampling first, as Section 6 assumes.
+///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::estimate::tangents_and_curvatures;
+/// use strandfit::sketch::tangents_and_curvatures;
 /// // A circle of radius 2, counter-clockwise: κ = +1/2, to 1 %.
 /// let pts: Vec<DVec2> = (0..50).map(|i| 2.0 * DVec2::from_angle(0.05 * i as f64)).collect();
 /// let found = tangents_and_curvatures(&pts, 3);
@@ -112,7 +115,7 @@ fn sg9(points: &[DVec2], i: usize) -> DVec2 {
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::estimate::smoothed;
+/// use strandfit::sketch::smoothed;
 ///
 /// // A cubic is left as it is (to rounding); the ends are kept exactly.
 /// let cubic: Vec<DVec2> = (0..20).map(|i| 0.1 * i as f64).map(|x| DVec2::new(x, x * x * x - x)).collect();
@@ -149,7 +152,7 @@ pub fn smoothed(points: &[DVec2]) -> Vec<DVec2> {
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::estimate::residual_agreement;
+/// use strandfit::sketch::residual_agreement;
 ///
 /// // A coarse clean circle: residuals are bias, alike along the drawing.
 /// let circle: Vec<DVec2> = (0..40).map(|k| DVec2::from_angle(k as f64 * 0.3)).collect();
@@ -227,7 +230,7 @@ fn local_quadratic(points: &[DVec2], s: &[f64], i: usize, lo: usize, hi: usize) 
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::estimate::denoise;
+/// use strandfit::sketch::denoise;
 ///
 /// // A circle of radius 1, 400 vertices, each moved by ±0.01 in x and y.
 /// let circle: Vec<DVec2> = (0..400).map(|k| DVec2::from_angle(k as f64 * 0.012)).collect();
@@ -312,7 +315,7 @@ pub fn denoise(points: &[DVec2], sigma: f64) -> Vec<DVec2> {
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::estimate::estimate_noise;
+/// use strandfit::sketch::estimate_noise;
 /// // A circle of 400 vertices, every vertex moved by ±0.001 in x and y.
 /// let pts: Vec<DVec2> = (0..400)
 ///     .map(|i| {
@@ -343,7 +346,7 @@ pub fn estimate_noise(points: &[DVec2]) -> f64 {
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::estimate::resample;
+/// use strandfit::sketch::resample;
 /// let l = [DVec2::ZERO, DVec2::new(1.0, 0.0), DVec2::new(1.0, 3.0)];
 /// let r = resample(&l, 5); // length 4: a point every unit
 /// assert_eq!(r[1], DVec2::new(1.0, 0.0));
@@ -392,7 +395,7 @@ fn turning(points: &[DVec2], i: usize) -> f64 {
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::estimate::is_corner;
+/// use strandfit::sketch::is_corner;
 ///
 /// // An L: the vertex at the bend is a corner, the others are not.
 /// let mut l: Vec<DVec2> = (0..10).map(|i| DVec2::new(i as f64, 0.0)).collect();
@@ -436,7 +439,7 @@ const CORNER_SPAN: usize = 8;
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::estimate::densify;
+/// use strandfit::sketch::densify;
 ///
 /// // A half circle of 8 vertices, densified to edges of about 0.1.
 /// let coarse: Vec<DVec2> = (0..8).map(|i| DVec2::from_angle(std::f64::consts::PI * i as f64 / 7.0)).collect();

@@ -1,23 +1,5 @@
-//! Beyond the paper: an exactly G1 result.
-//!
-//! The piecewise helix of Section 7 is neither C0 in space nor G1 at its
-//! junctions (the fine fit trades the tangent gaps against the drawing;
-//! `z` continuity is imposed afterwards). Here the lifted polyline — the
-//! drawing's vertices with the lifted `z` — is re-fitted by the
-//! floating-tangents fitter of the core ([`crate::fit_polyline_chain`]: Schneider
-//! smoothing, then the fewest helix elements within a tolerance `T`), whose
-//! chain is G1 by construction. What that costs in the drawing is
-//! measured, not assumed: the chain is sampled, projected on `z = 0` and
-//! the drawing's vertices are compared with it in order
-//! ([`ordered_distance`]).
-//!
-//! Bound: the lifted vertex `i` projects to the drawing's vertex `i`, and
-//! orthogonal projection does not lengthen distances, so the projected
-//! chain is within the chain's 3D distance of the drawing. The reported
-//! projection distance measures the chain sampled, with a sagitta of at
-//! most `T/64`, and adds that sagitta: it is at most the 3D one plus twice
-//! the sagitta (so at most `T + T/32` when the tolerance is met);
-//! `tests/sketch.rs` checks it.
+//! Beyond the paper: the lift re-fitted exactly G1 (`refit_g1`, where the
+//! method and its bound are described).
 
 use glam::DVec3;
 
@@ -30,7 +12,7 @@ use crate::metrics::ordered_distance;
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # use strandfit::sketch::{resample, PlacedHelix};
 /// # /// The projections of two helices, the second starting where the first
 /// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
 /// # /// 43 vertices, the corner at vertex 24.
@@ -107,6 +89,29 @@ pub struct G1Refit {
 /// assert!(g1.projection_distance <= g1.distance_3d + t / 32.0);
 /// assert_eq!(g1.tolerance, t);
 /// ```
+///
+/// # Method
+///
+/// Beyond the paper: an exactly G1 result.
+///
+/// The piecewise helix of Section 7 is neither C0 in space nor G1 at its
+/// junctions (the fine fit trades the tangent gaps against the drawing;
+/// `z` continuity is imposed afterwards). Here the lifted polyline — the
+/// drawing's vertices with the lifted `z` — is re-fitted by the
+/// floating-tangents fitter of the core ([`crate::fit_polyline_chain`]: Schneider
+/// smoothing, then the fewest helix elements within a tolerance `T`), whose
+/// chain is G1 by construction. What that costs in the drawing is
+/// measured, not assumed: the chain is sampled, projected on `z = 0` and
+/// the drawing's vertices are compared with it in order
+/// ([`ordered_distance`]).
+///
+/// Bound: the lifted vertex `i` projects to the drawing's vertex `i`, and
+/// orthogonal projection does not lengthen distances, so the projected
+/// chain is within the chain's 3D distance of the drawing. The reported
+/// projection distance measures the chain sampled, with a sagitta of at
+/// most `T/64`, and adds that sagitta: it is at most the 3D one plus twice
+/// the sagitta (so at most `T + T/32` when the tolerance is met);
+/// `tests/sketch.rs` checks it.
 pub fn refit_g1(lift: &SketchLift, tolerance: f64) -> Result<G1Refit, AdaptiveError> {
     let opts = AdaptiveOptions::new(ElementCount::Tolerance(tolerance));
     let fit = fit_polyline_chain(&lift.points_3d, &opts)?;

@@ -1,22 +1,5 @@
-//! The whole method: a 2D polyline to a 3D piecewise helix (Sections 6–7).
-//!
-//! 1. Checks, and normalisation to unit length about the centroid (so every
-//!    tolerance below is relative, and the result is invariant to
-//!    translation and uniform scale by construction; rotation invariance
-//!    follows from the tangent-based alignment, as the paper says).
-//! 2. Resampling when the input's edges differ by more than
-//!    [`UNIFORM_RATIO`] (Section 6 assumes even sampling); otherwise the
-//!    input vertices are used as they are. The paper resamples uniformly
-//!    ([`Resampling::Uniform`]); the default splits the long edges along a
-//!    spline and keeps every drawn vertex ([`Resampling::Densify`]), which
-//!    measured better (see there).
-//! 3. Tangents and curvatures (Section 5), covering (6.1–6.4).
-//! 4. Lift (Section 7): each helix or its mirror, chosen so the 3D tangents
-//!    at each junction are most parallel; then the fine fitting of
-//!    `α_T E_T + (1 − α_T) E_D` ([`refine`](super::refine)); then `z`
-//!    offsets making the curve continuous in `z` at every junction.
-//! 5. Report: per junction the remaining tangent angle and position gap,
-//!    and the projection error (vertex distances from the fitted curves).
+//! The whole method, `lift_sketch` (its steps are described there), with its
+//! options and result types.
 
 use glam::{DVec2, DVec3};
 
@@ -45,7 +28,7 @@ use super::ProjectedHelix;
 /// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
 /// #         .collect()
 /// # }
-/// use strandfit::sketch::{lift::UNIFORM_RATIO, lift_sketch, SketchOptions};
+/// use strandfit::sketch::{lift_sketch, SketchOptions, UNIFORM_RATIO};
 ///
 /// // Even edges: used as they are.
 /// let even = one_helix();
@@ -119,10 +102,9 @@ pub enum Resampling {
 /// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
 /// #         .collect()
 /// # }
-/// use strandfit::sketch::{lift_sketch, SketchOptions};
+/// use strandfit::sketch::{lift_sketch, SketchOptions, EMAX_FRACTION};
 ///
 /// let lift = lift_sketch(&one_helix(), &SketchOptions::default()).unwrap();
-/// use strandfit::sketch::lift::EMAX_FRACTION;
 ///
 /// // A clean drawing: E_max is the paper's 0.1 % of its length.
 /// assert!((lift.emax - EMAX_FRACTION * lift.length).abs() < 1e-12 * lift.length);
@@ -145,7 +127,7 @@ pub const EMAX_FRACTION: f64 = 1e-3;
 /// #         .map(|u| DVec2::new(u.cos(), u.sin() * tilt.cos() - pitch * u * tilt.sin()))
 /// #         .collect()
 /// # }
-/// use strandfit::sketch::{lift::NOISE_FACTOR, lift_sketch, SketchOptions};
+/// use strandfit::sketch::{lift_sketch, SketchOptions, NOISE_FACTOR};
 ///
 /// // Every vertex moved by ±0.01 in x and y: E_max follows the noise.
 /// let noisy: Vec<DVec2> = one_helix()
@@ -168,7 +150,7 @@ pub const NOISE_FACTOR: f64 = 5.0;
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::{lift::DENOISE_ABOVE, lift_sketch, SketchOptions};
+/// use strandfit::sketch::{lift_sketch, SketchOptions, DENOISE_ABOVE};
 ///
 /// // A clean drawing is fitted as drawn; the same with jitter is denoised.
 /// let clean: Vec<DVec2> = (0..200).map(|k| DVec2::from_angle(k as f64 * 0.02)).collect();
@@ -498,7 +480,7 @@ impl LiftedHelix {
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # use strandfit::sketch::{resample, PlacedHelix};
 /// # /// The projections of two helices, the second starting where the first
 /// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
 /// # /// 43 vertices, the corner at vertex 24.
@@ -543,7 +525,7 @@ pub struct Junction {
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{estimate::resample, PlacedHelix};
+/// # use strandfit::sketch::{resample, PlacedHelix};
 /// # /// The projections of two helices, the second starting where the first
 /// # /// ends with a corner of 0.6 rad, each sampled evenly along its length:
 /// # /// 43 vertices, the corner at vertex 24.
@@ -651,6 +633,28 @@ fn check(points: &[DVec2]) -> Result<Vec<DVec2>, SketchError> {
 /// let h = lift.helices[0].helix;
 /// assert!((h.a.abs() - 1.0).abs() < 1e-3 && (h.b.abs() - pitch).abs() < 1e-3);
 /// ```
+///
+/// # Method
+///
+/// Sections 6–7 of the paper, in five steps:
+///
+/// 1. Checks, and normalisation to unit length about the centroid (so every
+///    tolerance below is relative, and the result is invariant to
+///    translation and uniform scale by construction; rotation invariance
+///    follows from the tangent-based alignment, as the paper says).
+/// 2. Resampling when the input's edges differ by more than
+///    [`UNIFORM_RATIO`] (Section 6 assumes even sampling); otherwise the
+///    input vertices are used as they are. The paper resamples uniformly
+///    ([`Resampling::Uniform`]); the default splits the long edges along a
+///    spline and keeps every drawn vertex ([`Resampling::Densify`]), which
+///    measured better (see there).
+/// 3. Tangents and curvatures (Section 5), covering (6.1–6.4).
+/// 4. Lift (Section 7): each helix or its mirror, chosen so the 3D tangents
+///    at each junction are most parallel; then the fine fitting of
+///    `α_T E_T + (1 − α_T) E_D` ([`refine`](super::refine())); then `z`
+///    offsets making the curve continuous in `z` at every junction.
+/// 5. Report: per junction the remaining tangent angle and position gap,
+///    and the projection error (vertex distances from the fitted curves).
 pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift, SketchError> {
     if let Some(e) = opts.emax {
         if !(e > 0.0 && e < 1.0) {

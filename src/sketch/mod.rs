@@ -1,17 +1,21 @@
 //! Sketch to 3D (paper 003, Cherin, Cordier & Melkemi 2014): a 2D polyline
 //! lifted to a 3D piecewise helix whose orthogonal projection matches it.
 //!
-//! * [`projected`]: the projected helix `H(t)` with tilt `c` (Section 4).
-//! * [`estimate`]: polyline tangents and curvatures (Section 5).
-//! * [`placed`]: a projected helix placed in the sketch plane (6.1), its
-//!   lift, closest points.
-//! * [`nelder_mead`]: the simplex search the paper uses (6.2).
-//! * [`cover`]: one helix around the curvature maximum (6.1–6.3), and the
-//!   recursive covering (6.4).
-//! * [`refine`]: least squares on placed helices; the fine fitting (7).
-//! * [`lift`]: the whole method, [`lift_sketch`].
-//! * [`g1`]: beyond the paper, the lift re-fitted exactly G1 by the
-//!   floating-tangents fitter, [`refit_g1`].
+//! * [`lift_sketch`]: the whole method (its steps are described there), with
+//!   [`SketchOptions`] and the result, [`SketchLift`].
+//! * [`ProjectedHelix`]: the projected helix `H(t)` with tilt `c`
+//!   (Section 4).
+//! * [`tangents_and_curvatures`]: polyline tangents and curvatures
+//!   (Section 5); [`resample`] and [`densify`] even out the sampling,
+//!   [`estimate_noise`] and [`denoise`] deal with a noisy drawing.
+//! * [`PlacedHelix`]: a projected helix placed in the sketch plane (6.1),
+//!   its lift, closest points ([`Evaluator`], [`Foot`]).
+//! * [`minimize`]: the Nelder–Mead simplex search the paper uses (6.2).
+//! * [`cover()`]: one helix around the curvature maximum (6.1–6.3), and the
+//!   recursive covering (6.4), in [`Piece`]s.
+//! * [`refine()`]: least squares on placed helices; the fine fitting (7).
+//! * [`refit_g1`]: beyond the paper, the lift re-fitted exactly G1 by the
+//!   floating-tangents fitter.
 //!
 //! ```
 //! use glam::DVec2;
@@ -38,21 +42,29 @@
 //! assert!(g1.chain.arc_length() > lift.length);
 //! ```
 
-pub mod cover;
-pub mod estimate;
-pub mod g1;
-pub mod lift;
-pub mod nelder_mead;
-pub mod placed;
-pub mod projected;
-pub mod refine;
+mod cover;
+mod estimate;
+mod g1;
+mod lift;
+mod nelder_mead;
+mod placed;
+mod projected;
+mod refine;
 
+pub use cover::{cover, CoverOptions, COVER_GAIN, MIN_VERTICES, NOISY_COVER_GAIN};
+pub use estimate::{
+    denoise, densify, estimate_noise, is_corner, resample, residual_agreement, smoothed,
+    tangents_and_curvatures,
+};
 pub use g1::{refit_g1, G1Refit};
 pub use lift::{
     lift_sketch, Junction, LiftedHelix, Resampling, SketchError, SketchLift, SketchOptions,
+    DENOISE_ABOVE, EMAX_FRACTION, NOISE_FACTOR, NOISY_GAIN_ABOVE, UNIFORM_RATIO, WHITE_BELOW,
 };
-pub use placed::PlacedHelix;
+pub use nelder_mead::{minimize, Minimum, NelderMeadOptions};
+pub use placed::{Evaluator, Foot, PlacedHelix, PARAMS};
 pub use projected::ProjectedHelix;
+pub use refine::{objective, refine, refine_to, Objective, Piece, RefineReport};
 
 /// Helpers of the unit tests.
 #[cfg(test)]

@@ -1,18 +1,9 @@
-//! The Nelder–Mead simplex search as Lagarias, Reeds, Wright & Wright
-//! (1998) state it — the method the paper uses for its small fits (Section
-//! 6.2, reference \[14\]): reflection ρ = 1, expansion χ = 2, contraction
-//! γ = ½ (outside and inside), shrink σ = ½, with their tie-breaking
-//! (a new vertex goes after the old ones of equal value).
-//!
-//! Stops when the simplex is small in both senses —
-//! `max |f_i − f_0| ≤ ftol·(|f_0| + tiny)` and `max ‖x_i − x_0‖_∞ ≤ xtol` —
-//! or once `max_evals` evaluations are spent (checked before each step:
-//! the step under way may spend up to `N + 1` more).
+//! The Nelder–Mead simplex search of Section 6.2 (described on `minimize`).
 
-/// Stopping rules.
+/// Stopping rules of [`minimize`].
 ///
 /// ```
-/// use strandfit::sketch::nelder_mead::{minimize, NelderMeadOptions};
+/// use strandfit::sketch::{minimize, NelderMeadOptions};
 ///
 /// let rosenbrock = |x: &[f64; 2]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2);
 /// // A budget of 30 evaluations stops the search early: the last step may
@@ -47,7 +38,7 @@ impl Default for NelderMeadOptions {
 /// The best vertex found, its value and the evaluations spent.
 ///
 /// ```
-/// use strandfit::sketch::nelder_mead::{minimize, NelderMeadOptions};
+/// use strandfit::sketch::{minimize, NelderMeadOptions};
 ///
 /// // The value is the function's at the vertex returned; every call counted.
 /// let mut calls = 0;
@@ -70,8 +61,19 @@ pub struct Minimum<const N: usize> {
 /// Minimise `f` from `x0`, the initial simplex `x0` and `x0 + step_i e_i`.
 /// A `NaN` value counts as `+∞` (so a bad region is left, not trusted).
 ///
+/// The Nelder–Mead simplex search as Lagarias, Reeds, Wright & Wright
+/// (1998) state it — the method the paper uses for its small fits (Section
+/// 6.2, reference \[14\]): reflection ρ = 1, expansion χ = 2, contraction
+/// γ = ½ (outside and inside), shrink σ = ½, with their tie-breaking
+/// (a new vertex goes after the old ones of equal value).
+///
+/// Stops when the simplex is small in both senses —
+/// `max |f_i − f_0| ≤ ftol·(|f_0| + tiny)` and `max ‖x_i − x_0‖_∞ ≤ xtol` —
+/// or once `max_evals` evaluations are spent (checked before each step:
+/// the step under way may spend up to `N + 1` more).
+///
 /// ```
-/// use strandfit::sketch::nelder_mead::{minimize, NelderMeadOptions};
+/// use strandfit::sketch::{minimize, NelderMeadOptions};
 /// let rosenbrock = |x: &[f64; 2]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2);
 /// let m = minimize(rosenbrock, [-1.2, 1.0], [0.1, 0.1], &NelderMeadOptions::default());
 /// assert!((m.x[0] - 1.0).abs() < 1e-4 && (m.x[1] - 1.0).abs() < 1e-4, "{:?}", m.x);

@@ -1,18 +1,5 @@
-//! A projected helix placed in the sketch plane: the alignment of Section
-//! 6.1 (translation, rotation and possibly a reflection between the helix
-//! frame `F_H` at `t = 0` and the sketch), with the helix `(a, b, c)`:
-//!
-//! ```text
-//! P(t) = o + R(θ) S H(t),   S = diag(−1, 1) if reflected, else I,
-//! ```
-//!
-//! and its lift `(P(t), σ H_3D,R,z(t) + z₀)` (Section 7; `σ = −1` is the
-//! mirror helix `H_3D,S`). The map `(x, y, z) ↦ (o + R S (x, y), σ z + z₀)`
-//! is an isometry of space, so the lift of a helix is a helix.
-//!
-//! Parameters for the fits are `p = [θ, o_x, o_y, a, b, c]`; `a` and `b`
-//! may go negative during a fit (the curve is still a helix of radius `|a|`
-//! and pitch `|b|`).
+//! A projected helix placed in the sketch plane, `PlacedHelix` (the
+//! placement and the lift are described in the item's documentation).
 
 use glam::{DVec2, DVec3};
 
@@ -21,7 +8,7 @@ use super::ProjectedHelix;
 /// The number of parameters of one placed helix.
 ///
 /// ```
-/// use strandfit::sketch::placed::{PlacedHelix, PARAMS};
+/// use strandfit::sketch::{PlacedHelix, PARAMS};
 ///
 /// // The parameter vector, and one column of the Jacobian per parameter.
 /// let p: [f64; PARAMS] = [0.7, 0.3, -0.2, 0.4, 0.15, 0.5];
@@ -32,6 +19,22 @@ use super::ProjectedHelix;
 pub const PARAMS: usize = 6;
 
 /// A projected helix in sketch coordinates.
+///
+/// Placed by the alignment of Section 6.1 (translation, rotation and
+/// possibly a reflection between the helix frame `F_H` at `t = 0` and the
+/// sketch), with the helix `(a, b, c)`:
+///
+/// ```text
+/// P(t) = o + R(θ) S H(t),   S = diag(−1, 1) if reflected, else I,
+/// ```
+///
+/// and its lift `(P(t), σ H_3D,R,z(t) + z₀)` (Section 7; `σ = −1` is the
+/// mirror helix `H_3D,S`). The map `(x, y, z) ↦ (o + R S (x, y), σ z + z₀)`
+/// is an isometry of space, so the lift of a helix is a helix.
+///
+/// Parameters for the fits are `p = [θ, o_x, o_y, a, b, c]`; `a` and `b`
+/// may go negative during a fit (the curve is still a helix of radius `|a|`
+/// and pitch `|b|`).
 ///
 /// ```
 /// use glam::DVec2;

@@ -1,20 +1,23 @@
-//! The projected helix of Section 4 (paper 003): the helix of radius `a`
-//! and pitch `b` about the `y` axis, through the origin,
-//! `H_Prim(t) = (a(cos t − 1), bt, a sin t)`, turned by `c` about the `x`
-//! axis,
-//!
-//! ```text
-//! H_3D,R(t) = (a(cos t − 1), bt cos c − a sin c sin t, bt sin c + a cos c sin t),
-//! ```
-//!
-//! and its orthogonal projection on `z = 0`, `H(t)` = the first two
-//! coordinates. Only the rotation about `x` changes the projection's shape
-//! (a rotation about `y` shifts `t`, one about `z` turns the plane).
+//! The projected helix of Section 4 (paper 003), `ProjectedHelix` (its
+//! formula is in the item's documentation).
 
 use glam::{DVec2, DVec3};
 
 /// `(a, b, c)`: radius `|a|`, pitch `|b|` per radian, tilt `c` about the
 /// `x` axis (`a` and `b` are signed: a fit may leave either negative).
+///
+/// The projected helix of Section 4 (paper 003): the helix of radius `a`
+/// and pitch `b` about the `y` axis, through the origin,
+/// `H_Prim(t) = (a(cos t − 1), bt, a sin t)`, turned by `c` about the `x`
+/// axis,
+///
+/// ```text
+/// H_3D,R(t) = (a(cos t − 1), bt cos c − a sin c sin t, bt sin c + a cos c sin t),
+/// ```
+///
+/// and its orthogonal projection on `z = 0`, `H(t)` = the first two
+/// coordinates. Only the rotation about `x` changes the projection's shape
+/// (a rotation about `y` shifts `t`, one about `z` turns the plane).
 ///
 /// ```
 /// use strandfit::sketch::ProjectedHelix;

@@ -1,28 +1,5 @@
-//! Least-squares refinement of placed helices against the sketch, and the
-//! fine fitting of Section 7.
-//!
-//! The paper minimises `E = α_T E_T + (1 − α_T) E_D` over all `(aᵢ, bᵢ,
-//! cᵢ)` by the simplex method (about a minute for 500 vertices in Matlab).
-//! Here the same objective, with two changes, is minimised by
-//! Levenberg–Marquardt:
-//!
-//! * each helix's placement (`θ`, `o`) is free as well as `(a, b, c)`: the
-//!   alignment of Section 6.1 rests on one estimated tangent at the seed
-//!   vertex, and freeing it is what lets an exact projection be fitted
-//!   exactly;
-//! * the distance term is made dimensionless, so the result does not
-//!   depend on the scale of the drawing: `E_D = Σ (dᵢⱼ / E_max)²` (vertex
-//!   distances in units of the threshold), with `E_T = Σ ‖T̂⁻ − T̂⁺‖²` over
-//!   junctions as printed. A junction kink of 0.1 rad then weighs as much
-//!   as one vertex moved by 0.1 `E_max`: with `α_T = ½` the fine fit
-//!   mostly keeps the drawing and removes the kinks that cost little.
-//!
-//! `dᵢⱼ` is the signed distance of vertex `v_{i,j}` along the curve's
-//! normal at its closest point `Hᵢ(t_{i,j})`; its gradient is `−ν·∂P/∂p`
-//! (the closest-point condition removes the `∂t` term), so the distance
-//! rows get exact Jacobians. The tangent rows depend on the junction's
-//! closest parameters too and are differentiated numerically (central
-//! differences, re-projecting the junction vertex) — a handful of rows.
+//! Least-squares refinement of placed helices, and the fine fitting of
+//! Section 7 (the objective and the method are described on `refine`).
 
 use faer::linalg::solvers::Solve;
 use faer::Mat;
@@ -34,7 +11,7 @@ use super::placed::{Foot, PlacedHelix, PARAMS};
 ///
 /// ```
 /// use glam::DVec2;
-/// use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// use strandfit::sketch::{Piece, PlacedHelix};
 ///
 /// // Twenty vertices of a placed helix, and the piece that fits them.
 /// let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
@@ -64,7 +41,7 @@ impl Piece {
     ///
     /// ```
     /// # use glam::DVec2;
-    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # use strandfit::sketch::{Piece, PlacedHelix};
     /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
     /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
     /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
@@ -85,7 +62,7 @@ impl Piece {
     ///
     /// ```
     /// # use glam::DVec2;
-    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # use strandfit::sketch::{Piece, PlacedHelix};
     /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
     /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
     /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
@@ -115,7 +92,7 @@ impl Piece {
     ///
     /// ```
     /// # use glam::DVec2;
-    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # use strandfit::sketch::{Piece, PlacedHelix};
     /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
     /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
     /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
@@ -140,7 +117,7 @@ impl Piece {
     ///
     /// ```
     /// # use glam::DVec2;
-    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # use strandfit::sketch::{Piece, PlacedHelix};
     /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
     /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
     /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
@@ -164,10 +141,10 @@ impl Piece {
     /// curve between them (0 for fewer than two vertices). Beyond the
     /// paper: a drawing is a view of its curve, and a piece whose depth
     /// runs to many times its drawn length (a curve seen almost end-on)
-    /// fits noise, not a stroke (see [`cover`](super::cover)).
+    /// fits noise, not a stroke (see [`cover`](super::cover())).
     ///
     /// ```
-    /// use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// use strandfit::sketch::{Piece, PlacedHelix};
     ///
     /// // A helix seen along its axis (tilt π/2): a circle of radius 1 drawn,
     /// // depth 0.5 per radian, so a slope of 0.5.
@@ -206,7 +183,7 @@ impl Piece {
     ///
     /// ```
     /// # use glam::DVec2;
-    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # use strandfit::sketch::{Piece, PlacedHelix};
     /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
     /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
     /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
@@ -230,7 +207,7 @@ impl Piece {
     ///
     /// ```
     /// # use glam::DVec2;
-    /// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+    /// # use strandfit::sketch::{Piece, PlacedHelix};
     /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
     /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
     /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
@@ -253,17 +230,17 @@ impl Piece {
     }
 }
 
-/// Weights of the objective.
+/// Weights of the objective `E` of the fine fitting (see [`refine()`]).
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # use strandfit::sketch::{Piece, PlacedHelix};
 /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
 /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
 /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
 /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
 /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
-/// use strandfit::sketch::refine::{objective, Objective};
+/// use strandfit::sketch::{objective, Objective};
 ///
 /// // The vertices moved 0.01 off the curve, along its normals.
 /// let off: Vec<DVec2> = piece.feet(&points).iter().zip(&points).map(|(f, p)| *p + 0.01 * f.normal).collect();
@@ -284,13 +261,13 @@ pub struct Objective {
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # use strandfit::sketch::{Piece, PlacedHelix};
 /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
 /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
 /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
 /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
 /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
-/// use strandfit::sketch::refine::{refine, Objective};
+/// use strandfit::sketch::{refine, Objective};
 ///
 /// // A helix a little off the vertices, refined in at most 50 iterations.
 /// piece.helix.helix.a += 0.02;
@@ -314,17 +291,17 @@ fn joined(pieces: &[Piece], i: usize) -> bool {
     pieces[i - 1].last == pieces[i].first
 }
 
-/// `E` for the current parameters and projections.
+/// `E` (see [`refine()`]) for the current parameters and projections.
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # use strandfit::sketch::{Piece, PlacedHelix};
 /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
 /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
 /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
 /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
 /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
-/// use strandfit::sketch::refine::{objective, Objective};
+/// use strandfit::sketch::{objective, Objective};
 ///
 /// // The piece cut in two at vertex 10: no kink, no distance, E = 0.
 /// let mut left = piece.clone();
@@ -385,13 +362,13 @@ fn perturbed_tangent(piece: &Piece, params: &[f64; PARAMS], v: DVec2, at_end: bo
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # use strandfit::sketch::{Piece, PlacedHelix};
 /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
 /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
 /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
 /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
 /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
-/// use strandfit::sketch::refine::{refine, Objective};
+/// use strandfit::sketch::{refine, Objective};
 ///
 /// // From a helix a little off (radius, pitch and rotation), back onto the
 /// // vertices.
@@ -404,6 +381,34 @@ fn perturbed_tangent(piece: &Piece, params: &[f64; PARAMS], v: DVec2, at_end: bo
 /// assert!(report.after < 1e-12 * report.before, "{report:?}");
 /// assert!(piece.max_distance(&points) < 1e-7);
 /// ```
+///
+/// # Method
+///
+/// Least-squares refinement of placed helices against the sketch, and the
+/// fine fitting of Section 7.
+///
+/// The paper minimises `E = α_T E_T + (1 − α_T) E_D` over all `(aᵢ, bᵢ,
+/// cᵢ)` by the simplex method (about a minute for 500 vertices in Matlab).
+/// Here the same objective, with two changes, is minimised by
+/// Levenberg–Marquardt:
+///
+/// * each helix's placement (`θ`, `o`) is free as well as `(a, b, c)`: the
+///   alignment of Section 6.1 rests on one estimated tangent at the seed
+///   vertex, and freeing it is what lets an exact projection be fitted
+///   exactly;
+/// * the distance term is made dimensionless, so the result does not
+///   depend on the scale of the drawing: `E_D = Σ (dᵢⱼ / E_max)²` (vertex
+///   distances in units of the threshold), with `E_T = Σ ‖T̂⁻ − T̂⁺‖²` over
+///   junctions as printed. A junction kink of 0.1 rad then weighs as much
+///   as one vertex moved by 0.1 `E_max`: with `α_T = ½` the fine fit
+///   mostly keeps the drawing and removes the kinks that cost little.
+///
+/// `dᵢⱼ` is the signed distance of vertex `v_{i,j}` along the curve's
+/// normal at its closest point `Hᵢ(t_{i,j})`; its gradient is `−ν·∂P/∂p`
+/// (the closest-point condition removes the `∂t` term), so the distance
+/// rows get exact Jacobians. The tangent rows depend on the junction's
+/// closest parameters too and are differentiated numerically (central
+/// differences, re-projecting the junction vertex) — a handful of rows.
 pub fn refine(
     points: &[DVec2],
     pieces: &mut [Piece],
@@ -417,13 +422,13 @@ pub fn refine(
 ///
 /// ```
 /// # use glam::DVec2;
-/// # use strandfit::sketch::{refine::Piece, PlacedHelix};
+/// # use strandfit::sketch::{Piece, PlacedHelix};
 /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
 /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
 /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
 /// # let mut piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
 /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
-/// use strandfit::sketch::refine::{refine, refine_to, Objective};
+/// use strandfit::sketch::{refine, refine_to, Objective};
 ///
 /// // Stopping at the first step that gains less than half: fewer iterations.
 /// piece.helix.helix.a += 0.02;

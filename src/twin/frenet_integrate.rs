@@ -1,8 +1,9 @@
 //! Twin of `shaders/frenet_integrate.wgsl`: the Frenet–Serret integration of
 //! one 3D Euler spiral per invocation, in the kernel's precision.
 //!
-//! The integrator is [`crate::euler::FrenetProblem`]'s (read `src/euler/frenet.rs` for the math
-//! and the error argument): scaled arc length `u = s/L ∈ [0, 1]`, `N` steps
+//! The integrator is [`crate::euler::FrenetProblem`]'s (its
+//! [documentation](crate::euler::FrenetProblem#integration) has the math and
+//! the error argument): scaled arc length `u = s/L ∈ [0, 1]`, `N` steps
 //! of `h = 1/N`, each two rotations by the closed-form fourth-order Magnus
 //! vector `Ω = (ℓ(t₀ + d u_m), ℓ³c/12, ℓ(k₀ + g u_m))`, `ℓ = h/2`,
 //! `c = k₀d − t₀g`, `u_m` the half step's midpoint, each applied as the

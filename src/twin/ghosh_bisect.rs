@@ -1,7 +1,7 @@
 //! Twin of `shaders/ghosh_bisect.wgsl`: one Ghosh short helix per segment by
 //! bisection on `G(φ) = A·N(φ) + B·D(φ) = 0` over the full `I₀` (paper 000,
 //! Algorithm 2 with the ERRATA corrections; the `f64` reference with Brent's
-//! method is [`crate::helix::interpolate`]; `src/helix/ghosh.rs` derives the
+//! method is [`crate::helix::interpolate`], whose documentation derives the
 //! formulas).
 //!
 //! Split of the work. The host, in `f64`, reduces each segment to five
