@@ -212,50 +212,49 @@ pub fn compress_blocks(
     let mut summary = CompressSummary::default();
     // Blocks go in groups of one per thread: a group is fitted and coded in
     // parallel (each block's entropy coding is sequential), while the
-    // group before it is verified (decoded back) before being written.
+    // group before it is verified (decoded back) before being written, and
+    // the group after it is read on this thread (a reader need not be
+    // `Send`; reading was a serial twentieth of the run).
     let group = rayon::current_num_threads().max(2);
     let mut pending: Vec<(BlockBytes, u64)> = Vec::new();
     let mut ended = false;
-    while !ended || !pending.is_empty() {
-        let mut batches: Vec<(Vec<Curve>, u64)> = Vec::with_capacity(group);
-        let mut next = summary.curves;
-        while !ended && batches.len() < group {
-            let mut batch: Vec<Curve> = Vec::with_capacity(BLOCK_CURVES);
-            while batch.len() < BLOCK_CURVES {
-                match reader.next() {
-                    Some(c) => batch.push(c?),
-                    None => {
-                        ended = true;
-                        break;
-                    }
-                }
-            }
-            if !batch.is_empty() {
-                let n = batch.len() as u64;
-                batches.push((batch, next));
-                next += n;
-            }
+    let mut read = 0u64;
+    let mut next = read_group(reader, group, &mut ended, &mut read);
+    loop {
+        let batches = next?;
+        if batches.is_empty() && pending.is_empty() {
+            break;
         }
-        let (verified, encoded): (Vec<_>, Vec<_>) = rayon::join(
-            || pending.par_iter().map(|(b, _)| b.verify(&params)).collect(),
-            || {
-                batches
-                    .par_iter()
-                    .map(|(batch, _)| {
-                        let ins: Vec<CurveIn> = batch
-                            .iter()
-                            .map(|c| CurveIn {
-                                id: c.id.as_deref(),
-                                points: &c.points,
-                                point_data: &c.point_data,
-                                curve_data: &c.curve_data,
+        let mut verified: Vec<Result<(), (usize, String)>> = Vec::new();
+        let mut encoded = Vec::new();
+        next = Ok(Vec::new());
+        rayon::in_place_scope(|s| {
+            s.spawn(|_| {
+                (verified, encoded) = rayon::join(
+                    || pending.par_iter().map(|(b, _)| b.verify(&params)).collect(),
+                    || {
+                        batches
+                            .par_iter()
+                            .map(|(batch, _)| {
+                                let ins: Vec<CurveIn> = batch
+                                    .iter()
+                                    .map(|c| CurveIn {
+                                        id: c.id.as_deref(),
+                                        points: &c.points,
+                                        point_data: &c.point_data,
+                                        curve_data: &c.curve_data,
+                                    })
+                                    .collect();
+                                encode_block_bytes_on(&ins, &params, n_cd, n_pd, checker)
                             })
-                            .collect();
-                        encode_block_bytes_on(&ins, &params, n_cd, n_pd, checker)
-                    })
-                    .collect()
-            },
-        );
+                            .collect()
+                    },
+                );
+            });
+            if !ended {
+                next = read_group(reader, group, &mut ended, &mut read);
+            }
+        });
         for (check, (block, at)) in verified.into_iter().zip(pending.drain(..)) {
             check.map_err(|(k, why)| {
                 IoError::new(input, format!("cannot be compressed: {why}")).curve(at + k as u64)
@@ -282,6 +281,36 @@ pub fn compress_blocks(
         }
     }
     Ok(summary)
+}
+
+/// Up to `group` blocks of curves from `reader`, each with the index of
+/// its first curve (`read` counts the curves read so far); `ended` is set
+/// once the reader has no more.
+fn read_group(
+    reader: &mut dyn CurveReader,
+    group: usize,
+    ended: &mut bool,
+    read: &mut u64,
+) -> Result<Vec<(Vec<Curve>, u64)>, IoError> {
+    let mut batches = Vec::with_capacity(group);
+    while !*ended && batches.len() < group {
+        let mut batch: Vec<Curve> = Vec::with_capacity(BLOCK_CURVES);
+        while batch.len() < BLOCK_CURVES {
+            match reader.next() {
+                Some(c) => batch.push(c?),
+                None => {
+                    *ended = true;
+                    break;
+                }
+            }
+        }
+        if !batch.is_empty() {
+            let n = batch.len() as u64;
+            batches.push((batch, *read));
+            *read += n;
+        }
+    }
+    Ok(batches)
 }
 
 /// Blocks decoded at once (in parallel) by [`decompress_stream`].
