@@ -1,39 +1,6 @@
-//! Polylines → piecewise helices with the element count chosen per curve:
-//! fixed (`--elements N`), by a target element length (`--element-length S`)
-//! or by a tolerance (`--tolerance T`: the fewest elements whose chain stays
-//! within `T` of the input, in the distance chosen by [`Distance`]: by
-//! default the input's points must lie within `T` of the chain in order,
-//! the Fréchet distance with the input taken as its samples; optionally
-//! the continuous Fréchet distance between the chain and the input
-//! polyline).
-//!
-//! Pipeline per curve: Schneider smoothing to a G1 cubic spline
-//! ([`spline::fit_polyline`](crate::spline::fit_polyline)), then the floating
-//! tangents fit ([`fit`](crate::fit)) with `N` elements, then the check of
-//! the chain against the *input* polyline — not against the spline, so the
-//! smoothing error is inside the tolerance, not added to it.
-//!
-//! The check samples the chain at arc step `h` with `κ_max h²/8 ≈ T/64`: a
-//! curve of curvature at most `κ` is within its sagitta `κh²/8` of its
-//! chords, so `d(chain, input) ≤ d(samples, input) + T/64` for either
-//! distance, and the test is `d(samples, input) ≤ T − sagitta`. The
-//! reported distance is that bound, never an underestimate.
-//!
-//! Failure modes the floating tangents paper names, and what is done:
-//! * too few elements on a long curve: the chain cuts corners. The search
-//!   raises `N` until the distance is met.
-//! * on a short curve with many elements, the relaxation can move break
-//!   points past each other and the chain loops. An element whose chord
-//!   runs against the chord of the samples it was fitted to marks that `N`
-//!   as failed (`inverted`); a loop larger than the tolerance also fails
-//!   the Fréchet test, which forbids backtracking.
-//!
-//! Search for the tolerance: `N = 1, 2, 4, …` until the test passes (or
-//! `max_elements`), then an upward scan between the last failure and the
-//! first pass. The distance is not monotone in `N` in general, so this finds
-//! the smallest passing `N` above the last failing power of two. If no `N`
-//! up to the cap passes, the best chain tried is returned with
-//! `within_tolerance = false`.
+//! Polylines → piecewise helices with the element count chosen per curve;
+//! the pipeline, the check and the search are described on
+//! `fit_polyline_chain`.
 
 use glam::DVec3;
 
@@ -147,6 +114,44 @@ pub enum AdaptiveError {
 /// assert!(fit.within_tolerance && fit.frechet <= 0.01);
 /// assert!(fit.chain.len() < 10);
 /// ```
+///
+/// # Method
+///
+/// The element count is chosen per curve ([`ElementCount`]): fixed
+/// (`--elements N` on the command line), by a target element length
+/// (`--element-length S`) or by a tolerance (`--tolerance T`: the fewest
+/// elements whose chain stays within `T` of the input, in the distance chosen
+/// by [`Distance`]: by default the input's points must lie within `T` of the
+/// chain in order, the Fréchet distance with the input taken as its samples;
+/// optionally the continuous Fréchet distance between the chain and the input
+/// polyline).
+///
+/// Pipeline per curve: Schneider smoothing to a G1 cubic spline
+/// ([`spline::fit_polyline`](crate::spline::fit_polyline)), then the floating
+/// tangents fit ([`fit_spline`](crate::fit_spline)) with `N` elements, then the
+/// check of the chain against the *input* polyline — not against the spline, so
+/// the smoothing error is inside the tolerance, not added to it.
+///
+/// The check samples the chain at arc step `h` with `κ_max h²/8 ≈ T/64`: a
+/// curve of curvature at most `κ` is within its sagitta `κh²/8` of its
+/// chords, so `d(chain, input) ≤ d(samples, input) + T/64` for either
+/// distance, and the test is `d(samples, input) ≤ T − sagitta`. The
+/// reported distance is that bound, never an underestimate.
+///
+/// Failure modes the floating tangents paper names, and what is done:
+/// * too few elements on a long curve: the chain cuts corners. The search
+///   raises `N` until the distance is met.
+/// * on a short curve with many elements, the relaxation can move break
+///   points past each other and the chain loops. An element whose chord
+///   runs against the chord of the samples it was fitted to marks that `N`
+///   as failed (`inverted`); a loop larger than the tolerance also fails
+///   the Fréchet test, which forbids backtracking.
+///
+/// Search for the tolerance: `N = 1, 2, 4, …` until the test passes (or
+/// `max_elements`), then an upward scan between the last failure and the
+/// first pass. The distance is not monotone in `N` in general, so this finds
+/// the smallest passing `N` above the last failing power of two. If no `N`
+/// up to the cap passes, the best chain tried is returned with
 pub fn fit_polyline_chain(
     points: &[DVec3],
     opts: &AdaptiveOptions,
@@ -340,7 +345,7 @@ pub fn chain_samples(chain: &PiecewiseHelix, tol: f64) -> (Vec<DVec3>, f64) {
 
 /// `d(chain, input) ≤ tol`, conservatively: the chain is replaced by
 /// samples whose chords are within their sagitta of it, and the test is run
-/// at `tol − sagitta` (see the module docs).
+/// at `tol − sagitta` (see [`fit_polyline_chain`], Method).
 ///
 /// ```
 /// use strandfit::chain_within;

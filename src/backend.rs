@@ -1,18 +1,4 @@
-//! The `Backend` seam: every batch operation goes through one choice of
-//! engine — the `f64` CPU reference (rayon) or the GPU (wgpu kernels with
-//! their CPU twins; [`crate::gpu`], [`crate::kernels`]).
-//!
-//! `auto` opens the GPU when an adapter exists and falls back to the CPU
-//! otherwise, saying which on stderr. What runs where on the GPU backend:
-//!
-//! | operation     | GPU backend                                   |
-//! |---------------|-----------------------------------------------|
-//! | `interpolate` | `ghosh_bisect.wgsl`                            |
-//! | `fit`         | sampling and relaxation on the CPU (rayon; the dense 2N+3 LU stays there by design), all Ghosh interpolations of a batch of curves in one `ghosh_bisect` run |
-//! | `evaluate`    | `helix_eval.wgsl` (piecewise helices → points and tangents) |
-//! | `sample`      | `spline_sample.wgsl` (arc-length tables and inversion on the GPU; splines with cusps fall back to the `f64` reference) |
-//! | `integrate`   | `frenet_integrate.wgsl` (Euler spirals: end point and frame, or samples) |
-//! | `compress`    | `arc_check.wgsl`: the codec's candidate elements of all curves of a block checked together, a batch per round of the search; unsure verdicts (within rounding of the tolerance) and the entropy coding stay on the CPU, so the container is the same bytes |
+//! The `Backend` seam; what runs where is described on `Backend`.
 
 use rayon::prelude::*;
 
@@ -94,6 +80,23 @@ impl GpuEngine {
 }
 
 /// A resolved backend.
+///
+/// Every batch operation goes through one choice of engine — the `f64` CPU
+/// reference (rayon) or the GPU (wgpu kernels, each checked against a CPU
+/// twin).
+///
+/// [`BackendChoice::Auto`] opens the GPU when an adapter exists and falls back
+/// to the CPU otherwise ([`Backend::open_explained`] says which). What runs
+/// where on the GPU backend:
+///
+/// | operation     | GPU backend                                   |
+/// |---------------|-----------------------------------------------|
+/// | `interpolate` | `ghosh_bisect.wgsl`                            |
+/// | `fit`         | sampling and relaxation on the CPU (rayon; the dense 2N+3 LU stays there by design), all Ghosh interpolations of a batch of curves in one `ghosh_bisect` run |
+/// | `evaluate`    | `helix_eval.wgsl` (piecewise helices → points and tangents) |
+/// | `sample`      | `spline_sample.wgsl` (arc-length tables and inversion on the GPU; splines with cusps fall back to the `f64` reference) |
+/// | `integrate`   | `frenet_integrate.wgsl` (Euler spirals: end point and frame, or samples) |
+/// | `compress`    | `arc_check.wgsl`: the codec's candidate elements of all curves of a block checked together, a batch per round of the search; unsure verdicts (within rounding of the tolerance) and the entropy coding stay on the CPU, so the container is the same bytes |
 pub enum Backend {
     /// The `f64` CPU reference, on all cores (rayon).
     Cpu,

@@ -1,29 +1,5 @@
-//! Compression of polylines into the `.sfh` container, curve by curve:
-//! the adaptive fit ([`adaptive`](crate::adaptive)) and, in compact
-//! storage, the coarsest quantisation grids that keep the *decoded* chain
-//! within the tolerance.
-//!
-//! Error budget with a tolerance `T`: the fit aims at `fit_share · T`
-//! (default 0.95: on the fornix at 0.5 mm, 0.8 gave 2,531 elements and
-//! 16.9 KB, 0.95 gave 2,235 and 14.5 KB — elements cost more than the finer
-//! grids the smaller quantisation margin needs); the quantiser then takes the coarsest grids
-//! `ΔL = 2^⌊log₂ T⌋ 2^{−p}`, `Δθ = 2^⌊log₂(T/S)⌋ 2^{−p}` (`S` the chain's
-//! length: an angle error `Δθ` moves the far end by at most `SΔθ`) for
-//! `p = 1, 2, …` whose decoded chain passes the same Fréchet test as the fit
-//! against the input. So the quantisation error is inside the tolerance,
-//! measured, not estimated; and drift along the chain is what the test
-//! sees, so a long chain simply gets a finer grid.
-//!
-//! Without a tolerance (`--elements`, `--element-length`) the compact grids
-//! are chosen to stay within `1.1 ×` the fit's own Fréchet distance.
-//!
-//! Curves that cannot be fitted are stored verbatim and reported: empty
-//! curves, one-point curves (or all points equal), and any fit failure. In
-//! compact storage a curve is also stored as its points (`f32`) when they
-//! take fewer bytes than its helices: sparse polylines at a tolerance
-//! below their corners' sagitta need about one element per point, and four
-//! numbers per element then cost more than three per point. So the
-//! container is never larger than the float32 polylines.
+//! Compression of polylines into the `.sfh` container, curve by curve; the
+//! method and its error budget are described on `compress_curve`.
 
 use glam::DVec3;
 
@@ -92,7 +68,8 @@ pub struct CurveOutcome {
     pub points_cheaper: bool,
 }
 
-/// Compress one polyline.
+/// Compress one polyline (for the `.sfh` container; see
+/// [Method](compress_curve#method)).
 ///
 /// ```
 /// use strandfit::io::{Shape, Storage};
@@ -110,6 +87,37 @@ pub struct CurveOutcome {
 /// assert_eq!((one.shape, one.elements), (Shape::Points(vec![DVec3::ONE]), 0));
 /// assert!(one.verbatim.is_some());
 /// ```
+///
+/// # Method
+///
+/// Curve by curve: the adaptive fit
+/// ([`fit_polyline_chain`](crate::fit_polyline_chain)) and, in compact storage,
+/// the coarsest quantisation grids that keep the *decoded* chain within the
+/// tolerance.
+///
+/// Error budget with a tolerance `T`: the fit aims at `fit_share · T` (default
+/// 0.95: on the fornix at 0.5 mm, 0.8 gave 2,531 elements and 16.9 KB, 0.95
+/// gave 2,235 and 14.5 KB — elements cost more than the finer grids the smaller
+/// quantisation margin needs); the quantiser then takes the coarsest grids
+/// `ΔL = 2^⌊log₂ T⌋ 2^{−p}`, `Δθ = 2^⌊log₂(T/S)⌋ 2^{−p}` (`S` the chain's
+/// length: an angle error `Δθ` moves the far end by at most `SΔθ`) for
+/// `p = 1, 2, …` whose decoded chain passes the same Fréchet test as the fit
+/// against the input. So the quantisation error is inside the tolerance,
+/// measured, not estimated; and drift along the chain is what the test sees, so
+/// a long chain simply gets a finer grid.
+///
+/// Without a tolerance ([`ElementCount::Fixed`](crate::ElementCount::Fixed),
+/// [`ElementCount::ElementLength`](crate::ElementCount::ElementLength)) the
+/// compact grids are chosen to stay within `1.1 ×` the fit's own Fréchet
+/// distance.
+///
+/// Curves that cannot be fitted are stored verbatim and reported: empty
+/// curves, one-point curves (or all points equal), and any fit failure. In
+/// compact storage a curve is also stored as its points (`f32`) when they
+/// take fewer bytes than its helices: sparse polylines at a tolerance
+/// below their corners' sagitta need about one element per point, and four
+/// numbers per element then cost more than three per point. So the
+/// container is never larger than the float32 polylines.
 pub fn compress_curve(points: &[DVec3], opts: &CompressOptions) -> CurveOutcome {
     let tol = opts.tolerance();
     // Points are stored as f32 unless the container is f64: exact for

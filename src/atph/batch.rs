@@ -1,6 +1,4 @@
-//! Many Hermite problems at once, in parallel on the CPU (rayon): the CPU
-//! backend of [`crate::backend::Backend::interpolate_atph`] (the GPU one is
-//! [`crate::kernels::atph_hermite`]).
+//! Many Hermite problems at once: `interpolate_pairs`.
 
 use rayon::prelude::*;
 
@@ -11,6 +9,10 @@ pub use crate::pair::HermitePair;
 
 /// [`interpolate`] (or, where `lengths` gives one, [`interpolate_with_length`])
 /// for every pair; a pair that cannot be solved gets its own error.
+/// In parallel on the CPU (rayon): the CPU backend of
+/// [`Backend::interpolate_atph`](crate::Backend::interpolate_atph) (the GPU
+/// one is the `atph_hermite` kernel).
+///
 ///
 /// Each result interpolates its pair, with the prescribed length where given
 /// (here the pair's own arc length on the cylinder curve

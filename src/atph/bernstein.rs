@@ -1,8 +1,10 @@
-//! The scaling function `ρ` of an ATPH curve as a polynomial of degree
-//! `n ≤ 3` in Bernstein form on `[0, 1]`, `ρ(t) = Σ ρ_j B_jⁿ(t)` (Eqs. 2.7,
-//! 2.9). Its sign decides regularity (Proposition 1): `‖r′‖ = |ρ|`.
+//! The scaling function `ρ` of an ATPH curve in Bernstein form: `Bernstein`.
 
 /// Bernstein coefficients `ρ₀ … ρₙ`, `n ≤ 3`.
+///
+/// The scaling function `ρ` of an ATPH curve as a polynomial of degree
+/// `n ≤ 3` in Bernstein form on `[0, 1]`, `ρ(t) = Σ ρ_j B_jⁿ(t)` (Eqs. 2.7,
+/// 2.9). Its sign decides regularity (Proposition 1): `‖r′‖ = |ρ|`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bernstein {
     coef: [f64; 4],

@@ -1,18 +1,5 @@
-//! A spatial ATPH curve, `r(ξ) = r₀ + ∫₀^ξ ρ(t) T(t) dt`, `ξ ∈ [0, 1]`
-//! (Eq. 2.2), with `T` from [`SphericalTangent`] and `ρ` a polynomial of
-//! degree ≤ 3 in Bernstein form.
-//!
-//! **Closed form.** With `ρ = Σ c_k tᵏ`, `r(ξ) = r₀ + Σ c_k V_k(ξ)` where
-//! `V_k = ∫₀^ξ tᵏ T` ([`SphericalTangent::moment_vectors`]); in the
-//! Bernstein coefficients this is Eq. (2.8) (quadratic) or (2.10) (cubic).
-//! Accuracy: each `V_k` is good to a few ulps of `ξ^{k+1}`, and the
-//! Bernstein-to-monomial weights are at most 6, so `r` is good to about
-//! `1e-15 · Σ|ρ_j|` — a few ulps of the curve's size.
-//!
-//! **Differential geometry** (Section 2): `r′ = ρT`, so `‖r′‖ = |ρ|`,
-//! `κ = ‖T × T′‖/|ρ|`, `τ = det(T, T′, T″)/(ρ ‖T × T′‖²)` (the paper writes
-//! `|ρ|` in `τ`, which flips its sign where `ρ < 0`; `det(r′, r″, r‴)` has
-//! `ρ³`).
+//! A spatial ATPH curve: `AtphCurve`, whose documentation gives its closed
+//! form and differential geometry.
 
 use glam::DVec3;
 
@@ -20,7 +7,24 @@ use super::bernstein::{Bernstein, Sign};
 use super::tangent::SphericalTangent;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-/// A spatial ATPH curve on `ξ ∈ [0, 1]` (module docs): start point, unit tangent field and signed speed.
+/// A spatial ATPH curve on `ξ ∈ [0, 1]`: start point, unit tangent field
+/// and signed speed.
+///
+/// The curve is `r(ξ) = r₀ + ∫₀^ξ ρ(t) T(t) dt`, `ξ ∈ [0, 1]` (Eq. 2.2),
+/// with `T` from [`SphericalTangent`] and `ρ` a polynomial of
+/// degree ≤ 3 in Bernstein form.
+///
+/// **Closed form.** With `ρ = Σ c_k tᵏ`, `r(ξ) = r₀ + Σ c_k V_k(ξ)` where
+/// `V_k = ∫₀^ξ tᵏ T` ([`SphericalTangent::moment_vectors`]); in the
+/// Bernstein coefficients this is Eq. (2.8) (quadratic) or (2.10) (cubic).
+/// Accuracy: each `V_k` is good to a few ulps of `ξ^{k+1}`, and the
+/// Bernstein-to-monomial weights are at most 6, so `r` is good to about
+/// `1e-15 · Σ|ρ_j|` — a few ulps of the curve's size.
+///
+/// **Differential geometry** (Section 2): `r′ = ρT`, so `‖r′‖ = |ρ|`,
+/// `κ = ‖T × T′‖/|ρ|`, `τ = det(T, T′, T″)/(ρ ‖T × T′‖²)` (the paper writes
+/// `|ρ|` in `τ`, which flips its sign where `ρ < 0`; `det(r′, r″, r‴)` has
+/// `ρ³`).
 pub struct AtphCurve {
     /// `r₀ = r(0)`.
     pub start: DVec3,

@@ -1,24 +1,5 @@
-//! G1 Hermite interpolation by ATPH curves (Sections 3 and 4): given
-//! `P₁, T₁, P₂, T₂` (and optionally an arc length `L`), the tangent field of
-//! Section 3.1 ([`SphericalTangent::interpolating`]) and then `ρ` from a
-//! linear system on `r(1) = P₂` (and `∫₀¹ ρ = L`):
-//!
-//! | field | no length | with length |
-//! |---|---|---|
-//! | spatial | quadratic `ρ`, 3×3 (3.1) | cubic `ρ`, 4×4 (4.1) |
-//! | planar | linear `ρ`, 2×2 in the plane | quadratic `ρ`, 3×3 in the plane |
-//! | constant | `ρ = (P₂ − P₁)·T` | — (only `L = |P₂ − P₁|`) |
-//!
-//! The paper's systems carry factors 2 from the product-to-sum step; here
-//! the columns are `∫₀¹ B_jⁿ(t) T(t) dt` directly, which is (3.1) and (4.1)
-//! with the rows divided by 2 where the paper multiplies. For a planar field
-//! the paper defers to its planar predecessor (\[23\]); we take the same
-//! construction in the plane with one fewer unknown, so the system is
-//! square again and the solution unique. The solve is Gaussian elimination
-//! with partial pivoting on the stack (fixed 2–4 unknowns; a general LU
-//! would allocate per pair, and this runs a million times a second). A
-//! system whose determinant is below `1e-12` of the product of its column
-//! norms is reported singular (the paper's `m = 0` / `q = 0`).
+//! G1 Hermite interpolation by ATPH curves (Sections 3 and 4); the linear
+//! systems of each case are described on `interpolate_field`.
 
 use glam::DVec3;
 
@@ -72,7 +53,8 @@ pub enum AtphError {
 }
 
 /// G1 Hermite interpolation (Section 3): the ATPH curve from `p1` along `t1`
-/// to `p2` along `t2`, quadratic `ρ` for a spatial field.
+/// to `p2` along `t2`, quadratic `ρ` for a spatial field (the systems of
+/// every case: [`interpolate_field`]).
 ///
 /// ```
 /// use strandfit::{atph, DVec3};
@@ -180,7 +162,7 @@ pub fn spatial_system(length: Option<f64>) -> &'static str {
 }
 
 /// `ρ` for a given field: `r(0) = p1`, `r(1) = p2`, and `∫ρ = length` if
-/// given (the table in the module docs).
+/// given (the table in [Systems](interpolate_field#systems)).
 ///
 /// With the field of a quarter turn along the equator, the unique linear `ρ`
 /// to `(1, 1, 0)` is the constant `π/2`: the quarter of the unit circle:
@@ -195,6 +177,30 @@ pub fn spatial_system(length: Option<f64>) -> &'static str {
 /// let mid = DVec3::new(FRAC_PI_4.sin(), 1.0 - FRAC_PI_4.cos(), 0.0);
 /// assert!((c.position(0.5) - mid).length() < 1e-14);
 /// ```
+///
+/// # Systems
+///
+/// G1 Hermite interpolation by ATPH curves (Sections 3 and 4): given
+/// `P₁, T₁, P₂, T₂` (and optionally an arc length `L`), the tangent field of
+/// Section 3.1 ([`SphericalTangent::interpolating`]) and then `ρ` from a
+/// linear system on `r(1) = P₂` (and `∫₀¹ ρ = L`):
+///
+/// | field | no length | with length |
+/// |---|---|---|
+/// | spatial | quadratic `ρ`, 3×3 (3.1) | cubic `ρ`, 4×4 (4.1) |
+/// | planar | linear `ρ`, 2×2 in the plane | quadratic `ρ`, 3×3 in the plane |
+/// | constant | `ρ = (P₂ − P₁)·T` | — (only `L = |P₂ − P₁|`) |
+///
+/// The paper's systems carry factors 2 from the product-to-sum step; here
+/// the columns are `∫₀¹ B_jⁿ(t) T(t) dt` directly, which is (3.1) and (4.1)
+/// with the rows divided by 2 where the paper multiplies. For a planar field
+/// the paper defers to its planar predecessor (\[23\]); we take the same
+/// construction in the plane with one fewer unknown, so the system is
+/// square again and the solution unique. The solve is Gaussian elimination
+/// with partial pivoting on the stack (fixed 2–4 unknowns; a general LU
+/// would allocate per pair, and this runs a million times a second). A
+/// system whose determinant is below `1e-12` of the product of its column
+/// norms is reported singular (the paper's `m = 0` / `q = 0`).
 pub fn interpolate_field(
     p1: DVec3,
     p2: DVec3,

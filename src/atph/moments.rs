@@ -1,25 +1,5 @@
-//! Trigonometric moments `M_k(ξ) = ∫₀^ξ tᵏ e^{i(ωt + α)} dt`, `k = 0..=3`.
-//!
-//! Every closed form of paper 002 is made of these: with `ρ(t) = Σ c_k tᵏ`,
-//! the coordinates (2.3) of the ATPH curve are `Re/Im` parts of
-//! `Σ c_k M_k` at the three frequencies `A₁ = a₁ + b₁`, `B₁ = a₁ − b₁` and
-//! `a₁` ([`super::SphericalTangent::moment_vectors`]). The paper's `B_x`,
-//! `C_x`, `D_x` of (2.5) are `Re M₂ + Re M₂'`, `Re M₁ + Re M₁'`,
-//! `Re M₀ + Re M₀'` (primes: frequency `B₁`), and `A_x` of (2.6) is the
-//! same with `M₃`; likewise `y` with `Im` and `z` with `Im` at `a₁`.
-//!
-//! **Two regimes.** For `|ωξ| ≥ 2` the closed form: integration by parts,
-//! `M_k = [tᵏ e^{i(ωt+α)}/(iω)]₀^ξ − (k/(iω)) M_{k−1}`, which is (2.5) and
-//! (2.6) with the errata of `ERRATA.md` (constants `1/A₁²` in `C`, `1/A₁` in
-//! `D`). Its terms grow like `k!/|ω|^{k+1}` while the moment stays about
-//! `ξ^{k+1}/(k+1)`, so for small `|ωξ|` it cancels catastrophically and at
-//! `ω = 0` it divides by zero — the paper's "zero-divisor cases" `a₁ = 0`,
-//! `A₁ = 0`, `B₁ = 0`. There the power series
-//! `M_k = e^{iα} ξ^{k+1} Σₙ (iωξ)ⁿ / (n! (n + k + 1))` is used instead; it is
-//! the same function (the paper's "recompute the formulae", done once for
-//! every case, including `ω` merely small). At the switch `|ωξ| = 2` the
-//! recurrence's largest term is `6ξ⁴/16 < 1.5 |M₃|`, so neither regime loses
-//! more than a few ulps; the tests check both against quadrature across it.
+//! Trigonometric moments `M_k(ξ) = ∫₀^ξ tᵏ e^{i(ωt + α)} dt`, `k = 0..=3`:
+//! `trig_moments`, whose documentation gives the two regimes.
 
 /// `M_k`, `k = 0..=3`, as real and imaginary parts.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -47,6 +27,30 @@ pub const SERIES_BELOW: f64 = 2.0;
 /// let m = trig_moments(0.0, 0.0, 1.0);
 /// assert!((0..4).all(|k| (m.re[k] - 1.0 / (k + 1) as f64).abs() < 1e-15 && m.im[k] == 0.0));
 /// ```
+///
+/// # Method
+///
+/// Every closed form of paper 002 is made of these: with `ρ(t) = Σ c_k tᵏ`, the
+/// coordinates (2.3) of the ATPH curve are `Re/Im` parts of `Σ c_k M_k` at the
+/// three frequencies `A₁ = a₁ + b₁`, `B₁ = a₁ − b₁` and `a₁`
+/// ([`SphericalTangent::moment_vectors`](super::SphericalTangent::moment_vectors)).
+/// The paper's `B_x`, `C_x`, `D_x` of (2.5) are `Re M₂ + Re M₂'`,
+/// `Re M₁ + Re M₁'`, `Re M₀ + Re M₀'` (primes: frequency `B₁`), and `A_x` of
+/// (2.6) is the same with `M₃`; likewise `y` with `Im` and `z` with `Im` at
+/// `a₁`.
+///
+/// Two regimes. For `|ωξ| ≥ 2` the closed form: integration by parts,
+/// `M_k = [tᵏ e^{i(ωt+α)}/(iω)]₀^ξ − (k/(iω)) M_{k−1}`, which is (2.5) and
+/// (2.6) with the errata of `ERRATA.md` (constants `1/A₁²` in `C`, `1/A₁` in
+/// `D`). Its terms grow like `k!/|ω|^{k+1}` while the moment stays about
+/// `ξ^{k+1}/(k+1)`, so for small `|ωξ|` it cancels catastrophically and at
+/// `ω = 0` it divides by zero — the paper's "zero-divisor cases" `a₁ = 0`,
+/// `A₁ = 0`, `B₁ = 0`. There the power series
+/// `M_k = e^{iα} ξ^{k+1} Σₙ (iωξ)ⁿ / (n! (n + k + 1))` is used instead; it is
+/// the same function (the paper's "recompute the formulae", done once for
+/// every case, including `ω` merely small). At the switch `|ωξ| = 2` the
+/// recurrence's largest term is `6ξ⁴/16 < 1.5 |M₃|`, so neither regime loses
+/// more than a few ulps; the tests check both against quadrature across it.
 #[inline]
 pub fn trig_moments(omega: f64, alpha: f64, xi: f64) -> Moments {
     if (omega * xi).abs() < SERIES_BELOW {

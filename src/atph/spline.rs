@@ -1,9 +1,4 @@
-//! G1 ATPH splines (Section 5): one [`AtphCurve`] per consecutive pair of
-//! points and tangents, each from [`super::interpolate`], so the spline is
-//! G1 at the joints by construction (each segment starts and ends on the
-//! given tangents). The azimuth is continuous along the data (ERRATA
-//! 002.2): every segment turns by the shortest `b₁`, so no segment jumps by
-//! `−π` or `−3π/2` where the paper's `arctan` branch would.
+//! G1 ATPH splines (Section 5): `AtphSpline`.
 
 use glam::DVec3;
 
@@ -12,6 +7,13 @@ use super::hermite::{interpolate, AtphError};
 
 /// A G1 spline of ATPH segments, parameter `u ∈ [0, n]` (segment `i` on
 /// `[i, i + 1]`).
+///
+/// Section 5: one [`AtphCurve`] per consecutive pair of points and tangents,
+/// each from [`interpolate`](super::interpolate), so the spline is
+/// G1 at the joints by construction (each segment starts and ends on the
+/// given tangents). The azimuth is continuous along the data (ERRATA
+/// 002.2): every segment turns by the shortest `b₁`, so no segment jumps by
+/// `−π` or `−3π/2` where the paper's `arctan` branch would.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AtphSpline {
     /// The segments, segment `i` on `u ∈ [i, i + 1]`.

@@ -1,28 +1,5 @@
-//! The unit tangent field of an ATPH curve, a sphere curve in spherical
-//! coordinates with latitude and azimuth linear in the parameter (Eq. 2.1):
-//!
-//! ```text
-//! T(ξ) = (cos θ cos φ, cos θ sin φ, sin θ),  θ = a₁ξ + a₀,  φ = b₁ξ + b₀.
-//! ```
-//!
-//! The coordinates are those of the input: the construction is invariant to
-//! translation, scale and rotation about `z`, not to other rotations (the
-//! poles are special). Section 3.1 interpolates `T(0) = T₁`, `T(1) = T₂`
-//! with `a₀ = θ₁`, `a₁ = θ₂ − θ₁`, `b₀ = φ₁`, `b₁ = φ₂ − φ₁`; this module
-//! fixes the choices the paper leaves open or gets wrong:
-//!
-//! * **Azimuth branch.** The paper's `arctan` rule, taken literally, makes
-//!   `b₁` jump by `−π` or `−3π/2` along a spline (ERRATA 002.2). Here the
-//!   azimuth is continuous: `b₁` is the shortest turn, `wrap(φ₂ − φ₁)` in
-//!   `(−π, π]`. A half turn (`|b₁|` within `1e-7` of `π`) is ambiguous; it
-//!   turns towards the chord (a circular arc's chord azimuth is
-//!   `φ₁ + b₁/2`), which is what the cylinder of Table 1 needs at `n = 2`.
-//! * **Poles.** At `T = ±z` the azimuth is free (Fig. 2). It is taken from
-//!   the chord's projection on the `xy` plane, so the field leaves the pole
-//!   towards the other end, else from the other tangent, else 0.
-//! * **`T₁ = T₂`.** Parallel to the chord (and pointing along it): the
-//!   straight line, `a₁ = b₁ = 0`. Otherwise the full latitude circle,
-//!   `b₁ = 2π` (Section 3.2, Fig. 4).
+//! The unit tangent field of an ATPH curve: `SphericalTangent`, whose
+//! documentation gives the choices Section 3.1 leaves open.
 
 use glam::DVec3;
 use std::f64::consts::{PI, TAU};
@@ -37,6 +14,33 @@ pub const PLANAR_TOL: f64 = 1e-12;
 pub const HALF_TURN_TOL: f64 = 1e-7;
 
 /// `θ(ξ) = a₁ξ + a₀` (latitude), `φ(ξ) = b₁ξ + b₀` (azimuth).
+///
+/// The unit tangent field of an ATPH curve: a sphere curve in spherical
+/// coordinates with latitude and azimuth linear in the parameter (Eq. 2.1):
+///
+/// ```text
+/// T(ξ) = (cos θ cos φ, cos θ sin φ, sin θ),  θ = a₁ξ + a₀,  φ = b₁ξ + b₀.
+/// ```
+///
+/// The coordinates are those of the input: the construction is invariant to
+/// translation, scale and rotation about `z`, not to other rotations (the poles
+/// are special). Section 3.1 interpolates `T(0) = T₁`, `T(1) = T₂` with
+/// `a₀ = θ₁`, `a₁ = θ₂ − θ₁`, `b₀ = φ₁`, `b₁ = φ₂ − φ₁`;
+/// [`interpolating`](Self::interpolating) fixes the choices the paper leaves
+/// open or gets wrong:
+///
+/// * **Azimuth branch.** The paper's `arctan` rule, taken literally, makes
+///   `b₁` jump by `−π` or `−3π/2` along a spline (ERRATA 002.2). Here the
+///   azimuth is continuous: `b₁` is the shortest turn, `wrap(φ₂ − φ₁)` in
+///   `(−π, π]`. A half turn (`|b₁|` within `1e-7` of `π`) is ambiguous; it
+///   turns towards the chord (a circular arc's chord azimuth is
+///   `φ₁ + b₁/2`), which is what the cylinder of Table 1 needs at `n = 2`.
+/// * **Poles.** At `T = ±z` the azimuth is free (Fig. 2). It is taken from
+///   the chord's projection on the `xy` plane, so the field leaves the pole
+///   towards the other end, else from the other tangent, else 0.
+/// * **`T₁ = T₂`.** Parallel to the chord (and pointing along it): the
+///   straight line, `a₁ = b₁ = 0`. Otherwise the full latitude circle,
+///   `b₁ = 2π` (Section 3.2, Fig. 4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SphericalTangent {
     /// `a₀`: latitude at `ξ = 0`.
@@ -105,7 +109,7 @@ impl SphericalTangent {
     }
 
     /// The field of Section 3.1 from unit tangents `t1`, `t2` and the chord
-    /// `P₂ − P₁` (which decides the free choices; see the module docs).
+    /// `P₂ − P₁` (which decides the free choices; see [`SphericalTangent`]).
     ///
     /// The field runs from `t1` to `t2`; equal tangents off the chord give the
     /// full latitude circle (`b₁ = 2π`):

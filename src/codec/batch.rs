@@ -10,10 +10,9 @@
 //! Run by [`search_block`], all curves of a block advance together: each
 //! runs until it asks, the questions of all curves go to the
 //! [`ArcChecker`] in one batch, the verdicts come back, and every curve
-//! runs on to its next question. A sure verdict is the reference's
-//! ([`crate::twin::arc_check`]); an unsure one is decided by the reference
-//! on the asking thread, so the chosen elements, and so the container, are
-//! the same bytes whichever backend checks.
+//! runs on to its next question. How verdicts are used (so that the
+//! container is the same bytes whichever backend checks) is described on
+//! `ArcChecker`; the reference is [`crate::twin::arc_check`].
 
 use std::cell::Cell;
 use std::future::Future;
@@ -82,7 +81,17 @@ pub struct ArcCandidate {
     pub origin_scale: f64,
 }
 
-/// A backend that checks many candidates at once.
+/// A backend that checks many candidates at once (on the GPU, the
+/// `arc_check` kernel).
+///
+/// The element search is sequential within a curve — each candidate depends
+/// on the verdict on the one before — but the curves of a block are
+/// independent, so [`encode_block_on`](super::encode_block_on) advances all
+/// curves of a block together and puts their questions to the checker in one
+/// batch per round. A sure verdict ([`Verdict::Pass`], [`Verdict::Fail`])
+/// must be the reference's; an [`Verdict::Unsure`] one is decided by the
+/// reference on the asking thread, so the chosen elements, and so the
+/// container, are the same bytes whichever backend checks.
 pub trait ArcChecker: Sync {
     /// Takes a block's points (each curve's relative to its origin,
     /// curve after curve) for the checks that follow.

@@ -1,6 +1,6 @@
 //! The `.sfh` container, version 3: codec blocks with an index at the end.
-//! Its layout is described in the codec's module documentation (and in
-//! `docs/container.md`, in full).
+//! Its layout is described in the [`codec`](crate::codec) module
+//! documentation (and in `docs/container.md`, in full).
 
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom, Write};

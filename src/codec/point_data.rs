@@ -1,34 +1,5 @@
-//! Per-point values carried onto the decoded points.
-//!
-//! The codec's output points are not the input's (an arc's samples, a
-//! lattice point near each vertex), so a per-point value (a `.trk` scalar,
-//! a TRX `dpv` array) is stored for each *output* point: the input's values
-//! linearly interpolated at the point's nearest location on the input
-//! polyline. The locations are found in one forward walk, since both
-//! polylines run the same way within the tolerance of each other; the cost
-//! is linear in the points of both.
-//!
-//! ```
-//! use std::path::Path;
-//! use strandfit::codec::{compress_to_bytes, read_range, CodecHeader, CodecReader};
-//! use strandfit::io::{Curve, Format, Metadata, SourceMeta, VecReader};
-//! use strandfit::DVec3;
-//!
-//! // A helix whose one per-point value is its height z, compressed to 0.01:
-//! // each decoded point's value is the height there, to the tolerance.
-//! let points: Vec<DVec3> = (0..60).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s)).collect();
-//! let point_data: Vec<f32> = points.iter().map(|p| p.z as f32).collect();
-//! let mut meta = Metadata::new(Format::Json);
-//! meta.point_data_names = vec!["z".into()];
-//! let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec!["z".into()]);
-//! let curve = Curve { point_data, ..Curve::from_points(points) };
-//! let bytes = compress_to_bytes(&mut VecReader::new(meta, vec![curve]), Path::new("in.json"), &header, None).unwrap();
-//! let back = read_range(&mut CodecReader::from_bytes(bytes).unwrap(), 0, 1).unwrap().remove(0);
-//! assert_eq!(back.point_data.len(), back.points.len());
-//! for (p, &z) in back.points.iter().zip(&back.point_data) {
-//!     assert!((p.z - z as f64).abs() <= 0.011, "{} vs {z}", p.z);
-//! }
-//! ```
+//! Per-point values carried onto the decoded points: `carry`
+//! (`codec::carry_point_data`), whose documentation describes how.
 
 use glam::DVec3;
 
@@ -36,6 +7,14 @@ use glam::DVec3;
 /// interpolated from `values` on the polyline `input` at the nearest
 /// location found walking forward. An empty `input` gives no values; a
 /// one-point `input` gives its values everywhere.
+///
+/// The codec's output points are not the input's (an arc's samples, a
+/// lattice point near each vertex), so a per-point value (a `.trk` scalar,
+/// a TRX `dpv` array) is stored for each *output* point: the input's values
+/// linearly interpolated at the point's nearest location on the input
+/// polyline. The locations are found in one forward walk, since both
+/// polylines run the same way within the tolerance of each other; the cost
+/// is linear in the points of both.
 ///
 /// ```
 /// use strandfit::codec::carry_point_data;
@@ -53,6 +32,30 @@ use glam::DVec3;
 /// // No input, no values; a one-point input's values everywhere.
 /// assert!(carry_point_data(&[], &[], 1, &output).is_empty());
 /// assert_eq!(carry_point_data(&input[..1], &[7.0], 1, &output), vec![7.0; 3]);
+/// ```
+///
+/// Through the codec:
+///
+/// ```
+/// use std::path::Path;
+/// use strandfit::codec::{compress_to_bytes, read_range, CodecHeader, CodecReader};
+/// use strandfit::io::{Curve, Format, Metadata, SourceMeta, VecReader};
+/// use strandfit::DVec3;
+///
+/// // A helix whose one per-point value is its height z, compressed to 0.01:
+/// // each decoded point's value is the height there, to the tolerance.
+/// let points: Vec<DVec3> = (0..60).map(|i| 0.2 * i as f64).map(|s| DVec3::new(s.cos(), s.sin(), 0.1 * s)).collect();
+/// let point_data: Vec<f32> = points.iter().map(|p| p.z as f32).collect();
+/// let mut meta = Metadata::new(Format::Json);
+/// meta.point_data_names = vec!["z".into()];
+/// let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec!["z".into()]);
+/// let curve = Curve { point_data, ..Curve::from_points(points) };
+/// let bytes = compress_to_bytes(&mut VecReader::new(meta, vec![curve]), Path::new("in.json"), &header, None).unwrap();
+/// let back = read_range(&mut CodecReader::from_bytes(bytes).unwrap(), 0, 1).unwrap().remove(0);
+/// assert_eq!(back.point_data.len(), back.points.len());
+/// for (p, &z) in back.points.iter().zip(&back.point_data) {
+///     assert!((p.z - z as f64).abs() <= 0.011, "{} vs {z}", p.z);
+/// }
 /// ```
 pub fn carry(input: &[DVec3], values: &[f32], width: usize, output: &[DVec3]) -> Vec<f32> {
     debug_assert_eq!(values.len(), input.len() * width);

@@ -1,19 +1,20 @@
-//! Quantisation steps, all fractions of the tolerance `T`, and how the
-//! error budget is split between fitting and quantisation.
-//!
-//! An element's end point is coded in the frame of its prediction: the
-//! chord length along the predicted direction `u` (step `length_step`) and
-//! the two perpendicular offsets (step `offset_step`). Only the
-//! perpendicular offsets move the curve sideways; an error along `u` slides
-//! the end along the curve, so its step can be coarser. Start points are on
-//! a cubic grid (step `start_step`, error `≤ √3/2 · start_step`).
-//!
-//! The steps are stored in the container's header (as these fractions and
-//! `T`), so a decoder needs nothing else.
+//! Quantisation steps, all fractions of the tolerance `T` (see `Steps`), and
+//! how the error budget is split between fitting and quantisation.
 
 use serde::{Deserialize, Serialize};
 
 /// Steps as fractions of the tolerance.
+///
+/// An element's end point is coded in the frame of its prediction: the
+/// chord length along the predicted direction `u` (step
+/// [`length`](Self::length)) and the two perpendicular offsets (step
+/// [`offset`](Self::offset)). Only the
+/// perpendicular offsets move the curve sideways; an error along `u` slides
+/// the end along the curve, so its step can be coarser. Start points are on
+/// a lattice of their own ([`start`](Self::start)).
+///
+/// The steps are stored in the container's header (as these fractions and
+/// `T`), so a decoder needs nothing else.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Steps {
     /// Perpendicular end-point offsets and corner bulges.

@@ -1,21 +1,5 @@
-//! Inter-curve prediction: a curve's points predicted from a neighbour.
-//!
-//! Fibres of a bundle, hairs of a clump and field lines of an active region
-//! run side by side: a curve's next step is better predicted by the step
-//! its neighbour takes at the same place than by its own last step. A
-//! points-mode curve may name one of the [`MAX_BACK`] curves before it in
-//! its block (either direction) as its *reference*; its step `i` is then
-//! predicted as the reference's step between the matching points
-//! `j(i − 1)` and `j(i)`, with `j(i) = round(i (m − 1) / (n − 1))` for a
-//! curve of `n` and a reference of `m` points, and its start by the
-//! reference's start. The reference is the decoded curve rounded to the
-//! points grid, which the decoder computes exactly as the encoder does.
-//!
-//! On the resampled bundles of the shared data (20 points 4–11 mm apart)
-//! the best of the 32 previous curves cuts the residuals' entropy from 3.5
-//! to 2.4 bits per coordinate at 0.5 mm (docs/reference.md, "Compression, measured"); the
-//! encoder picks by estimated cost, so a curve with no good neighbour
-//! keeps its own second-order prediction.
+//! Inter-curve prediction: a curve's points predicted from a neighbour, as
+//! `Reference` describes.
 
 use glam::DVec3;
 
@@ -36,6 +20,23 @@ const PAIRED: usize = 3;
 
 /// A curve's reference: `back` curves before it, maybe reversed; and maybe
 /// a second one, whose steps are averaged with the first's.
+///
+/// Fibres of a bundle, hairs of a clump and field lines of an active region
+/// run side by side: a curve's next step is better predicted by the step
+/// its neighbour takes at the same place than by its own last step. A
+/// points-mode curve may name one of the `MAX_BACK` (128) curves before it in
+/// its block (either direction) as its *reference*; its step `i` is then
+/// predicted as the reference's step between the matching points
+/// `j(i − 1)` and `j(i)`, with `j(i) = round(i (m − 1) / (n − 1))` for a
+/// curve of `n` and a reference of `m` points, and its start by the
+/// reference's start. The reference is the decoded curve rounded to the
+/// points grid, which the decoder computes exactly as the encoder does.
+///
+/// On the resampled bundles of the shared data (20 points 4–11 mm apart) the
+/// best of the 32 previous curves cuts the residuals' entropy from 3.5 to 2.4
+/// bits per coordinate at 0.5 mm (docs/reference.md, "Compression, measured");
+/// the encoder picks by estimated cost, so a curve with no good neighbour keeps
+/// its own second-order prediction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Reference {
     /// How many curves before this one it is (1: the previous curve).

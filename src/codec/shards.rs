@@ -1,14 +1,6 @@
-//! Shards of a container and back, by copying blocks: [`split`] cuts a
-//! container into several, each a valid container of whole blocks;
-//! [`merge`] joins containers with the same header into one. Blocks are
-//! independently decodable (their models and predictions restart), so
-//! neither decodes nor re-encodes anything: the curves, and so the
-//! guarantee, are the input's bit for bit, and splitting then merging gives
-//! back the input file byte for byte.
-//!
-//! A shard holds whole blocks (4,096 curves each, the last block of a file
-//! fewer), so `curves_per_shard` is rounded down to whole blocks, and at
-//! least one block goes into every shard.
+//! Shards of a container and back, by copying blocks: `split`
+//! (`codec::split_into_shards`) and `merge` (`codec::merge_shards`), whose
+//! documentation describes them.
 
 use std::path::{Path, PathBuf};
 
@@ -146,6 +138,20 @@ pub fn shard_path(input: &Path, dir: &Path, k: usize) -> PathBuf {
 /// assert!(split_into_shards(&dir.path().join("bad.sfh"), &dir.path().join("none"), 10).is_err());
 /// assert!(!dir.path().join("none").exists());
 /// ```
+///
+/// # Shards
+///
+/// Shards of a container and back, by copying blocks:
+/// [`split_into_shards`](split) cuts a container into several, each a valid
+/// container of whole blocks; [`merge_shards`](merge) joins containers with the
+/// same header into one. Blocks are independently decodable (their models and
+/// predictions restart), so neither decodes nor re-encodes anything: the
+/// curves, and so the guarantee, are the input's bit for bit, and splitting
+/// then merging gives back the input file byte for byte.
+///
+/// A shard holds whole blocks (4,096 curves each, the last block of a file
+/// fewer), so `curves_per_shard` is rounded down to whole blocks, and at
+/// least one block goes into every shard.
 pub fn split(input: &Path, dir: &Path, curves_per_shard: u64) -> Result<Vec<Shard>, IoError> {
     if curves_per_shard == 0 {
         return Err(IoError::new(input, "curves per shard must be at least 1"));
@@ -301,6 +307,9 @@ fn header_difference(a: &CodecHeader, b: &CodecHeader) -> Option<&'static str> {
 /// assert!(err.to_string().contains("tolerance"), "{err}");
 /// assert!(merge_shards(&[], &joined).is_err());
 /// ```
+///
+/// Nothing is decoded or re-encoded (see [`split_into_shards`](split),
+/// Shards): the output's curves are the inputs' bit for bit.
 pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Vec<Shard>, IoError> {
     let Some(first) = inputs.first() else {
         return Err(IoError::new(

@@ -1,5 +1,5 @@
-//! Whole files through the codec, block by block (described in the codec's
-//! module documentation).
+//! Whole files through the codec, block by block (described in the
+//! [`codec`](crate::codec) module documentation, "Whole files").
 
 use std::path::Path;
 

@@ -1,23 +1,5 @@
-//! Many spirals at once.
-//!
-//! [`solve_spirals`] on the CPU backend is [`solve_spiral`] on every pair
-//! (rayon): the same answers as one at a time, by construction. On the GPU
-//! backend it is [`solve_spirals_lockstep`]: the same solve — the same
-//! starts, restarts and truncation check of [`SolveOptions`] — run in
-//! lockstep over the batch, with every curve evaluation of a round in one
-//! [`Backend::integrate`] call per step count in use (one `frenet_integrate`
-//! dispatch each on the GPU; the first count and a doubling or two): first the
-//! initial residuals of runs that begin (a start, a restart, a doubling of
-//! the steps) and the half-step ends of the truncation checks, then the ten
-//! Jacobian columns' `±h` candidates of every pair (central differences:
-//! the kernel returns ends, not derivatives), then one trial step per pair.
-//!
-//! Lockstep differs from the sequential solver in two ways: the Jacobian is
-//! by central differences instead of [`solve_spiral`]'s one-march
-//! derivatives (the same residual, so the same solutions, reached by a
-//! slightly different path), and a rejected trial raises `λ` and waits for
-//! the next round instead of retrying at once, so a pair may take more
-//! rounds (each run is allowed `4 × max_iterations`).
+//! Many spirals at once: `solve_spirals`, and the lockstep solve it runs on
+//! the GPU (`solve_spirals_lockstep`, whose documentation describes it).
 
 use super::frenet::{FrenetEnd, FrenetProblem};
 use super::solve::{
@@ -31,11 +13,14 @@ use crate::euler::solve_spiral;
 use crate::pair::HermitePair;
 
 /// Solve every pair; results in input order. A pair's own bad input is its
-/// `Err`; a GPU failure fails the whole call. See the module docs for what
-/// each backend runs.
+/// `Err`; a GPU failure fails the whole call.
 ///
-/// On the CPU: [`solve_spiral`] on each pair. Each solved spiral meets its end
-/// conditions:
+/// On the CPU backend this is [`solve_spiral`] on every pair (rayon): the
+/// same answers as one at a time, by construction. On the GPU backend it is
+/// [`solve_spirals_lockstep`]: the same solve, run in lockstep over the
+/// batch (see there).
+///
+/// Each solved spiral meets its end conditions:
 /// ```
 /// use strandfit::euler::{solve_spirals, SolveOptions};
 /// use strandfit::{Backend, DVec3, HermitePair};
@@ -197,9 +182,9 @@ fn integrate_grouped(
         .collect())
 }
 
-/// The lockstep solve (module docs) through any backend: what
-/// [`solve_spirals`] runs on the GPU; on the CPU backend, for tests and
-/// comparison.
+/// The lockstep solve (see [Method](solve_spirals_lockstep#method)) through any
+/// backend: what [`solve_spirals`] runs on the GPU; on the CPU backend, for
+/// tests and comparison.
 ///
 /// The lockstep solve (here on the CPU) reaches the same spiral as
 /// [`solve_spiral`]:
@@ -214,6 +199,25 @@ fn integrate_grouped(
 /// assert!((lock.problem.kappa0 - one.problem.kappa0).abs() < 1e-6);
 /// assert!((lock.problem.length - one.problem.length).abs() < 1e-6);
 /// ```
+///
+/// # Method
+///
+/// The same solve as [`solve_spiral`] — the same starts, restarts and
+/// truncation check of [`SolveOptions`] — run in lockstep over the batch,
+/// with every curve evaluation of a round in one [`Backend::integrate`] call
+/// per step count in use (one `frenet_integrate` dispatch each on the GPU;
+/// the first count and a doubling or two): first the initial residuals of
+/// runs that begin (a start, a restart, a doubling of the steps) and the
+/// half-step ends of the truncation checks, then the ten Jacobian columns'
+/// `±h` candidates of every pair (central differences: the kernel returns
+/// ends, not derivatives), then one trial step per pair.
+///
+/// Lockstep differs from the sequential solver in two ways: the Jacobian is
+/// by central differences instead of [`solve_spiral`]'s one-march
+/// derivatives (the same residual, so the same solutions, reached by a
+/// slightly different path), and a rejected trial raises `λ` and waits for
+/// the next round instead of retrying at once, so a pair may take more
+/// rounds (each run is allowed `4 × max_iterations`).
 pub fn solve_spirals_lockstep(
     pairs: &[HermitePair],
     opts: &SolveOptions,

@@ -1,48 +1,6 @@
 //! Planar clothoids (2D Euler spirals) and their G1 Hermite interpolation.
-//!
-//! A clothoid has curvature linear in arc length, `κ(s) = κ₀ + κ′s`,
-//! `0 ≤ s ≤ L`, so its tangent angle is `θ(s) = θ₀ + κ₀s + κ′s²/2` and
-//!
-//! ```text
-//! P(s) = P₀ + ∫₀ˢ (cos θ(u), sin θ(u)) du = P₀ + s (X₀, Y₀)(κ′s², κ₀s, θ₀),
-//! ```
-//!
-//! with the generalised Fresnel integrals (Bertolazzi & Frego, "G1 fitting
-//! with clothoids", Math. Methods Appl. Sci. 38 (2015))
-//!
-//! ```text
-//! X_k(a,b,c) = ∫₀¹ tᵏ cos(a t²/2 + b t + c) dt,   Y_k(a,b,c) = ∫₀¹ tᵏ sin(…) dt.
-//! ```
-//!
-//! Paper 004 (3D Euler spirals, Section 6, Step 1) initialises its 3D
-//! descent with the planar spiral fitted here ([`clothoid_g1`]).
-//!
-//! **Fresnel integrals.** `C(x), S(x) = ∫₀ˣ cos/sin(πt²/2) dt` ([`fresnel_cs`])
-//! are summed as a power series for `|x| < 1.5` and from the Lentz continued
-//! fraction of the complementary error function beyond (Numerical Recipes
-//! Fresnel method, written here from the formulas). For `|a| ≥ 4` the
-//! generalised integrals complete the square and use `C, S`; their moments
-//! `k = 1, 2` follow from `∫ θ′ e^{iθ} = −i[e^{iθ}]` (exact recurrences).
-//! For `|a| < 4` (including `a = 0`) they are the series
-//! `X_k + iY_k = e^{ic} Σₙ (ia/2)ⁿ/n! J_{k+2n}(b)`, `J_m(b) = ∫₀¹ tᵐ e^{ibt} dt`,
-//! where `J_m` runs upward (`m < |b|`) or downward (`m > |b|`) through
-//! `J_m = (e^{ib} − m J_{m−1})/(ib)`, each in its stable direction.
-//! Measured (tests): `C, S` agree with mpmath to ≤ 3.4e-16 for
-//! `|x| ≤ 1000` (the phase `πx²/2` is reduced exactly, see
-//! `cis_half_pi_sq`); `X_k, Y_k` (`k ≤ 2`) agree with composite 20-point
-//! Gauss–Legendre quadrature to ≤ 3e-15 on the grid `a ∈ {0, ±1e-8, 1e-3,
-//! …, ±100, ±1e3, ±1e4}`, `|b| ≤ 40`. Known weak spot: for `|a| ≥ 12` with
-//! `|b| ≫ |a|` the moments `k = 1, 2` lose about `k·log₁₀(|b|/|a|)` digits
-//! (recurrence division by `a`); the G1 solve never goes there
-//! (`|b| ≤ |a|/2 + 2π`).
-//!
-//! **Root choice.** Newton from the paper's fitted guess converges (no
-//! safeguard needed) on a 61×61 grid (also checked once at 301×301) of
-//! `(φ₀, φ₁) ∈ [−π, π]²`, including `φ₀ = φ₁ = π`, and the roots it finds
-//! satisfy `0 ≤ A/(φ₀+φ₁) ≤ 3`. The solver accepts a root only inside that
-//! window (widened slightly, `root_window`); outside it, or if Newton
-//! fails, a bracketed search inside the window takes over. The window is
-//! measured, not the paper's proven uniqueness interval (not coded here).
+//! The curve is described on `Clothoid`, the Fresnel integrals and their
+//! accuracy on `generalized_fresnel`, the solve on `clothoid_g1`.
 
 use glam::DVec2;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
@@ -98,7 +56,8 @@ impl Cx {
 ///
 /// Power series for `|x| < 1.5`; for larger `|x|` the continued fraction of
 /// `erfc` (modified Lentz), `C + iS = (1+i)/2 (1 − e^{iπx²/2} h)`. Odd in `x`.
-/// Verified to ≈ 1e-15 absolute against quadrature (tests).
+/// Verified to ≈ 1e-15 absolute against quadrature (tests; see
+/// [`generalized_fresnel`] for the method and the measured accuracy).
 ///
 /// Published values at 1 (Abramowitz & Stegun, Table 7.7), and the asymptotic
 /// form `C ≈ ½ + sin(πx²/2)/(πx)`, `S ≈ ½ − cos(πx²/2)/(πx)` at 1000:
@@ -241,6 +200,27 @@ const A_SERIES_WIDE: f64 = 12.0;
 /// assert!((generalized_fresnel(PI, 0.0, 0.0).0[0] - fresnel_cs(1.0).0).abs() < 1e-14);
 /// assert!((generalized_fresnel(4.0 * PI, 0.0, 0.0).0[0] - fresnel_cs(2.0).0 / 2.0).abs() < 1e-14);
 /// ```
+///
+/// # Method and accuracy
+///
+/// `C(x), S(x) = ∫₀ˣ cos/sin(πt²/2) dt` ([`fresnel_cs`])
+/// are summed as a power series for `|x| < 1.5` and from the Lentz continued
+/// fraction of the complementary error function beyond (Numerical Recipes
+/// Fresnel method, written here from the formulas). For `|a| ≥ 4` the
+/// generalised integrals complete the square and use `C, S`; their moments
+/// `k = 1, 2` follow from `∫ θ′ e^{iθ} = −i[e^{iθ}]` (exact recurrences).
+/// For `|a| < 4` (including `a = 0`) they are the series
+/// `X_k + iY_k = e^{ic} Σₙ (ia/2)ⁿ/n! J_{k+2n}(b)`, `J_m(b) = ∫₀¹ tᵐ e^{ibt} dt`,
+/// where `J_m` runs upward (`m < |b|`) or downward (`m > |b|`) through
+/// `J_m = (e^{ib} − m J_{m−1})/(ib)`, each in its stable direction.
+/// Measured (tests): `C, S` agree with mpmath to ≤ 3.4e-16 for
+/// `|x| ≤ 1000` (the phase `πx²/2` is reduced exactly, see
+/// `cis_half_pi_sq`); `X_k, Y_k` (`k ≤ 2`) agree with composite 20-point
+/// Gauss–Legendre quadrature to ≤ 3e-15 on the grid `a ∈ {0, ±1e-8, 1e-3,
+/// …, ±100, ±1e3, ±1e4}`, `|b| ≤ 40`. Known weak spot: for `|a| ≥ 12` with
+/// `|b| ≫ |a|` the moments `k = 1, 2` lose about `k·log₁₀(|b|/|a|)` digits
+/// (recurrence division by `a`); the G1 solve never goes there
+/// (`|b| ≤ |a|/2 + 2π`).
 pub fn generalized_fresnel(a: f64, b: f64, c: f64) -> ([f64; 3], [f64; 3]) {
     if a.abs() < A_SERIES || (a.abs() < A_SERIES_WIDE && b.abs() > 2.0 * a.abs()) {
         // Series in a: X_k + iY_k = e^{ic} Σₙ (ia/2)ⁿ/n! J_{k+2n}(b).
@@ -296,6 +276,19 @@ pub fn generalized_fresnel(a: f64, b: f64, c: f64) -> ([f64; 3], [f64; 3]) {
 
 /// A clothoid segment: `κ(s) = κ₀ + κ′s`, `θ(s) = θ₀ + κ₀s + κ′s²/2`,
 /// `0 ≤ s ≤ L`, starting at `start`.
+///
+/// Its tangent angle is `θ(s) = θ₀ + κ₀s + κ′s²/2`, so
+///
+/// ```text
+/// P(s) = P₀ + ∫₀ˢ (cos θ(u), sin θ(u)) du = P₀ + s (X₀, Y₀)(κ′s², κ₀s, θ₀),
+/// ```
+///
+/// with the generalised Fresnel integrals (Bertolazzi & Frego, "G1 fitting
+/// with clothoids", Math. Methods Appl. Sci. 38 (2015))
+///
+/// ```text
+/// X_k(a,b,c) = ∫₀¹ tᵏ cos(a t²/2 + b t + c) dt,   Y_k(a,b,c) = ∫₀¹ tᵏ sin(…) dt.
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Clothoid {
     /// Start point `P(0)`.
@@ -459,6 +452,19 @@ fn g_and_dg(a: f64, delta: f64, phi0: f64) -> (f64, f64) {
 /// assert!((c.length - FRAC_PI_2).abs() < 1e-12);
 /// assert!((c.end() - DVec2::Y).length() < 1e-12);
 /// ```
+///
+/// Paper 004 (3D Euler spirals, Section 6, Step 1) initialises its 3D
+/// descent with the planar spiral fitted here.
+///
+/// # Root choice
+///
+/// Newton from the paper's fitted guess converges (no safeguard needed) on
+/// a 61×61 grid (also checked once at 301×301) of
+/// `(φ₀, φ₁) ∈ [−π, π]²`, including `φ₀ = φ₁ = π`, and the roots it finds
+/// satisfy `0 ≤ A/(φ₀+φ₁) ≤ 3`. The solver accepts a root only inside that
+/// window (widened slightly, `root_window`); outside it, or if Newton
+/// fails, a bracketed search inside the window takes over. The window is
+/// measured, not the paper's proven uniqueness interval (not coded here).
 pub fn clothoid_g1(
     p0: DVec2,
     theta0: f64,

@@ -1,21 +1,6 @@
-//! The paper's construction of a 3D Euler spiral between two point–tangent
-//! pairs, implemented faithfully (paper 004, Section 6, Algorithm 1): the
-//! baseline that the Levenberg–Marquardt solver ([`solve`](super::solve))
-//! is measured against.
-//!
-//! * The problem is translated by `−x₀` and scaled by `D = max |x_f − x₀|`
-//!   per axis; tangents are left alone.
-//! * Parameters `(κ₀, γ, τ₀, δ, L)` start from the planar clothoid in the
-//!   plane of `T₀` and `x_f − x₀` with `τ₀ = δ = 0` (Step 1).
-//! * Each iteration tries every parameter at `±Δ`, keeps those that lower
-//!   `ε` (Eq. 9), and compares each single change with all of them together;
-//!   the best is taken if it lowers `ε`, otherwise `Δ ← 3Δ/4` (Steps 3–5).
-//! * `Δ` starts at 0.1; the loop stops at `Δ < 1e-5` or `ε < 1e-6`
-//!   (Step 2).
-//! * Optionally `L` is bounded to one revolution: `½γL² + κ₀L ≤ 2π`.
-//! * Candidates are integrated with 100 samples by explicit Euler (the
-//!   paper's choice; first order, ERRATA 004.1) or, optionally, with the
-//!   fourth-order scheme.
+//! The paper's construction of a 3D Euler spiral (paper 004, Section 6,
+//! Algorithm 1), implemented faithfully: `paper_spiral`, whose
+//! documentation describes it.
 
 use glam::DVec3;
 
@@ -65,7 +50,12 @@ fn epsilon(p: &[f64; 5], sc: &Scaled, integ: PaperIntegrator) -> f64 {
     }
 }
 
-/// Algorithm 1. The returned `error` is Eq. 9 in the input's units,
+/// The paper's construction of a 3D Euler spiral between two point–tangent
+/// pairs, implemented faithfully (paper 004, Section 6, Algorithm 1; see
+/// [Method](paper_spiral#method)): the baseline that the Levenberg–Marquardt
+/// solver [`solve_spiral`](super::solve_spiral) is measured against.
+///
+/// The returned `error` is Eq. 9 in the input's units,
 /// re-evaluated with the accurate integrator (so a first-order integrator's
 /// own optimism does not hide in it); `iterations` counts Steps 3–5.
 ///
@@ -86,6 +76,22 @@ fn epsilon(p: &[f64; 5], sc: &Scaled, integ: PaperIntegrator) -> f64 {
 /// let err = paper_spiral(DVec3::ONE, DVec3::X, DVec3::ONE, DVec3::Y, &opts).unwrap_err();
 /// assert_eq!(err, SolveError::Coincident);
 /// ```
+///
+/// # Method
+///
+/// * The problem is translated by `−x₀` and scaled by `D = max |x_f − x₀|`
+///   per axis; tangents are left alone.
+/// * Parameters `(κ₀, γ, τ₀, δ, L)` start from the planar clothoid in the
+///   plane of `T₀` and `x_f − x₀` with `τ₀ = δ = 0` (Step 1).
+/// * Each iteration tries every parameter at `±Δ`, keeps those that lower
+///   `ε` (Eq. 9), and compares each single change with all of them together;
+///   the best is taken if it lowers `ε`, otherwise `Δ ← 3Δ/4` (Steps 3–5).
+/// * `Δ` starts at 0.1; the loop stops at `Δ < 1e-5` or `ε < 1e-6`
+///   (Step 2).
+/// * Optionally `L` is bounded to one revolution: `½γL² + κ₀L ≤ 2π`.
+/// * Candidates are integrated with 100 samples by explicit Euler (the
+///   paper's choice; first order, ERRATA 004.1) or, optionally, with the
+///   fourth-order scheme.
 pub fn paper_spiral(
     x0: DVec3,
     t0: DVec3,

@@ -1,46 +1,5 @@
 //! A 3D Euler spiral between two point–tangent pairs by Levenberg–Marquardt
-//! on the end conditions: the fast solver (the paper's own coordinate
-//! descent, Algorithm 1, is [`paper_spiral`](super::paper_spiral)).
-//!
-//! Given `(x₀, T₀)` and `(x_f, T_f)`, find `(κ₀, γ, τ₀, δ, L)` so that the
-//! spiral from `x₀` with frame `[T₀, N₀, T₀ × N₀]` ends at `x_f` with tangent
-//! `T_f`. Residual (six components, Eq. 9 of paper 004 is its squared norm):
-//!
-//! ```text
-//! r = (x(L) − x_f, T(L) − T_f)
-//! ```
-//!
-//! As in the paper (Section 6), the problem is translated by `−x₀` and scaled
-//! by `D = max |x_f − x₀|` per axis, solved, and scaled back (Prop. 5.1:
-//! curvatures scale by `1/D`, their rates by `1/D²`, `L` by `D`). `N₀` is
-//! the in-plane normal `normalize(d − (d·T₀)T₀)`, `d = x_f − x₀`
-//! (ERRATA 004.2).
-//!
-//! Initial guess (the paper's Step 1): the planar clothoid G1 fit in the
-//! plane of `T₀` and `d` to `T_f`'s projection, `τ₀ = δ = 0`.
-//!
-//! **Residual and Jacobian.** Candidates are integrated with the
-//! fourth-order scheme of [`frenet`](super::frenet) at a fixed step count
-//! per run, so residuals are smooth in the parameters; one march gives the
-//! end and the Jacobian together
-//! ([`FrenetProblem::integrate_with_derivatives_unchecked`]: the
-//! variational integrals of the Frenet equations by Simpson's rule), about
-//! 1.3 plain marches where central differences took ten.
-//!
-//! **Steps.** A run starts at [`SolveOptions::steps`] (32); once it
-//! converges, the end at half the steps estimates the truncation error
-//! (fourth order: the difference over 15); above
-//! [`SolveOptions::truncation`] (1e-7 of `|x_f − x₀|`) the steps double and
-//! LM resumes from the solution (one or two iterations). About half of
-//! random pairs within a revolution stop at 32 steps, nearly all others at
-//! 64.
-//!
-//! **Restarts.** About 2% of random pairs within a revolution leave LM in a
-//! local minimum from the in-plane start. [`SolveOptions::restarts`] then
-//! solves the reversed problem from its own in-plane start and runs the
-//! solution backwards ([`Restart::Reversed`]: on 60,000 random pairs it
-//! rescued 1,395 of the 1,405 failures), then tries turned start normals
-//! ([`Restart::Turned`]: the other 10). See [`DEFAULT_RESTARTS`].
+//! on the end conditions; the method is described on `solve_spiral`.
 
 use glam::DVec3;
 
@@ -651,6 +610,51 @@ fn solve_from(sc: &Scaled, p: [f64; 5], steps: usize, opts: &SolveOptions) -> Ru
 /// assert!((s.problem.kappa0 - 1.0).abs() < 1e-6);
 /// assert!((s.problem.length - std::f64::consts::FRAC_PI_2).abs() < 1e-6);
 /// ```
+///
+/// # Method
+///
+/// Levenberg–Marquardt on the end conditions: the fast solver (the paper's own
+/// coordinate descent, Algorithm 1, is [`paper_spiral`](super::paper_spiral)).
+///
+/// Given `(x₀, T₀)` and `(x_f, T_f)`, find `(κ₀, γ, τ₀, δ, L)` so that the
+/// spiral from `x₀` with frame `[T₀, N₀, T₀ × N₀]` ends at `x_f` with tangent
+/// `T_f`. Residual (six components, Eq. 9 of paper 004 is its squared norm):
+///
+/// ```text
+/// r = (x(L) − x_f, T(L) − T_f)
+/// ```
+///
+/// As in the paper (Section 6), the problem is translated by `−x₀` and scaled
+/// by `D = max |x_f − x₀|` per axis, solved, and scaled back (Prop. 5.1:
+/// curvatures scale by `1/D`, their rates by `1/D²`, `L` by `D`). `N₀` is
+/// the in-plane normal `normalize(d − (d·T₀)T₀)`, `d = x_f − x₀`
+/// (ERRATA 004.2).
+///
+/// Initial guess (the paper's Step 1): the planar clothoid G1 fit in the
+/// plane of `T₀` and `d` to `T_f`'s projection, `τ₀ = δ = 0`.
+///
+/// **Residual and Jacobian.** Candidates are integrated with the fourth-order
+/// scheme of [`FrenetProblem`](super::FrenetProblem) at a fixed step count per
+/// run, so residuals are smooth in the parameters; one march gives the end and
+/// the Jacobian together
+/// ([`FrenetProblem::integrate_with_derivatives_unchecked`]: the variational
+/// integrals of the Frenet equations by Simpson's rule), about 1.3 plain
+/// marches where central differences took ten.
+///
+/// **Steps.** A run starts at [`SolveOptions::steps`] (32); once it
+/// converges, the end at half the steps estimates the truncation error
+/// (fourth order: the difference over 15); above
+/// [`SolveOptions::truncation`] (1e-7 of `|x_f − x₀|`) the steps double and
+/// LM resumes from the solution (one or two iterations). About half of
+/// random pairs within a revolution stop at 32 steps, nearly all others at
+/// 64.
+///
+/// **Restarts.** About 2% of random pairs within a revolution leave LM in a
+/// local minimum from the in-plane start. [`SolveOptions::restarts`] then
+/// solves the reversed problem from its own in-plane start and runs the
+/// solution backwards ([`Restart::Reversed`]: on 60,000 random pairs it
+/// rescued 1,395 of the 1,405 failures), then tries turned start normals
+/// ([`Restart::Turned`]: the other 10). See [`DEFAULT_RESTARTS`].
 pub fn solve_spiral(
     x0: DVec3,
     t0: DVec3,

@@ -1,25 +1,5 @@
-//! One circular helix element: constant curvature `κ ≥ 0` and torsion `τ`.
-//!
-//! The element is stored by its start point `p₀` and start Frenet frame
-//! `(t₀, n₀, b₀ = t₀ × n₀)`. Its Darboux vector `Ω = τ t + κ b` is constant,
-//! with length `ω = √(κ² + τ²)` and unit axis `Ω̄ = (τ t₀ + κ b₀)/ω`; the whole
-//! frame rotates about `Ω̄` at rate `ω` (paper 000, Eqs. (A.3)–(A.4)).
-//!
-//! Eq. (7)/(A.9) of the paper writes the helix with `sin(ωs)/ω` and
-//! `(1 − cos ωs)/ω`, which lose all precision as `ω → 0`. Expanding
-//! `Ω̄`, `t₀ − τ̄Ω̄ = κ̄(κ̄t₀ − τ̄b₀)` and `t₀ × Ω̄ = −κ̄n₀` gives the equivalent
-//! form used here, with `φ = ωs`,
-//!
-//! ```text
-//! α(s) = p₀ + (s − κ²s³ g(φ)) t₀ + κ s² h(φ) n₀ + κτ s³ g(φ) b₀
-//! t(s) = (1 − κ²s² h(φ)) t₀ + κ s sinc(φ) n₀ + κτ s² h(φ) b₀
-//! n(s) = cos φ n₀ + s sinc(φ) (τ b₀ − κ t₀)
-//! b(s) = (1 − τ²s² h(φ)) b₀ − τ s sinc(φ) n₀ + κτ s² h(φ) t₀
-//! ```
-//!
-//! where `sinc x = sin x / x`, `h(x) = (1 − cos x)/x²` and
-//! `g(x) = (x − sin x)/x³`, all evaluated without cancellation. The straight
-//! segment (`κ = τ = 0`) is the ordinary special case `α(s) = p₀ + s t₀`.
+//! One circular helix element, `HelixElement`, whose documentation gives
+//! its closed form, and the cancellation-free functions it is made of.
 
 use glam::DVec3;
 
@@ -113,6 +93,31 @@ pub struct Frame {
 /// For a straight element (`κ = 0`) the normal is not defined by the
 /// geometry; it is kept as a reference direction (any unit vector ⊥ `t₀`) so
 /// that frames can be carried through straight runs, and `τ` is 0.
+///
+/// # Closed form
+///
+/// The element has constant curvature `κ ≥ 0` and torsion `τ`.
+///
+/// The element is stored by its start point `p₀` and start Frenet frame
+/// `(t₀, n₀, b₀ = t₀ × n₀)`. Its Darboux vector `Ω = τ t + κ b` is constant,
+/// with length `ω = √(κ² + τ²)` and unit axis `Ω̄ = (τ t₀ + κ b₀)/ω`; the whole
+/// frame rotates about `Ω̄` at rate `ω` (paper 000, Eqs. (A.3)–(A.4)).
+///
+/// Eq. (7)/(A.9) of the paper writes the helix with `sin(ωs)/ω` and
+/// `(1 − cos ωs)/ω`, which lose all precision as `ω → 0`. Expanding
+/// `Ω̄`, `t₀ − τ̄Ω̄ = κ̄(κ̄t₀ − τ̄b₀)` and `t₀ × Ω̄ = −κ̄n₀` gives the equivalent
+/// form used here, with `φ = ωs`,
+///
+/// ```text
+/// α(s) = p₀ + (s − κ²s³ g(φ)) t₀ + κ s² h(φ) n₀ + κτ s³ g(φ) b₀
+/// t(s) = (1 − κ²s² h(φ)) t₀ + κ s sinc(φ) n₀ + κτ s² h(φ) b₀
+/// n(s) = cos φ n₀ + s sinc(φ) (τ b₀ − κ t₀)
+/// b(s) = (1 − τ²s² h(φ)) b₀ − τ s sinc(φ) n₀ + κτ s² h(φ) t₀
+/// ```
+///
+/// where `sinc x = sin x / x`, `h(x) = (1 − cos x)/x²` and
+/// `g(x) = (x − sin x)/x³`, all evaluated without cancellation. The straight
+/// segment (`κ = τ = 0`) is the ordinary special case `α(s) = p₀ + s t₀`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HelixElement {
     /// Start point `p₀`.

@@ -1,32 +1,5 @@
-//! Point relaxation (paper 000, Section 4): move the break points as little
-//! as possible so that every consecutive pair becomes co-helical,
-//!
-//! ```text
-//! min Σᵢ ‖p'ᵢ − pᵢ‖²   subject to   ⟨p'ᵢ₊₁ − p'ᵢ, dᵢ⟩ = 0,  dᵢ = tᵢ₊₁ − tᵢ,
-//! ```
-//!
-//! for `i = 0..N−1` (N + 1 points). Two solvers give the same unique minimiser:
-//!
-//! * [`relax_tridiagonal`] (default, `O(N)`): the Lagrange conditions give
-//!   `p'ᵢ = pᵢ − ½(λᵢ₋₁ êᵢ₋₁ − λᵢ êᵢ)`; substituting into the constraints gives
-//!   the symmetric tridiagonal system
-//!   `λᵢ − ½⟨êᵢ, êᵢ₋₁⟩λᵢ₋₁ − ½⟨êᵢ, êᵢ₊₁⟩λᵢ₊₁ = ⟨pᵢ₊₁ − pᵢ, êᵢ⟩`.
-//!   We use the unit directions `êᵢ = dᵢ/|dᵢ|` (the constraints are unchanged);
-//!   the matrix then has unit diagonal and off-diagonals of size ≤ ½, so it is
-//!   diagonally dominant and symmetric positive definite, and the Thomas
-//!   algorithm is stable without pivoting.
-//! * [`relax_dense`] (the paper's reference): `p'ᵢ₊₁ = p'ᵢ + Dᵢaᵢ` with `Dᵢ` an
-//!   orthonormal basis of the plane ⊥ `dᵢ` (Eq. (3)); the unconstrained least
-//!   squares in `(p'₀, a₀ … aₙ₋₁)` has the `2N + 3` normal equations (5),
-//!   solved by dense LU with partial pivoting (faer).
-//!
-//! A constraint whose `dᵢ` vanishes (`|dᵢ| ≤` [`PARALLEL_EPS`], parallel
-//! tangents) says nothing by itself. Dropping it would leave the chord free,
-//! and for parallel tangents the only short helix is the straight segment
-//! along them (Ghosh's theorem excludes `t₁ = t₀`; the limit is a full turn).
-//! So we replace it by that condition, chord ∥ `t`: two constraints (chord ⊥
-//! `u`, `v`) in the multiplier form, and `Dᵢ = [t̂]` (one unknown) in the dense
-//! form. Both solvers still solve the same problem.
+//! Point relaxation (paper 000, Section 4); the problem and its two solvers
+//! are described on `relax`.
 
 use faer::linalg::solvers::Solve;
 use faer::Mat;
@@ -56,6 +29,38 @@ pub enum Relaxation {
 /// assert!((p[0] - DVec3::new(0.25, -0.25, 0.0)).length() < 1e-15);
 /// assert!((p[1] - DVec3::new(0.75, 0.25, 0.0)).length() < 1e-15);
 /// ```
+///
+/// # Method
+///
+/// Point relaxation (paper 000, Section 4) moves the break points as little
+/// as possible so that every consecutive pair becomes co-helical,
+///
+/// ```text
+/// min Σᵢ ‖p'ᵢ − pᵢ‖²   subject to   ⟨p'ᵢ₊₁ − p'ᵢ, dᵢ⟩ = 0,  dᵢ = tᵢ₊₁ − tᵢ,
+/// ```
+///
+/// for `i = 0..N−1` (N + 1 points). Two solvers give the same unique minimiser:
+///
+/// * [`relax_tridiagonal`] (default, `O(N)`): the Lagrange conditions give
+///   `p'ᵢ = pᵢ − ½(λᵢ₋₁ êᵢ₋₁ − λᵢ êᵢ)`; substituting into the constraints gives
+///   the symmetric tridiagonal system
+///   `λᵢ − ½⟨êᵢ, êᵢ₋₁⟩λᵢ₋₁ − ½⟨êᵢ, êᵢ₊₁⟩λᵢ₊₁ = ⟨pᵢ₊₁ − pᵢ, êᵢ⟩`.
+///   We use the unit directions `êᵢ = dᵢ/|dᵢ|` (the constraints are unchanged);
+///   the matrix then has unit diagonal and off-diagonals of size ≤ ½, so it is
+///   diagonally dominant and symmetric positive definite, and the Thomas
+///   algorithm is stable without pivoting.
+/// * [`relax_dense`] (the paper's reference): `p'ᵢ₊₁ = p'ᵢ + Dᵢaᵢ` with `Dᵢ` an
+///   orthonormal basis of the plane ⊥ `dᵢ` (Eq. (3)); the unconstrained least
+///   squares in `(p'₀, a₀ … aₙ₋₁)` has the `2N + 3` normal equations (5),
+///   solved by dense LU with partial pivoting (faer).
+///
+/// A constraint whose `dᵢ` vanishes (`|dᵢ| ≤` [`PARALLEL_EPS`], parallel
+/// tangents) says nothing by itself. Dropping it would leave the chord free,
+/// and for parallel tangents the only short helix is the straight segment
+/// along them (Ghosh's theorem excludes `t₁ = t₀`; the limit is a full turn).
+/// So we replace it by that condition, chord ∥ `t`: two constraints (chord ⊥
+/// `u`, `v`) in the multiplier form, and `Dᵢ = [t̂]` (one unknown) in the dense
+/// form. Both solvers still solve the same problem.
 pub fn relax(points: &[DVec3], tangents: &[DVec3], method: Relaxation) -> Vec<DVec3> {
     match method {
         Relaxation::Tridiagonal => {
@@ -104,7 +109,8 @@ fn segment_dirs(t0: DVec3, t1: DVec3) -> ([DVec3; 2], usize) {
     }
 }
 
-/// `O(N)` relaxation; writes the relaxed points into `out`.
+/// `O(N)` relaxation (the multiplier form of [`relax`]'s Method); writes
+/// the relaxed points into `out`.
 ///
 /// With parallel tangents the vanished constraint is replaced by the
 /// straight-segment condition (chord ⊥ two directions ⊥ `t`), making the
@@ -270,7 +276,8 @@ fn mat_vec(a: &Block, r: usize, c: usize, v: &[f64; 2]) -> [f64; 2] {
     out
 }
 
-/// The paper's dense normal equations (5), solved by LU with partial pivoting.
+/// The paper's dense normal equations (5), solved by LU with partial pivoting
+/// (see [`relax`]'s Method).
 ///
 /// Points are centred on their centroid first (translation does not change
 /// the minimiser, and it keeps the right-hand side small).

@@ -1,17 +1,4 @@
-//! Output written to a temporary file next to the target and renamed over it
-//! only on [`AtomicFile::commit`]: a failed or interrupted run never leaves a
-//! partial file and never clobbers an existing one. Dropping an uncommitted
-//! `AtomicFile` deletes the temporary, and so does
-//! [`remove_unfinished_outputs`], which a program calls from its signal
-//! handler or panic hook (the command line does, for SIGINT, SIGTERM and
-//! SIGHUP), since a process killed by a signal runs no destructors.
-//!
-//! What is replaced, and how:
-//! - a symbolic link is followed: its target is written, the link stays;
-//! - an existing regular file keeps its permissions;
-//! - a new file gets `0o666` less the umask, as `touch` or `cp` would give;
-//! - anything else (a directory, a device such as `/dev/full`, a FIFO, a
-//!   socket) is refused: it would be replaced by a regular file.
+//! Atomic output files: see `AtomicFile` and `remove_unfinished_outputs`.
 
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -97,6 +84,21 @@ fn resolve_target(target: &Path) -> Result<PathBuf, IoError> {
 }
 
 /// A file written under a temporary name and moved into place by `commit`, so that readers never see a partial output.
+///
+/// Output is written to a temporary file next to the target and renamed over
+/// it only on [`AtomicFile::commit`]: a failed or interrupted run never leaves a
+/// partial file and never clobbers an existing one. Dropping an uncommitted
+/// `AtomicFile` deletes the temporary, and so does
+/// [`remove_unfinished_outputs`], which a program calls from its signal
+/// handler or panic hook (the command line does, for SIGINT, SIGTERM and
+/// SIGHUP), since a process killed by a signal runs no destructors.
+///
+/// What is replaced, and how:
+/// - a symbolic link is followed: its target is written, the link stays;
+/// - an existing regular file keeps its permissions;
+/// - a new file gets `0o666` less the umask, as `touch` or `cp` would give;
+/// - anything else (a directory, a device such as `/dev/full`, a FIFO, a
+///   socket) is refused: it would be replaced by a regular file.
 pub struct AtomicFile {
     /// The path the user named (for messages).
     target: PathBuf,

@@ -1,26 +1,6 @@
-//! The `.sfh` container: piecewise helices, compressed, with the source's
-//! metadata. The layout is documented in `docs/container.md`; in short:
-//!
-//! ```text
-//! magic "\x89SFH\r\n\x1a\n" · version u16 · flags u16
-//! header: u32 JSON length · u32 stored length · u32 CRC-32 of the stored bytes
-//!         · deflated JSON (storage, tolerance, source metadata)
-//! blocks: "SFHB" · u32 curves · u32 raw length · u32 stored length · u8 encoding
-//!         · 3 zero bytes · u32 CRC-32 of the stored bytes · stored bytes, which
-//!         inflate to a table of 6 stream lengths and the 6 streams
-//! end:    "SFHE" · u64 curves · u32 CRC-32 of the block CRCs
-//! ```
-//!
-//! A block holds up to [`BLOCK_CURVES`] curve records, deflated. A curve is
-//! empty, a verbatim polyline (one-point curves and curves that could not be
-//! fitted), or a chain in its compact form ([`ChainParams`]: start point and
-//! frame, then length, curvature, torsion and twist per element) stored as
-//! `f64`, `f32`, or quantised ([`Storage::Compact`], see [`QuantChain`]).
-//!
-//! Every read is checked: magic, version, lengths against the file size,
-//! CRC-32 of the header and of every block, the decoded record lengths, and
-//! the end record's count. Truncation or corruption is an error naming the
-//! file, the block and the curve — never a panic or a wrong curve.
+//! The `.sfh` container (version 1): piecewise helices, compressed, with the
+//! source's metadata. The layout is described on `ContainerWriter`, the
+//! reader's checks on `ContainerReader` (and in `docs/container.md`, in full).
 
 use std::io::{Read, Write};
 use std::path::Path;
@@ -782,6 +762,28 @@ pub(crate) fn file_head(version: u16, json: &[u8]) -> std::io::Result<Vec<u8>> {
 
 /// Streams curves into a container; [`finish`](Self::finish) writes the
 /// last block and the end record and renames the file into place.
+///
+/// # Layout
+///
+/// The `.sfh` container: piecewise helices, compressed, with the source's
+/// metadata. The layout is documented in `docs/container.md`; in short:
+///
+/// ```text
+/// magic "\x89SFH\r\n\x1a\n" · version u16 · flags u16
+/// header: u32 JSON length · u32 stored length · u32 CRC-32 of the stored bytes
+///         · deflated JSON (storage, tolerance, source metadata)
+/// blocks: "SFHB" · u32 curves · u32 raw length · u32 stored length · u8 encoding
+///         · 3 zero bytes · u32 CRC-32 of the stored bytes · stored bytes, which
+///         inflate to a table of 6 stream lengths and the 6 streams
+/// end:    "SFHE" · u64 curves · u32 CRC-32 of the block CRCs
+/// ```
+///
+/// A block holds up to [`CONTAINER_BLOCK_CURVES`](BLOCK_CURVES) curve records,
+/// deflated. A curve is empty, a verbatim polyline (one-point curves and curves
+/// that could not be fitted), or a chain in its compact form ([`ChainParams`]:
+/// start point and frame, then length, curvature, torsion and twist per
+/// element) stored as `f64`, `f32`, or quantised ([`Storage::Compact`], see
+/// [`QuantChain`]).
 pub struct ContainerWriter {
     out: AtomicFile,
     header: Header,
@@ -975,7 +977,15 @@ impl ContainerWriter {
 
 // ---------------------------------------------------------------- reading
 
-/// Streams the curves of a container, block by block.
+/// Streams the curves of a container, block by block (the layout is
+/// described on [`ContainerWriter`]).
+///
+/// # Checks
+///
+/// Every read is checked: magic, version, lengths against the file size,
+/// CRC-32 of the header and of every block, the decoded record lengths, and
+/// the end record's count. Truncation or corruption is an error naming the
+/// file, the block and the curve — never a panic or a wrong curve.
 pub struct ContainerReader {
     src: ByteSource,
     header: Header,

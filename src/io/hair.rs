@@ -1,36 +1,6 @@
-//! Cem Yuksel's `.hair` format (cyHairFile), little endian: a 128-byte
-//! header (`"HAIR"`, strand count, point count, array bits, default
-//! segments, thickness, transparency and colour, 88-byte info string), then
-//! whole arrays, each present when its bit is set: segments per strand
-//! (uint16, bit 0; else every strand has the default), points (3 × float32,
-//! bit 1), thickness (float32 per point, bit 2), transparency (bit 3) and
-//! colour (3 × float32 per point, bit 4). A strand of s segments has s + 1
-//! points.
-//!
-//! # Reading
-//!
-//! The arrays are laid out by attribute, not by strand, so the reader checks
-//! the sizes the header implies against the file length, reads the segments
-//! table (2 bytes a strand) to check that it adds up to the point count, and
-//! then streams each array through its own buffered handle, all advancing
-//! strand by strand: one strand is in memory at a time. Thickness,
-//! transparency and colour are carried as per-point data named `thickness`,
-//! `transparency`, `color_r`, `color_g`, `color_b`; the header's defaults and
-//! info string go to `extra` (`hair.default_*`, `hair.info`). Units are not
-//! part of the format: [`Metadata::units`] stays `None`.
-//!
-//! # Writing
-//!
-//! The header needs both counts, so the points and per-point arrays are
-//! spooled to scratch files next to the target (the segments, 2 bytes a
-//! strand, stay in memory) and the file is assembled at
-//! [`CurveWriter::finish`] through an [`AtomicFile`]. The segments array is
-//! always written. Per-point data named as above is written (colour only
-//! when all three channels are there); other per-point and all per-curve
-//! data has no place in the format and is dropped. Defaults and info come
-//! from `extra` when the source was a `.hair` file (else cyHairFile's own
-//! defaults, and `vtk.title` as the info); the info keeps at most 87 bytes
-//! and a terminating NUL.
+//! Cem Yuksel's `.hair` format: the reader and the writer. The format and
+//! what the reader makes of it are described on `open` (`io::open_hair`),
+//! what the writer keeps on `create` (`io::create_hair`).
 
 use std::path::{Path, PathBuf};
 
@@ -86,6 +56,29 @@ pub struct HairReader {
 /// assert_eq!((err.path, err.at.as_deref()), (path, Some("byte 4")));
 /// assert!(err.reason.starts_with("file truncated"));
 /// ```
+///
+/// # Format
+///
+/// Cem Yuksel's `.hair` format (cyHairFile), little endian: a 128-byte
+/// header (`"HAIR"`, strand count, point count, array bits, default
+/// segments, thickness, transparency and colour, 88-byte info string), then
+/// whole arrays, each present when its bit is set: segments per strand
+/// (uint16, bit 0; else every strand has the default), points (3 × float32,
+/// bit 1), thickness (float32 per point, bit 2), transparency (bit 3) and
+/// colour (3 × float32 per point, bit 4). A strand of s segments has s + 1
+/// points.
+///
+/// ## Reading
+///
+/// The arrays are laid out by attribute, not by strand, so the reader checks
+/// the sizes the header implies against the file length, reads the segments
+/// table (2 bytes a strand) to check that it adds up to the point count, and
+/// then streams each array through its own buffered handle, all advancing
+/// strand by strand: one strand is in memory at a time. Thickness,
+/// transparency and colour are carried as per-point data named `thickness`,
+/// `transparency`, `color_r`, `color_g`, `color_b`; the header's defaults and
+/// info string go to `extra` (`hair.default_*`, `hair.info`). Units are not
+/// part of the format: [`Metadata::units`] stays `None`.
 pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     Ok(Box::new(HairReader::open(path)?))
 }
@@ -342,7 +335,7 @@ impl CurveReader for HairReader {
 // ---------------------------------------------------------------------------
 // Writer
 
-/// Create a `.hair` file (see the module docs for what is kept).
+/// Create a `.hair` file (see [Output](create#output) for what is kept).
 ///
 /// A strand's thickness is kept; other per-point values are dropped:
 ///
@@ -364,6 +357,20 @@ impl CurveReader for HairReader {
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!((&curves[0].points, &curves[0].point_data), (&points, &vec![0.1f32, 0.2, 0.3]));
 /// ```
+///
+/// # Output
+///
+/// The header needs both counts, so the points and per-point arrays are
+/// spooled to scratch files next to the target (the segments, 2 bytes a
+/// strand, stay in memory) and the file is assembled at
+/// [`CurveWriter::finish`] through an [`AtomicFile`]. The segments array is
+/// always written. Per-point data named as the reader names it (see
+/// [`open_hair`](crate::io::open_hair), Format) is written (colour only
+/// when all three channels are there); other per-point and all per-curve
+/// data has no place in the format and is dropped. Defaults and info come
+/// from `extra` when the source was a `.hair` file (else cyHairFile's own
+/// defaults, and `vtk.title` as the info); the info keeps at most 87 bytes
+/// and a terminating NUL.
 pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     Ok(Box::new(HairWriter::new(path, meta)?))
 }

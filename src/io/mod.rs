@@ -17,7 +17,14 @@
 //!
 //! Writers write to a temporary file next to the target and rename it into
 //! place in [`CurveWriter::finish`]; dropping a writer without finishing it
-//! (a failed run) leaves nothing behind and never clobbers an existing file.
+//! (a failed run) leaves nothing behind and never clobbers an existing file
+//! ([`AtomicFile`]).
+//!
+//! Each format's reader documents the format and what is read from it
+//! ([`open_tck`], [`open_trk`], [`open_trx`], [`VtkReader`], [`open_hair`],
+//! [`open_json`], [`open_csv`], [`read_sketch`]), and its writer what is
+//! written ([`create_tck`], [`create_trk`], [`create_trx`], [`VtkWriter`],
+//! [`create_hair`]).
 
 mod atomic;
 mod bytes;

@@ -1,26 +1,5 @@
-//! Plain polylines: JSON (one document) and CSV (one row per point).
-//!
-//! JSON, read whole into memory (it is the format for small data and for
-//! hand-made inputs; the binary formats stream):
-//!
-//! ```json
-//! {"units": "mm",
-//!  "curves": [{"id": "a", "points": [[x, y, z], …],
-//!              "point_data": {"fa": [v0, v1, …]}, "curve_data": {"weight": w}}, …]}
-//! ```
-//!
-//! `units`, `id`, `point_data` and `curve_data` are optional; all curves
-//! must carry the same data names. Other fields (e.g. the `tangents` that
-//! `strandfit evaluate --tangents` writes) are ignored, so `evaluate`'s
-//! output reads as polylines. Numbers are written with the shortest
-//! representation that reads back to the same `f64`.
-//!
-//! CSV, streamed: a header `curve,x,y,z[,name…]` (extra columns are per-point
-//! values), then one row per point; consecutive rows with the same `curve`
-//! value form one curve. The header is required (a file without one is not
-//! guessed at), so that a column shift cannot go unnoticed. A curve with no
-//! points is one row with its id and every other field empty (`c7,,,`), so
-//! that it survives a round trip instead of vanishing.
+//! Plain polylines: JSON (one document) and CSV (one row per point). The
+//! formats are described on `open_json` and `open_csv`.
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -57,7 +36,7 @@ struct JsonCurve {
     curve_data: BTreeMap<String, Option<f64>>,
 }
 
-/// Open a JSON polyline file (read whole; see the module docs).
+/// Open a JSON polyline file (read whole; see [Format](open_json#format)).
 ///
 /// A file that is not one is an error naming the file and the place:
 ///
@@ -71,6 +50,23 @@ struct JsonCurve {
 /// assert!(err.reason.starts_with("not a polyline JSON document"));
 /// assert!(err.at.unwrap().starts_with("line 1, column"));
 /// ```
+///
+/// # Format
+///
+/// JSON, read whole into memory (it is the format for small data and for
+/// hand-made inputs; the binary formats stream):
+///
+/// ```json
+/// {"units": "mm",
+///  "curves": [{"id": "a", "points": [[x, y, z], …],
+///              "point_data": {"fa": [v0, v1, …]}, "curve_data": {"weight": w}}, …]}
+/// ```
+///
+/// `units`, `id`, `point_data` and `curve_data` are optional; all curves
+/// must carry the same data names. Other fields (e.g. the `tangents` that
+/// `strandfit evaluate --tangents` writes) are ignored, so `evaluate`'s
+/// output reads as polylines. Numbers are written with the shortest
+/// representation that reads back to the same `f64`.
 pub fn open_json(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     let text = std::fs::read_to_string(path).map_err(|e| IoError::os(path, "cannot read", e))?;
     let doc: JsonDoc = serde_json::from_str(&text).map_err(|e| {
@@ -190,7 +186,7 @@ struct JsonWriter {
     written: u64,
 }
 
-/// Create a JSON polyline writer.
+/// Create a JSON polyline writer (the format of [`open_json`]).
 ///
 /// Curve names and per-curve values are kept:
 ///
@@ -338,7 +334,7 @@ struct CsvReader {
     done: bool,
 }
 
-/// Open a CSV polyline file (streamed; see the module docs).
+/// Open a CSV polyline file (streamed; see [Format](open_csv#format)).
 ///
 /// A file that is not one is an error naming the file and the line:
 ///
@@ -352,6 +348,15 @@ struct CsvReader {
 /// assert_eq!(err.at.as_deref(), Some("line 1"));
 /// assert_eq!(err.reason, "the header must start with `curve,x,y,z`, found `id,x,y`");
 /// ```
+///
+/// # Format
+///
+/// CSV, streamed: a header `curve,x,y,z[,name…]` (extra columns are per-point
+/// values), then one row per point; consecutive rows with the same `curve`
+/// value form one curve. The header is required (a file without one is not
+/// guessed at), so that a column shift cannot go unnoticed. A curve with no
+/// points is one row with its id and every other field empty (`c7,,,`), so
+/// that it survives a round trip instead of vanishing.
 pub fn open_csv(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     let mut src = ByteSource::open(path)?;
     let header = src
@@ -568,7 +573,7 @@ impl CurveWriter for CsvWriter {
         };
         let mut s = String::with_capacity(48 * c.points.len());
         if c.points.is_empty() {
-            // The empty-curve row (see the module docs).
+            // The empty-curve row (see `open_csv`, Format).
             s.push_str(&id);
             s.push_str(&",".repeat(3 + self.np));
             s.push('\n');

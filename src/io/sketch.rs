@@ -1,52 +1,7 @@
 //! 2D sketches for `strandfit sketch`: reading a hand-drawn polyline from
 //! JSON, CSV or SVG, and writing an SVG preview that overlays the fitted
-//! (projected) helix pieces on it.
-//!
-//! # Input formats
-//!
-//! [`read_sketch`] picks the format by extension (case-insensitive):
-//!
-//! * `.json`: a bare array `[[x, y], …]` or an object `{"points": [[x, y], …]}`
-//!   (other fields of the object are ignored). Each point is exactly two
-//!   finite numbers.
-//! * `.csv`, `.txt`: one `x,y` per line, the two values separated by a comma,
-//!   a semicolon, or tabs/spaces. A first line that holds no number at all
-//!   is a header and is skipped; blank lines and `#` comments (to the end of
-//!   the line) are skipped anywhere.
-//! * `.svg`: the first `<path>` element's `d` attribute, or, when the file
-//!   has no `<path>`, the first `<polyline>` or `<polygon>` element's
-//!   `points`. Path data is parsed fully per SVG 1.1 (all commands, absolute
-//!   and relative, implicit repetition, compact numbers and arc flags).
-//!   A sketch is one stroke, so **only the first subpath** is used: the
-//!   points up to the second moveto that follows some drawing, or up to and
-//!   including the first `Z`, which closes the stroke by repeating its start
-//!   point. A polygon is closed the same way. `transform` attributes (on the
-//!   element or on an enclosing element) are rejected with an error rather
-//!   than ignored, since ignoring them would give silently wrong points.
-//!
-//! Coordinates are returned exactly as the file has them. In particular SVG's
-//! y axis points down and is **not** flipped, so that the preview written by
-//! [`write_preview_svg`] overlays the original drawing.
-//!
-//! # Flattening of SVG curves
-//!
-//! Cubic and quadratic Béziers and elliptical arcs are replaced by polylines
-//! whose vertices lie on the curve at uniform parameter steps, with enough
-//! pieces that the distance between the curve and its chords is at most
-//! [`FLATTEN_TOLERANCE`] (1e-3) times the segment's size: its control-polygon
-//! length for Béziers, `max(rx, ry)·|Δθ|` for arcs (both bound the arc length
-//! from above). The piece count comes from the bound `M·h²/8` on the chord
-//! deviation of a curve with `|B''| ≤ M` over a parameter step `h`; it is at
-//! most 28 per segment whatever the shape.
-//!
-//! # Validation (all formats)
-//!
-//! Non-finite values are errors; consecutive duplicate points (zero-length
-//! segments) are removed; a sketch needs at least 3 distinct points and a
-//! non-zero length. Errors name the file and where: `line N` (CSV, 1-based),
-//! `point N` (JSON, 0-based index), `path data offset N` (SVG, byte offset
-//! into the attribute, with the element's line). No input makes a reader
-//! panic.
+//! (projected) helix pieces on it. The formats, the flattening of SVG
+//! curves and the validation are described on `read_sketch`.
 
 use std::io::Write;
 use std::path::Path;
@@ -56,7 +11,7 @@ use glam::DVec2;
 use super::{AtomicFile, IoError};
 
 /// Chord deviation allowed when flattening SVG curves, relative to the
-/// segment's size (see the module docs).
+/// segment's size (see [`read_sketch`]).
 pub const FLATTEN_TOLERANCE: f64 = 1e-3;
 
 /// Most pieces one curve segment is flattened into (a guard; the tolerance
@@ -66,8 +21,8 @@ const MAX_PIECES: usize = 1024;
 /// The file extensions [`read_sketch`] accepts.
 pub const SKETCH_EXTENSIONS: &[&str] = &["json", "csv", "txt", "svg"];
 
-/// Read a 2D sketch, choosing the format by the extension of `path` (see the
-/// module docs). Points are in the file's own coordinates.
+/// Read a 2D sketch, choosing the format by the extension of `path` (see
+/// [Formats](read_sketch#formats)). Points are in the file's own coordinates.
 ///
 /// ```
 /// use strandfit::io::read_sketch;
@@ -79,6 +34,52 @@ pub const SKETCH_EXTENSIONS: &[&str] = &["json", "csv", "txt", "svg"];
 /// assert_eq!(points.len(), 3);
 /// assert_eq!((points[1].x, points[1].y), (1.0, 0.5));
 /// ```
+///
+/// # Formats
+///
+/// The extension picks the format (case-insensitive):
+///
+/// * `.json`: a bare array `[[x, y], …]` or an object `{"points": [[x, y], …]}`
+///   (other fields of the object are ignored). Each point is exactly two
+///   finite numbers.
+/// * `.csv`, `.txt`: one `x,y` per line, the two values separated by a comma,
+///   a semicolon, or tabs/spaces. A first line that holds no number at all
+///   is a header and is skipped; blank lines and `#` comments (to the end of
+///   the line) are skipped anywhere.
+/// * `.svg`: the first `<path>` element's `d` attribute, or, when the file
+///   has no `<path>`, the first `<polyline>` or `<polygon>` element's
+///   `points`. Path data is parsed fully per SVG 1.1 (all commands, absolute
+///   and relative, implicit repetition, compact numbers and arc flags).
+///   A sketch is one stroke, so **only the first subpath** is used: the
+///   points up to the second moveto that follows some drawing, or up to and
+///   including the first `Z`, which closes the stroke by repeating its start
+///   point. A polygon is closed the same way. `transform` attributes (on the
+///   element or on an enclosing element) are rejected with an error rather
+///   than ignored, since ignoring them would give silently wrong points.
+///
+/// Coordinates are returned exactly as the file has them. In particular SVG's
+/// y axis points down and is **not** flipped, so that the preview written by
+/// [`write_preview_svg`] overlays the original drawing.
+///
+/// # Flattening of SVG curves
+///
+/// Cubic and quadratic Béziers and elliptical arcs are replaced by polylines
+/// whose vertices lie on the curve at uniform parameter steps, with enough
+/// pieces that the distance between the curve and its chords is at most
+/// [`SVG_FLATTEN_TOLERANCE`](FLATTEN_TOLERANCE) (1e-3) times the segment's
+/// size: its control-polygon length for Béziers, `max(rx, ry)·|Δθ|` for arcs
+/// (both bound the arc length from above). The piece count comes from the bound
+/// `M·h²/8` on the chord deviation of a curve with `|B''| ≤ M` over a parameter
+/// step `h`; it is at most 28 per segment whatever the shape.
+///
+/// # Validation (all formats)
+///
+/// Non-finite values are errors; consecutive duplicate points (zero-length
+/// segments) are removed; a sketch needs at least 3 distinct points and a
+/// non-zero length. Errors name the file and where: `line N` (CSV, 1-based),
+/// `point N` (JSON, 0-based index), `path data offset N` (SVG, byte offset
+/// into the attribute, with the element's line). No input makes a reader
+/// panic.
 pub fn read_sketch(path: &Path) -> Result<Vec<DVec2>, IoError> {
     let ext = path
         .extension()
@@ -103,8 +104,8 @@ pub fn read_sketch(path: &Path) -> Result<Vec<DVec2>, IoError> {
     parse(&text, path)
 }
 
-/// Parse a JSON sketch (`[[x, y], …]` or `{"points": [[x, y], …]}`); `path`
-/// only names the source in errors.
+/// Parse a JSON sketch (`[[x, y], …]` or `{"points": [[x, y], …]}`; see
+/// [`read_sketch`]); `path` only names the source in errors.
 ///
 /// Repeated points are dropped; a 3D point is an error naming it:
 ///
@@ -172,7 +173,7 @@ pub fn parse_sketch_json(text: &str, path: &Path) -> Result<Vec<DVec2>, IoError>
     finish(out, path)
 }
 
-/// Parse a CSV/text sketch (one `x,y` per line; see the module docs); `path`
+/// Parse a CSV/text sketch (one `x,y` per line; see [`read_sketch`]); `path`
 /// only names the source in errors.
 ///
 /// ```
@@ -230,7 +231,7 @@ pub fn parse_sketch_csv(text: &str, path: &Path) -> Result<Vec<DVec2>, IoError> 
 }
 
 /// Parse an SVG sketch (the first `<path>`'s `d`, else the first
-/// `<polyline>`/`<polygon>`'s `points`; see the module docs); `path` only
+/// `<polyline>`/`<polygon>`'s `points`; see [`read_sketch`]); `path` only
 /// names the source in errors.
 ///
 /// A closed path repeats its start point:

@@ -1,29 +1,6 @@
-//! MRtrix `.tck` tractograms: a text header (`mrtrix tracks`, `key: value`
-//! lines, `END`), then coordinate triplets from the byte offset named in
-//! `file: . OFFSET`. A NaN triplet ends each streamline and an Inf triplet
-//! ends the data. Coordinates are RAS+ millimetres already, so they pass
-//! through unchanged.
-//!
-//! Where the format leaves room, the reader decides:
-//! - `datatype` and `file` are required (MRtrix requires them; nibabel
-//!   guesses); `count` is optional, and when present the streamlines found
-//!   must match it, so a truncated or spliced file is an error, not a short
-//!   read.
-//! - Data that end cleanly after a NaN separator but without the Inf
-//!   terminator (a writer that died before its last write) are accepted when
-//!   the number of streamlines agrees with `count` (or there is no `count`);
-//!   otherwise the error says the terminator is missing.
-//! - Bytes after the Inf terminator are ignored, as MRtrix does.
-//! - A streamline with no points (two NaN triplets in a row) comes out as an
-//!   empty [`Curve`], so that counts match the header; nibabel drops them.
-//! - A triplet mixing NaN or Inf with numbers is an error, not a separator.
-//!
-//! Header lines other than `count` and `file` (including `datatype`) are kept
-//! in [`Metadata::extra`], in order, so `.tck` → `.tck` writes them back. The
-//! writer keeps the source's `datatype` (Float32LE for sources that are not
-//! `.tck`), writes a zero-padded `count` and fills it in at
-//! [`finish`](CurveWriter::finish). `.tck` holds points only: per-point and
-//! per-curve values are dropped.
+//! MRtrix `.tck` tractograms: the reader and the writer. The format and
+//! what the reader makes of it are described on `open` (`io::open_tck`),
+//! what the writer writes on `create` (`io::create_tck`).
 
 use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -156,6 +133,28 @@ fn snippet(s: &str) -> String {
 /// assert_eq!((err.path, err.at.as_deref()), (path, Some("byte 0")));
 /// assert!(err.reason.starts_with("not an MRtrix .tck file"));
 /// ```
+///
+/// # Format
+///
+/// MRtrix `.tck` tractograms: a text header (`mrtrix tracks`, `key: value`
+/// lines, `END`), then coordinate triplets from the byte offset named in
+/// `file: . OFFSET`. A NaN triplet ends each streamline and an Inf triplet
+/// ends the data. Coordinates are RAS+ millimetres already, so they pass
+/// through unchanged.
+///
+/// Where the format leaves room, the reader decides:
+/// - `datatype` and `file` are required (MRtrix requires them; nibabel
+///   guesses); `count` is optional, and when present the streamlines found
+///   must match it, so a truncated or spliced file is an error, not a short
+///   read.
+/// - Data that end cleanly after a NaN separator but without the Inf
+///   terminator (a writer that died before its last write) are accepted when
+///   the number of streamlines agrees with `count` (or there is no `count`);
+///   otherwise the error says the terminator is missing.
+/// - Bytes after the Inf terminator are ignored, as MRtrix does.
+/// - A streamline with no points (two NaN triplets in a row) comes out as an
+///   empty [`Curve`], so that counts match the header; nibabel drops them.
+/// - A triplet mixing NaN or Inf with numbers is an error, not a separator.
 pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     Ok(Box::new(TckReader::open(path)?))
 }
@@ -478,6 +477,15 @@ impl CurveReader for TckReader {
 /// std::fs::remove_file(&path).unwrap();
 /// assert_eq!(curves[0].points, [DVec3::ZERO, DVec3::new(1.0, 2.0, 3.5)]);
 /// ```
+///
+/// # Output
+///
+/// Header lines other than `count` and `file` (including `datatype`) are kept
+/// in [`Metadata::extra`], in order, so `.tck` → `.tck` writes them back. The
+/// writer keeps the source's `datatype` (Float32LE for sources that are not
+/// `.tck`), writes a zero-padded `count` and fills it in at
+/// [`finish`](CurveWriter::finish). `.tck` holds points only: per-point and
+/// per-curve values are dropped.
 pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     let mut dtype = DataType::DEFAULT;
     let mut head = format!("{MAGIC}\n");

@@ -1,42 +1,6 @@
-//! TrackVis `.trk` tractograms (versions 1 and 2; 3 read as 2, as nibabel
-//! does): a 1000-byte header, then per streamline an `int32` point count,
-//! `x y z` plus `n_scalars` floats per point, and `n_properties` floats.
-//!
-//! Coordinates are "voxmm": millimetres from the *corner* of the reference
-//! image's first voxel, along its voxel axes. They are mapped to RAS+ mm
-//! exactly as nibabel maps them, so the two agree on every file:
-//! `vox = voxmm / voxel_size − 0.5` (the half voxel moves the origin to the
-//! voxel centre), then, if the header's `voxel_order` differs from the axis
-//! directions of `vox_to_ras`, the flip/permutation between them (nibabel's
-//! `inv_ornt_aff`, which uses `dim`), then `ras = vox_to_ras · vox`.
-//!
-//! Header decisions:
-//! - Byte order: `hdr_size` must be 1000; if it reads 1000 little endian the
-//!   file is little endian, if big endian, big endian; otherwise the file is
-//!   rejected.
-//! - `vox_to_ras` with `[3][3] == 0` (not recorded, as in old files) and
-//!   version 1 files (no matrix) use the identity, as nibabel does: points
-//!   then come out in voxel units shifted by half a voxel, not millimetres,
-//!   unless the voxels are 1 mm. An empty `voxel_order` means `LPS`
-//!   (TrackVis's default, also nibabel's).
-//! - `n_count == 0` means "unknown, read to the end". A non-zero `n_count`
-//!   must match the file: fewer streamlines is a truncation error, bytes
-//!   after the last one are an error too (nibabel ignores them).
-//! - Per-point scalars and per-streamline properties are named by up to ten
-//!   20-byte fields. A plain name is one value; nibabel's `name\0N` is `N`
-//!   values, which come out as `name[0]` … `name[N-1]`. Values no field
-//!   names come out as `scalars` (or `scalars[i]`) and `properties`, as in
-//!   nibabel.
-//!
-//! The raw header is kept, hex-encoded, in [`Metadata::extra`] under
-//! [`HEADER_KEY`]; the writer starts from it for a `.trk` source, so `.trk`
-//! → `.trk` reproduces the header byte for byte (byte order included) except
-//! `n_count`. Fields [`Metadata`] carries (affine, voxel sizes, dimensions,
-//! data names) override it when they differ. A source that is not `.trk`
-//! gets a little-endian version 2 header from the metadata: its
-//! `vox_to_world` (identity for `.tck` and the other formats, so voxmm =
-//! RAS + 0.5 mm), voxel sizes and dimensions where known (else 1 mm and 1),
-//! and the `voxel_order` of the affine's axes.
+//! TrackVis `.trk` tractograms: the reader and the writer. The format and
+//! what the reader makes of it are described on `open` (`io::open_trk`),
+//! the header the writer writes on `create` (`io::create_trk`).
 
 use std::fmt::Write as _;
 use std::io::{Seek, SeekFrom, Write};
@@ -405,7 +369,7 @@ impl Header {
 }
 
 /// The value names in ten 20-byte fields at `at`, for `n` values per point
-/// (or streamline). See the module documentation for the encoding.
+/// (or streamline). The encoding is described on [`open`] (Format).
 fn decode_names(
     raw: &[u8],
     at: usize,
@@ -562,6 +526,38 @@ fn from_hex(s: &str) -> Option<Vec<u8>> {
 /// assert_eq!((err.path, err.at.as_deref()), (path, Some("byte 0")));
 /// assert!(err.reason.starts_with("file truncated: 5 bytes, shorter than the 1000-byte .trk header"));
 /// ```
+///
+/// # Format
+///
+/// TrackVis `.trk` tractograms (versions 1 and 2; 3 read as 2, as nibabel
+/// does): a 1000-byte header, then per streamline an `int32` point count,
+/// `x y z` plus `n_scalars` floats per point, and `n_properties` floats.
+///
+/// Coordinates are "voxmm": millimetres from the *corner* of the reference
+/// image's first voxel, along its voxel axes. They are mapped to RAS+ mm
+/// exactly as nibabel maps them, so the two agree on every file:
+/// `vox = voxmm / voxel_size − 0.5` (the half voxel moves the origin to the
+/// voxel centre), then, if the header's `voxel_order` differs from the axis
+/// directions of `vox_to_ras`, the flip/permutation between them (nibabel's
+/// `inv_ornt_aff`, which uses `dim`), then `ras = vox_to_ras · vox`.
+///
+/// Header decisions:
+/// - Byte order: `hdr_size` must be 1000; if it reads 1000 little endian the
+///   file is little endian, if big endian, big endian; otherwise the file is
+///   rejected.
+/// - `vox_to_ras` with `[3][3] == 0` (not recorded, as in old files) and
+///   version 1 files (no matrix) use the identity, as nibabel does: points
+///   then come out in voxel units shifted by half a voxel, not millimetres,
+///   unless the voxels are 1 mm. An empty `voxel_order` means `LPS`
+///   (TrackVis's default, also nibabel's).
+/// - `n_count == 0` means "unknown, read to the end". A non-zero `n_count`
+///   must match the file: fewer streamlines is a truncation error, bytes
+///   after the last one are an error too (nibabel ignores them).
+/// - Per-point scalars and per-streamline properties are named by up to ten
+///   20-byte fields. A plain name is one value; nibabel's `name\0N` is `N`
+///   values, which come out as `name[0]` … `name[N-1]`. Values no field
+///   names come out as `scalars` (or `scalars[i]`) and `properties`, as in
+///   nibabel.
 pub fn open(path: &Path) -> Result<Box<dyn CurveReader>, IoError> {
     Ok(Box::new(TrkReader::open(path)?))
 }
@@ -768,8 +764,8 @@ fn default_header() -> [u8; HEADER_SIZE] {
     raw
 }
 
-/// The header to write for curves described by `meta` (see the module
-/// documentation), with `n_count` 0 until the end.
+/// The header to write for curves described by `meta` (see [`create`],
+/// Output), with `n_count` 0 until the end.
 fn header_for(path: &Path, meta: &Metadata) -> Result<[u8; HEADER_SIZE], IoError> {
     let source = match meta.extra(HEADER_KEY) {
         Some(hex) if meta.format == Format::Trk => Some(
@@ -872,7 +868,7 @@ fn header_for(path: &Path, meta: &Metadata) -> Result<[u8; HEADER_SIZE], IoError
 }
 
 /// Create a `.trk` writer for curves in world space (RAS+ mm) described by
-/// `meta` (see the module documentation for the header it writes).
+/// `meta` (see [Output](create#output) for the header it writes).
 ///
 /// A 1000-byte header, then per streamline its point count and the points
 /// (float32); the points read back within float32 rounding.
@@ -891,6 +887,18 @@ fn header_for(path: &Path, meta: &Metadata) -> Result<[u8; HEADER_SIZE], IoError
 /// std::fs::remove_file(&path).unwrap();
 /// assert!(curves[0].points.iter().zip(&p).all(|(a, b)| a.distance(*b) < 1e-5));
 /// ```
+///
+/// # Output
+///
+/// The raw header is kept, hex-encoded, in [`Metadata::extra`] under
+/// [`TRK_HEADER_KEY`](HEADER_KEY); the writer starts from it for a `.trk`
+/// source, so `.trk` → `.trk` reproduces the header byte for byte (byte order
+/// included) except `n_count`. Fields [`Metadata`] carries (affine, voxel
+/// sizes, dimensions, data names) override it when they differ. A source that
+/// is not `.trk` gets a little-endian version 2 header from the metadata: its
+/// `vox_to_world` (identity for `.tck` and the other formats, so voxmm = RAS +
+/// 0.5 mm), voxel sizes and dimensions where known (else 1 mm and 1), and the
+/// `voxel_order` of the affine's axes.
 pub fn create(path: &Path, meta: &Metadata) -> Result<Box<dyn CurveWriter>, IoError> {
     let raw = header_for(path, meta)?;
     // The transform the reader will apply, from the bytes it will read.

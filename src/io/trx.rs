@@ -1177,7 +1177,7 @@ fn plan_arrays(
 }
 
 /// Create a TRX writer (a stored zip). A TRX source's dtypes are kept (see
-/// [Output](#output)); other sources get float32 throughout.
+/// [Output](create#output)); other sources get float32 throughout.
 ///
 /// Per-point values travel with the points:
 ///

@@ -1,9 +1,5 @@
-//! Paths with moving frames for viewers: a legacy VTK `POLYDATA` file
-//! (ASCII, version 3.0) with one polyline per path and the frame vectors as
-//! point data — `FIELD frame 3` with the 3-component arrays `f1`, `f2`,
-//! `f3`. A `FIELD` rather than three `VECTORS`, because VTK's legacy reader
-//! keeps only the first `VECTORS` array of a section; ParaView lists the
-//! three arrays and glyphs them directly. Written atomically.
+//! Paths with moving frames for viewers, as legacy VTK: see
+//! `write_framed_paths` (`io::write_framed_paths`).
 
 use std::io::Write;
 use std::path::Path;
@@ -20,7 +16,12 @@ pub struct FramedPath {
     pub frames: Vec<[DVec3; 3]>,
 }
 
-/// Write `paths` to `target` (see the module docs).
+/// Write `paths` to `target`, for viewers: a legacy VTK `POLYDATA` file
+/// (ASCII, version 3.0) with one polyline per path and the frame vectors as
+/// point data — `FIELD frame 3` with the 3-component arrays `f1`, `f2`,
+/// `f3`. A `FIELD` rather than three `VECTORS`, because VTK's legacy reader
+/// keeps only the first `VECTORS` array of a section; ParaView lists the
+/// three arrays and glyphs them directly. Written atomically.
 ///
 /// ```
 /// use strandfit::io::{write_framed_paths, FramedPath};

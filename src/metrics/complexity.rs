@@ -1,57 +1,6 @@
-//! Curve complexity `C(Γ) = ∫ √(κ² + τ²) ds` of Bézier cubics.
-//!
-//! This is Eq. 12 of the floating tangents paper: the total angle through
-//! which the Frenet frame turns (its Darboux vector has length `√(κ² + τ²)`).
-//! It is dimensionless, so invariant under scaling. For a planar curve it is
-//! the total curvature `∫ κ ds`, which for an arc without inflection is the
-//! angle between its end tangents.
-//!
-//! For a cubic `B(t)`, with `c = B' × B''` and `D = det(B', B'', B''')`,
-//!
-//! ```text
-//! κ = |c| / |B'|³,   τ = D / |c|²,   ds = |B'| dt,
-//! C = ∫₀¹ √( |c|²/|B'|⁴ + D²|B'|²/|c|⁴ ) dt.
-//! ```
-//!
-//! Two facts about cubics shape the implementation:
-//!
-//! * `D` is constant in `t`: with `B'(t) = a + bt + et²`, `B'' = b + 2et`,
-//!   `B''' = 2e`, every term of `det(B', B'', B''')` with `e` outside the last
-//!   column vanishes, leaving `det(a, b, 2e)`. In terms of the control-point
-//!   differences `dᵢ = Pᵢ₊₁ − Pᵢ` it is `D = 108 d₀·(d₁ × d₂)`. So planarity is
-//!   a property of the segment, decided once.
-//! * `c(t) = a×b + 2t a×e + t² b×e` is a quadratic, so `|c|²` is a quartic
-//!   whose minima (where the curve is closest to an inflection) are the roots
-//!   of a cubic, found once per segment.
-//!
-//! Degenerate cases (documented choices):
-//!
-//! * Planar cubics (`|D|` within the rounding of the control points, see
-//!   `PLANAR_ULPS`): `τ ≡ 0` and the integrand is `κ|B'| = |c|/|B'|²`. This
-//!   also covers straight pieces and inflections, where `c = 0` and the
-//!   torsion formula is `0/0`. Treating such cubics as planar matters: a
-//!   *non*-planar cubic passing near an inflection has a narrow torsion spike
-//!   through which the binormal turns by nearly `π` (τ has the constant sign
-//!   of `D`), so `C` jumps by about `π` between an exactly planar S-curve and
-//!   a slightly lifted one. That is a property of `C`, not of the quadrature,
-//!   and it is computed faithfully: the integration is split at the minima of
-//!   `|c|` and graded geometrically towards them (see `breakpoints`), so the
-//!   spike is not stepped over.
-//! * `B' = 0` (a cusp, or a collapsed segment): the integrand is taken as 0
-//!   at that parameter. A cusp forces `D = 0` (evaluate `D` there), so it only
-//!   occurs in planar cubics, where `κ|B'|` stays bounded near the cusp. The
-//!   `π` flip of the tangent *at* the cusp is a point event and is not
-//!   counted, just as corners between segments are not counted by
-//!   [`complexity_cubics`].
-//! * Non-finite control points give NaN.
-//!
-//! Quadrature: adaptive 8-point Gauss–Legendre. A panel is accepted when its
-//! value and the sum over its two halves agree to within its share of `tol`,
-//! or to within the rounding of the integrand (`NOISE_ULPS`); otherwise both
-//! halves are refined with half the tolerance each. The integrand of a cubic
-//! is smooth away from the isolated points split off in advance, so the
-//! refinement normally stays local; `MAX_DEPTH` bounds it near a trouble
-//! spot and `MAX_PANELS` bounds the total work per segment in any case.
+//! Curve complexity `C(Γ) = ∫ √(κ² + τ²) ds` of Bézier cubics; the
+//! formulas, degenerate cases and quadrature are described on
+//! `complexity_cubic`.
 
 use glam::DVec3;
 
@@ -107,10 +56,10 @@ const GL_W: [f64; 4] = [
     0.101_228_536_290_376_3,
 ];
 
-/// Complexity `∫ √(κ² + τ²) ds` of one cubic, to an absolute accuracy of
-/// about `tol` (a non-positive or NaN `tol` asks for full precision; the
-/// work stays bounded by the depth limit). See the module documentation for
-/// the degenerate cases; non-finite control points give NaN.
+/// Complexity `∫ √(κ² + τ²) ds` of one cubic, to an absolute accuracy of about
+/// `tol` (a non-positive or NaN `tol` asks for full precision; the work stays
+/// bounded by the depth limit). See [Method](complexity_cubic#method) for the
+/// degenerate cases; non-finite control points give NaN.
 ///
 /// The parabola `y = x²`, `x ∈ [0, 1]`, is planar without inflection, so `C` is
 /// the angle between its end tangents `(1, 0)` and `(1, 2)`, at any scale:
@@ -125,6 +74,61 @@ const GL_W: [f64; 4] = [
 /// let big = CubicBez::new(c.p0 * 50.0, c.p1 * 50.0, c.p2 * 50.0, c.p3 * 50.0);
 /// assert!((complexity_cubic(&big, 1e-12) - 2f64.atan()).abs() < 1e-10);
 /// ```
+///
+/// # Method
+///
+/// `C(Γ) = ∫ √(κ² + τ²) ds` is Eq. 12 of the floating tangents paper: the total
+/// angle through which the Frenet frame turns (its Darboux vector has length
+/// `√(κ² + τ²)`). It is dimensionless, so invariant under scaling. For a planar
+/// curve it is the total curvature `∫ κ ds`, which for an arc without
+/// inflection is the angle between its end tangents.
+///
+/// For a cubic `B(t)`, with `c = B' × B''` and `D = det(B', B'', B''')`,
+///
+/// ```text
+/// κ = |c| / |B'|³,   τ = D / |c|²,   ds = |B'| dt,
+/// C = ∫₀¹ √( |c|²/|B'|⁴ + D²|B'|²/|c|⁴ ) dt.
+/// ```
+///
+/// Two facts about cubics shape the implementation:
+///
+/// * `D` is constant in `t`: with `B'(t) = a + bt + et²`, `B'' = b + 2et`,
+///   `B''' = 2e`, every term of `det(B', B'', B''')` with `e` outside the last
+///   column vanishes, leaving `det(a, b, 2e)`. In terms of the control-point
+///   differences `dᵢ = Pᵢ₊₁ − Pᵢ` it is `D = 108 d₀·(d₁ × d₂)`. So planarity is
+///   a property of the segment, decided once.
+/// * `c(t) = a×b + 2t a×e + t² b×e` is a quadratic, so `|c|²` is a quartic
+///   whose minima (where the curve is closest to an inflection) are the roots
+///   of a cubic, found once per segment.
+///
+/// Degenerate cases (documented choices):
+///
+/// * Planar cubics (`|D|` within the rounding of the control points, see
+///   `PLANAR_ULPS`): `τ ≡ 0` and the integrand is `κ|B'| = |c|/|B'|²`. This
+///   also covers straight pieces and inflections, where `c = 0` and the
+///   torsion formula is `0/0`. Treating such cubics as planar matters: a
+///   *non*-planar cubic passing near an inflection has a narrow torsion spike
+///   through which the binormal turns by nearly `π` (τ has the constant sign
+///   of `D`), so `C` jumps by about `π` between an exactly planar S-curve and
+///   a slightly lifted one. That is a property of `C`, not of the quadrature,
+///   and it is computed faithfully: the integration is split at the minima of
+///   `|c|` and graded geometrically towards them (see `breakpoints`), so the
+///   spike is not stepped over.
+/// * `B' = 0` (a cusp, or a collapsed segment): the integrand is taken as 0
+///   at that parameter. A cusp forces `D = 0` (evaluate `D` there), so it only
+///   occurs in planar cubics, where `κ|B'|` stays bounded near the cusp. The
+///   `π` flip of the tangent *at* the cusp is a point event and is not
+///   counted, just as corners between segments are not counted by
+///   [`complexity_cubics`].
+/// * Non-finite control points give NaN.
+///
+/// Quadrature: adaptive 8-point Gauss–Legendre. A panel is accepted when its
+/// value and the sum over its two halves agree to within its share of `tol`,
+/// or to within the rounding of the integrand (`NOISE_ULPS`); otherwise both
+/// halves are refined with half the tolerance each. The integrand of a cubic
+/// is smooth away from the isolated points split off in advance, so the
+/// refinement normally stays local; `MAX_DEPTH` bounds it near a trouble
+/// spot and `MAX_PANELS` bounds the total work per segment in any case.
 pub fn complexity_cubic(seg: &CubicBez, tol: f64) -> f64 {
     if ![seg.p0, seg.p1, seg.p2, seg.p3]
         .iter()
@@ -228,7 +232,7 @@ impl Integrand {
         let b2 = self.seg.deriv2(t);
         let s2 = b1.length_squared();
         if s2 == 0.0 {
-            return (0.0, 0.0); // cusp or collapsed segment: see module docs
+            return (0.0, 0.0); // cusp or collapsed segment: see complexity_cubic's docs
         }
         let c2 = b1.cross(b2).length_squared();
         let k = c2.sqrt() / s2; // κ|B'|

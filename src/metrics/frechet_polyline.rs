@@ -1,28 +1,6 @@
-//! Continuous Fréchet distance between polylines (Alt & Godau 1995).
-//!
-//! The discrete Fréchet distance of [`discrete_frechet`](super::discrete_frechet)
-//! couples vertices only, so two samplings of the same curve at spacing `h`
-//! are up to `h/2` apart: useless for checking a fit to a tolerance below the
-//! sampling step of the data (tractography is stored every ≈ 0.5–1 mm and
-//! compressed to 0.1–0.5 mm). The continuous distance couples every point of
-//! one polyline with a point of the other:
-//!
-//! ```text
-//! F(P, Q) = inf over monotone reparametrisations α, β of max_t |P(α(t)) − Q(β(t))|.
-//! ```
-//!
-//! **Decision** ([`frechet_within`]): Alt and Godau's free-space diagram. On
-//! the grid of cells (segment `i` of `P`) × (segment `j` of `Q`), the free
-//! space `{(s, t) : |P(s) − Q(t)| ≤ ε}` is convex in each cell, so it is
-//! described by its intervals on the cell edges (a segment meets a ball in
-//! one interval). `F ≤ ε` iff the top-right corner is reachable from the
-//! bottom-left one by a path monotone in both parameters; reachable edge
-//! intervals propagate cell by cell. `O(mn)` time, `O(n)` memory.
-//!
-//! **Value** ([`frechet_polyline`]): bisection on `ε` between the lower
-//! bound `max(|P₀ − Q₀|, |P_m − Q_n|)` and the upper bound given by the
-//! discrete distance of the vertices, to a relative accuracy the caller
-//! chooses.
+//! Continuous Fréchet distance between polylines (Alt & Godau 1995): the
+//! definition and the value on `frechet_polyline`, the decision on
+//! `frechet_within`.
 
 use glam::DVec3;
 
@@ -61,7 +39,8 @@ fn from(iv: Interval, lo: f64) -> Interval {
     iv.and_then(|(a, b)| (a.max(lo) <= b).then_some((a.max(lo), b)))
 }
 
-/// `F(P, Q) ≤ eps`? Polylines of one point are points. Errors: empty or
+/// `F(P, Q) ≤ eps`, for the continuous Fréchet distance `F` (defined on
+/// [`frechet_polyline`])? Polylines of one point are points. Errors: empty or
 /// non-finite input.
 ///
 /// A tent of height `0.3` over a segment: `F = 0.3`:
@@ -73,6 +52,16 @@ fn from(iv: Interval, lo: f64) -> Interval {
 /// assert!(frechet_within(&p, &q, 0.3 + 1e-12).unwrap());
 /// assert!(!frechet_within(&p, &q, 0.3 - 1e-9).unwrap());
 /// ```
+///
+/// # Method
+///
+/// Alt and Godau's free-space diagram. On
+/// the grid of cells (segment `i` of `P`) × (segment `j` of `Q`), the free
+/// space `{(s, t) : |P(s) − Q(t)| ≤ ε}` is convex in each cell, so it is
+/// described by its intervals on the cell edges (a segment meets a ball in
+/// one interval). `F ≤ ε` iff the top-right corner is reachable from the
+/// bottom-left one by a path monotone in both parameters; reachable edge
+/// intervals propagate cell by cell. `O(mn)` time, `O(n)` memory.
 pub fn frechet_within(p: &[DVec3], q: &[DVec3], eps: f64) -> Result<bool, MetricsError> {
     check(p)?;
     check(q)?;
@@ -173,6 +162,25 @@ fn within(
 /// let f = frechet_polyline(&p, &q, 1e-9).unwrap();
 /// assert!(f >= 0.5 && f <= 0.5 * (1.0 + 1e-9));
 /// ```
+///
+/// # Definition
+///
+/// The discrete Fréchet distance of [`discrete_frechet`](super::discrete_frechet)
+/// couples vertices only, so two samplings of the same curve at spacing `h`
+/// are up to `h/2` apart: useless for checking a fit to a tolerance below the
+/// sampling step of the data (tractography is stored every ≈ 0.5–1 mm and
+/// compressed to 0.1–0.5 mm). The continuous distance couples every point of
+/// one polyline with a point of the other:
+///
+/// ```text
+/// F(P, Q) = inf over monotone reparametrisations α, β of max_t |P(α(t)) − Q(β(t))|.
+/// ```
+///
+/// # Method
+///
+/// Bisection on `ε` between the lower bound `max(|P₀ − Q₀|, |P_m − Q_n|)` and
+/// the upper bound given by the discrete distance of the vertices, to a
+/// relative accuracy the caller chooses.
 pub fn frechet_polyline(p: &[DVec3], q: &[DVec3], rel_tol: f64) -> Result<f64, MetricsError> {
     let (mut l, mut r) = (Vec::new(), Vec::new());
     smallest_passing(p, q, rel_tol, |eps| within(p, q, eps, &mut l, &mut r))

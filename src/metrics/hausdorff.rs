@@ -1,43 +1,15 @@
-//! Hausdorff distances between polylines and between vertex sets.
-//!
-//! [`hausdorff`] is the *vertex-to-polyline* Hausdorff distance
-//!
-//! ```text
-//! H(A, B) = max( max_{a ∈ vert A} d(a, B), max_{b ∈ vert B} d(b, A) )
-//! ```
-//!
-//! where `d(p, B)` is the distance from `p` to the polyline `B` (its
-//! segments, not only its vertices). The true (continuous) Hausdorff distance
-//! between the polylines takes the sup over *all* points of `A` and `B`, and
-//! that sup can be attained in the interior of a segment: for the "V"
-//! `A = (−1,1), (0,0), (1,1)` and the "lid and diagonal"
-//! `B = (−1,1), (1,1), (0,0)`, every vertex of each lies on the other, so
-//! `H = 0`, while the midpoint `(0,1)` of `B`'s top edge is `1/√2` from `A`.
-//!
-//! Why vertices suffice for densely sampled curves: `p ↦ d(p, B)` is
-//! 1-Lipschitz, so a point at distance `s` along a segment of `A` of length
-//! `ℓ` satisfies `d(p, B) ≤ min(d(a₀, B) + s, d(a₁, B) + ℓ − s) ≤ H + ℓ/2`.
-//! Hence `H ≤ H_true ≤ H + h/2`, with `h` the longest segment of either
-//! polyline. For curves sampled at spacing `h` much finer than the distances
-//! being measured, `H` is the continuous distance up to `h/2` (and usually
-//! far better, since the maximiser is typically near a vertex).
-//!
-//! A polyline of one point is that point. Repeated vertices (zero-length
-//! segments) are allowed.
-//!
-//! All functions are `O(mn)` with an early exit: while scanning for the
-//! nearest point of `B` to a vertex `a`, the scan stops as soon as some
-//! distance falls below the running maximum, since `a` can then no longer
-//! raise the maximum (Taha & Hanbury 2015). Squared distances are used
-//! throughout and one square root taken at the end.
+//! Hausdorff distances between polylines and between vertex sets. How the
+//! vertex-to-polyline distance relates to the continuous one, and the
+//! early exit, are described on `hausdorff`.
 
 use glam::DVec3;
 
 use super::error::{check, MetricsError};
 
 /// Symmetric vertex-to-polyline Hausdorff distance between the polylines `a`
-/// and `b` (see the module documentation for how it relates to the continuous
-/// Hausdorff distance).
+/// and `b` (see
+/// [Vertices and the continuous distance](hausdorff#vertices-and-the-continuous-distance)
+/// for how it relates to the continuous Hausdorff distance).
 ///
 /// Errors: [`MetricsError::Empty`] if either is empty,
 /// [`MetricsError::NonFinite`] on NaN or infinite coordinates.
@@ -49,6 +21,41 @@ use super::error::{check, MetricsError};
 /// let b = [DVec3::new(0.0, 0.5, 0.0), DVec3::new(1.0, 0.5, 0.0), DVec3::new(2.0, 0.5, 0.0)];
 /// assert_eq!(hausdorff(&a, &b).unwrap(), 0.5);
 /// ```
+///
+/// # Vertices and the continuous distance
+///
+/// This is the *vertex-to-polyline* Hausdorff distance
+///
+/// ```text
+/// H(A, B) = max( max_{a ∈ vert A} d(a, B), max_{b ∈ vert B} d(b, A) )
+/// ```
+///
+/// where `d(p, B)` is the distance from `p` to the polyline `B` (its
+/// segments, not only its vertices). The true (continuous) Hausdorff distance
+/// between the polylines takes the sup over *all* points of `A` and `B`, and
+/// that sup can be attained in the interior of a segment: for the "V"
+/// `A = (−1,1), (0,0), (1,1)` and the "lid and diagonal"
+/// `B = (−1,1), (1,1), (0,0)`, every vertex of each lies on the other, so
+/// `H = 0`, while the midpoint `(0,1)` of `B`'s top edge is `1/√2` from `A`.
+///
+/// Why vertices suffice for densely sampled curves: `p ↦ d(p, B)` is
+/// 1-Lipschitz, so a point at distance `s` along a segment of `A` of length
+/// `ℓ` satisfies `d(p, B) ≤ min(d(a₀, B) + s, d(a₁, B) + ℓ − s) ≤ H + ℓ/2`.
+/// Hence `H ≤ H_true ≤ H + h/2`, with `h` the longest segment of either
+/// polyline. For curves sampled at spacing `h` much finer than the distances
+/// being measured, `H` is the continuous distance up to `h/2` (and usually
+/// far better, since the maximiser is typically near a vertex).
+///
+/// A polyline of one point is that point. Repeated vertices (zero-length
+/// segments) are allowed.
+///
+/// # Cost
+///
+/// All the Hausdorff functions of [`metrics`](crate::metrics) are `O(mn)` with
+/// an early exit: while scanning for the nearest point of `B` to a vertex `a`,
+/// the scan stops as soon as some distance falls below the running maximum,
+/// since `a` can then no longer raise the maximum (Taha & Hanbury 2015).
+/// Squared distances are used throughout and one square root taken at the end.
 pub fn hausdorff(a: &[DVec3], b: &[DVec3]) -> Result<f64, MetricsError> {
     check(a)?;
     check(b)?;
@@ -210,7 +217,7 @@ mod tests {
         assert_eq!(hausdorff(&a, &b).unwrap(), 1.0);
     }
 
-    /// The example of the module documentation: the sup is attained at an
+    /// The example of `hausdorff`'s documentation: the sup is attained at an
     /// edge midpoint, not at a vertex, and is bounded by `H + h/2`.
     #[test]
     fn interior_maximiser() {

@@ -1,18 +1,5 @@
-//! A picture of a compression: the input curves and the decoded ones over
-//! each other in three orthographic views (x–y, x–z, y–z), each decoded
-//! segment coloured by its local error — the distance of its farther end
-//! from the input polyline, as a fraction of the tolerance — from blue
-//! (0) through orange to red (the tolerance). An SVG document, written by
-//! hand (a few kinds of element): input curves as one grey path per view,
-//! decoded segments as one path per colour bin.
-//!
-//! ```
-//! use glam::DVec3;
-//! let input = vec![vec![DVec3::ZERO, DVec3::new(10.0, 0.0, 0.0)]];
-//! let decoded = vec![vec![DVec3::new(0.0, 0.05, 0.0), DVec3::new(10.0, 0.09, 0.0)]];
-//! let svg = strandfit::metrics::preview_svg(&input, &decoded, 0.1);
-//! assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-//! ```
+//! A picture of a compression: `preview_svg`, whose documentation
+//! describes it.
 
 use std::fmt::Write;
 
@@ -132,7 +119,13 @@ impl Pen {
 }
 
 /// The SVG of `input` and `decoded` curves (paired by index) at
-/// `tolerance`; see the module's documentation.
+/// `tolerance`: a picture of a compression, the input curves and the
+/// decoded ones over each other in three orthographic views (x–y, x–z,
+/// y–z), each decoded segment coloured by its local error — the distance of
+/// its farther end from the input polyline, as a fraction of the tolerance —
+/// from blue (0) through orange to red (the tolerance). An SVG document,
+/// written by hand (a few kinds of element): input curves as one grey path
+/// per view, decoded segments as one path per colour bin.
 ///
 /// A decoded curve 0.09 off a straight input at tolerance 0.1 is drawn
 /// in the colour of the top error bin (its relative error is 0.9):
@@ -147,6 +140,16 @@ impl Pen {
 /// assert_eq!(svg.matches(r#"class="decoded""#).count(), 3); // one path per view
 /// assert_eq!(svg.matches(&top).count(), 3);
 /// assert!(svg.contains(&format!(r#"stroke="{}""#, error_colour(0.95))));
+/// ```
+///
+/// A whole document:
+///
+/// ```
+/// use glam::DVec3;
+/// let input = vec![vec![DVec3::ZERO, DVec3::new(10.0, 0.0, 0.0)]];
+/// let decoded = vec![vec![DVec3::new(0.0, 0.05, 0.0), DVec3::new(10.0, 0.09, 0.0)]];
+/// let svg = strandfit::metrics::preview_svg(&input, &decoded, 0.1);
+/// assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
 /// ```
 pub fn preview_svg(input: &[Vec<DVec3>], decoded: &[Vec<DVec3>], tolerance: f64) -> String {
     const VIEW: f64 = 360.0;

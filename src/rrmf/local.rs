@@ -1,26 +1,6 @@
 //! G1 Hermite interpolation by an RRMF quintic of class I with a one-sided
-//! frame condition (Section 4): from `𝐩ᵢ` with frame `(𝐮ᵢ, 𝐯ᵢ, 𝐰ᵢ)` to `𝐩_f`
-//! with tangent direction `𝐮_f`, given the symmetry condition (4.1)
-//! `𝐮ᵢ·𝚫𝐮 = 𝚫𝐮·𝐮_f`.
-//!
-//! **Canonical frame.** The paper's `𝐢` is any unit vector; its Section 4.2
-//! takes `𝐢 = 𝐮ᵢ`, `𝐣 = −𝐯ᵢ`, `𝐤 = −𝐰ᵢ`, where (4.6) gives `α₀ = 0` and
-//! `𝒰₀ = 𝐢`. We solve there and rotate the pre-image back (`𝒜 ↦ 𝒬𝒜` turns
-//! the hodograph `𝒜𝐢𝒜*` and the frame `𝒜𝒲𝐞𝒲*𝒜*` by `𝒬`): the choices
-//! of the method — (4.15) for `θ₁`, `𝐒_γ(φ₂) = 𝚫𝐮` for `φ₂`, the `g`
-//! functional — are geometric, so the result is the same in every frame,
-//! and the assumptions `𝐢 ≠ −𝐮ᵢ`, `𝐢 ≠ −𝐮_f` of (4.5) hold by construction.
-//! In this frame `φ₂ = θ₂` (Eq. 4.22).
-//!
-//! **Steps.** `𝒰₂(θ₂) = 𝐛(𝐮_f, 𝐢) e^{θ₂𝐢}` (4.5); `𝐬₂ = 𝒰₀⋆𝒰₂/|𝒰₀⋆𝒰₂|`
-//! (4.8); `𝒰₁ = 𝐛(𝐢, 𝐬₂) e^{θ₁𝐢}` with `θ₁ = atan2(x₁, y₁)` or `+π` (4.13,
-//! 4.14), the one with `𝐬_m = 𝐛(𝐬₀₂, 𝐬₂)` (4.15); the scaled displacement
-//! `𝐈_γ = 𝐪₁ + 𝐪₂ + 𝐪₃` (4.18); `φ₂` by bisection on
-//! `f(φ₂) = (𝐒_γ(φ₂) − 𝚫𝐮)·𝐛` (4.31) in the regime of `γ` (Section 4.3:
-//! `[0, π]` for `γ > 2π/5`; `[0, 2π/3]` for `γ = 2π/5`; both `[0, 2π/3]` and
-//! `[2π/3, π]` for `γ < 2π/5`, keeping the root with the smaller `g`), on
-//! the side given by the sign of `𝚫𝐮·𝐧`; then `μ = √(5|𝚫𝐩|/|𝐈_γ|)` (4.17)
-//! and `𝒜₀ = μ𝒰₀`, `𝒜₁ = μ√|𝒰₀⋆𝒰₂| 𝒰₁`, `𝒜₂ = μ𝒰₂`.
+//! frame condition (Section 4); the method is described on
+//! `interpolate_local`.
 
 use glam::{DMat3, DQuat, DVec3};
 use std::f64::consts::{FRAC_PI_3, PI};
@@ -181,7 +161,10 @@ pub fn unit_displacement(u_i: DVec3, u_f: DVec3, phi2: f64) -> Option<DVec3> {
     Some(rot.inverse() * d)
 }
 
-/// Solve the local problem (module docs).
+/// G1 Hermite interpolation by an RRMF quintic of class I with a one-sided
+/// frame condition (Section 4): from `𝐩ᵢ` with frame `(𝐮ᵢ, 𝐯ᵢ, 𝐰ᵢ)` to `𝐩_f`
+/// with tangent direction `𝐮_f`, given the symmetry condition (4.1)
+/// `𝐮ᵢ·𝚫𝐮 = 𝚫𝐮·𝐮_f` (see [Method](interpolate_local#method)).
 ///
 /// From the origin with frame `(x, y, z)` to `(1, 1, 0)` with tangent `x`
 /// turned by `π/2` about the chord (so that `𝐮ᵢ·𝚫𝐮 = 𝚫𝐮·𝐮_f`, (4.1)): the
@@ -198,6 +181,27 @@ pub fn unit_displacement(u_i: DVec3, u_f: DVec3, phi2: f64) -> Option<DVec3> {
 /// assert!((0..3).all(|k| (c.frame(0.0)[k] - frame[k]).length() < 1e-12));
 /// assert!(c.rmf_residual(0.5) < 1e-12);
 /// ```
+///
+/// # Method
+///
+/// **Canonical frame.** The paper's `𝐢` is any unit vector; its Section 4.2
+/// takes `𝐢 = 𝐮ᵢ`, `𝐣 = −𝐯ᵢ`, `𝐤 = −𝐰ᵢ`, where (4.6) gives `α₀ = 0` and
+/// `𝒰₀ = 𝐢`. We solve there and rotate the pre-image back (`𝒜 ↦ 𝒬𝒜` turns
+/// the hodograph `𝒜𝐢𝒜*` and the frame `𝒜𝒲𝐞𝒲*𝒜*` by `𝒬`): the choices
+/// of the method — (4.15) for `θ₁`, `𝐒_γ(φ₂) = 𝚫𝐮` for `φ₂`, the `g`
+/// functional — are geometric, so the result is the same in every frame,
+/// and the assumptions `𝐢 ≠ −𝐮ᵢ`, `𝐢 ≠ −𝐮_f` of (4.5) hold by construction.
+/// In this frame `φ₂ = θ₂` (Eq. 4.22).
+///
+/// **Steps.** `𝒰₂(θ₂) = 𝐛(𝐮_f, 𝐢) e^{θ₂𝐢}` (4.5); `𝐬₂ = 𝒰₀⋆𝒰₂/|𝒰₀⋆𝒰₂|`
+/// (4.8); `𝒰₁ = 𝐛(𝐢, 𝐬₂) e^{θ₁𝐢}` with `θ₁ = atan2(x₁, y₁)` or `+π` (4.13,
+/// 4.14), the one with `𝐬_m = 𝐛(𝐬₀₂, 𝐬₂)` (4.15); the scaled displacement
+/// `𝐈_γ = 𝐪₁ + 𝐪₂ + 𝐪₃` (4.18); `φ₂` by bisection on
+/// `f(φ₂) = (𝐒_γ(φ₂) − 𝚫𝐮)·𝐛` (4.31) in the regime of `γ` (Section 4.3:
+/// `[0, π]` for `γ > 2π/5`; `[0, 2π/3]` for `γ = 2π/5`; both `[0, 2π/3]` and
+/// `[2π/3, π]` for `γ < 2π/5`, keeping the root with the smaller `g`), on
+/// the side given by the sign of `𝚫𝐮·𝐧`; then `μ = √(5|𝚫𝐩|/|𝐈_γ|)` (4.17)
+/// and `𝒜₀ = μ𝒰₀`, `𝒜₁ = μ√|𝒰₀⋆𝒰₂| 𝒰₁`, `𝒜₂ = μ𝒰₂`.
 pub fn interpolate_local(
     p_i: DVec3,
     frame: [DVec3; 3],

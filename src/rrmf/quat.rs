@@ -1,23 +1,26 @@
-//! Quaternions as the paper writes them (Section 2): `𝒜 = a + 𝐚`, scalar
-//! part `scal(𝒜) = a`, vector part `vect(𝒜) = 𝐚`, product
-//! `(a + 𝐚)(b + 𝐛) = (ab − 𝐚·𝐛) + (a𝐛 + b𝐚 + 𝐚 × 𝐛)`, conjugate
-//! `𝒜* = a − 𝐚`, and the operators of Definition 2.11,
-//!
-//! ```text
-//! 𝒜 ⋆ ℬ = ½(𝒜 𝐢 ℬ* + ℬ 𝐢 𝒜*),   𝒜 □ ℬ = ½(𝒜 ℬ* − ℬ 𝒜*),
-//! ```
-//!
-//! both pure vectors. `𝐢, 𝐣, 𝐤` are the standard basis (the paper allows any
-//! unit `𝐢`; fixing it costs nothing, since the constructions rotate the
-//! data instead). A type of our own rather than `glam::DQuat`, whose API is
-//! about rotations: here quaternions are pre-image *coefficients* — not
-//! unit, added and scaled — and the formulas read as printed.
+//! Quaternions as the paper writes them (Section 2): `Quat`, whose
+//! documentation gives the conventions, and the ⋆ and □ operators.
 
 use glam::DVec3;
 use std::ops::{Add, Mul, Neg, Sub};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 /// A quaternion `s + 𝐯` (scalar and vector part).
+///
+/// Written as in the paper (Section 2): `𝒜 = a + 𝐚`, scalar
+/// part `scal(𝒜) = a`, vector part `vect(𝒜) = 𝐚`, product
+/// `(a + 𝐚)(b + 𝐛) = (ab − 𝐚·𝐛) + (a𝐛 + b𝐚 + 𝐚 × 𝐛)`, conjugate
+/// `𝒜* = a − 𝐚`, and the operators of Definition 2.11,
+///
+/// ```text
+/// 𝒜 ⋆ ℬ = ½(𝒜 𝐢 ℬ* + ℬ 𝐢 𝒜*),   𝒜 □ ℬ = ½(𝒜 ℬ* − ℬ 𝒜*),
+/// ```
+///
+/// both pure vectors. `𝐢, 𝐣, 𝐤` are the standard basis (the paper allows any
+/// unit `𝐢`; fixing it costs nothing, since the constructions rotate the
+/// data instead). A type of our own rather than `glam::DQuat`, whose API is
+/// about rotations: here quaternions are pre-image *coefficients* — not
+/// unit, added and scaled — and the formulas read as printed.
 pub struct Quat {
     /// `scal(𝒜)`.
     pub s: f64,

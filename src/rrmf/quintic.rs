@@ -1,21 +1,24 @@
-//! PH quintics from a quadratic quaternion pre-image (Section 2.1):
-//! `𝒜(t) = 𝒜₀B₀²(t) + 𝒜₁B₁²(t) + 𝒜₂B₂²(t)`, hodograph `𝐡 = 𝒜 𝐢 𝒜*`
-//! (Eq. 2.7 with `ρ = 1`), so the parametric speed is the polynomial
-//! `σ = |𝒜|²` and the arc length is exact.
-//!
-//! * hodograph control points `𝐡₀…𝐡₄` (2.8) and curve control points
-//!   `𝐫₀…𝐫₅` (2.10);
-//! * speed weights `w₀…w₄` (2.12): `σ(t) = Σ wᵢ Bᵢ⁴(t)`, and the arc length
-//!   `s(t) = ∫σ`, a quintic in Bernstein form with coefficients
-//!   `sₖ = (w₀ + … + w_{k−1})/5`;
-//! * the tangent indicatrix `𝐭 = 𝐡/σ` (2.11) and the Euler–Rodrigues frame
-//!   `(𝒜𝐢𝒜*, 𝒜𝐣𝒜*, 𝒜𝐤𝒜*)/|𝒜|²`.
+//! PH quintics from a quadratic quaternion pre-image (Section 2.1): see
+//! `PhQuintic`.
 
 use glam::DVec3;
 
 use super::quat::{Quat, I, J, K};
 
 /// A PH quintic `𝐫(t) = 𝐫₀ + ∫₀ᵗ 𝒜𝐢𝒜*`, `t ∈ [0, 1]`.
+///
+/// The pre-image is quadratic (Section 2.1):
+/// `𝒜(t) = 𝒜₀B₀²(t) + 𝒜₁B₁²(t) + 𝒜₂B₂²(t)`, hodograph `𝐡 = 𝒜 𝐢 𝒜*`
+/// (Eq. 2.7 with `ρ = 1`), so the parametric speed is the polynomial
+/// `σ = |𝒜|²` and the arc length is exact.
+///
+/// * hodograph control points `𝐡₀…𝐡₄` (2.8) and curve control points
+///   `𝐫₀…𝐫₅` (2.10);
+/// * speed weights `w₀…w₄` (2.12): `σ(t) = Σ wᵢ Bᵢ⁴(t)`, and the arc length
+///   `s(t) = ∫σ`, a quintic in Bernstein form with coefficients
+///   `sₖ = (w₀ + … + w_{k−1})/5`;
+/// * the tangent indicatrix `𝐭 = 𝐡/σ` (2.11) and the Euler–Rodrigues frame
+///   `(𝒜𝐢𝒜*, 𝒜𝐣𝒜*, 𝒜𝐤𝒜*)/|𝒜|²`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PhQuintic {
     /// `𝐫(0)`.

@@ -1,26 +1,6 @@
 //! The rational rotation-minimising frame of a class I RRMF quintic
-//! (Proposition 2.7): `ℬ = 𝒜𝒲` with `𝒲 = a + 𝐢b` quadratic, and
-//!
-//! ```text
-//! 𝐟₁ = ℬ𝐢ℬ*/|ℬ|² (= 𝐭),   𝐟₂ = ℬ𝐣ℬ*/|ℬ|²,   𝐟₃ = ℬ𝐤ℬ*/|ℬ|²,
-//! ```
-//!
-//! rational of degree 8. Since `𝒲` commutes with `𝐢`, the frame is the
-//! Euler–Rodrigues frame turned about the tangent by `2ψ`, `ψ = arg w`
-//! (`w = a + ib` as a complex polynomial), and it is rotation-minimising iff
-//! `ψ′ = scal(𝒜′𝐢𝒜*)/|𝒜|²` — condition (2.5) with the sign of ERRATA 001.1
-//! (as printed it would double the twist instead of cancelling it).
-//!
-//! **Finding 𝒲.** The paper does not spell it out; we derive it. With
-//! `w = c(t − ζ₁)(t − ζ₂)`, `ψ′ = Σ Im ζₖ / |t − ζₖ|²`, a rational function
-//! with denominator `|w|²`; matching `scal(𝒜′𝐢𝒜*)/|𝒜|²` forces `|w|² ∝
-//! |𝒜|²`, so `ζ₁, ζ₂` are roots of the real quartic `σ = |𝒜|²` (no real
-//! roots: the curve is regular), one from each conjugate pair. Of the four
-//! choices exactly one satisfies the condition for a class I quintic (2.17)
-//! — the one we keep, checked at three parameters. The roots come from
-//! Aberth–Ehrlich iteration polished by Newton steps; `𝒲` is scaled so
-//! that `𝒲(0) = 1`, which makes the frame start as the Euler–Rodrigues frame
-//! (Section 4 places that on the prescribed initial frame with `α₀`).
+//! (Proposition 2.7): the frame is described on `RrmfQuintic`, how `𝒲` is
+//! found on `RrmfQuintic::new`.
 
 use glam::DVec3;
 
@@ -319,6 +299,19 @@ pub enum RmfError {
 }
 
 /// A class I RRMF quintic with its rational RMF.
+///
+/// The rational rotation-minimising frame (Proposition 2.7): `ℬ = 𝒜𝒲` with
+/// `𝒲 = a + 𝐢b` quadratic, and
+///
+/// ```text
+/// 𝐟₁ = ℬ𝐢ℬ*/|ℬ|² (= 𝐭),   𝐟₂ = ℬ𝐣ℬ*/|ℬ|²,   𝐟₃ = ℬ𝐤ℬ*/|ℬ|²,
+/// ```
+///
+/// rational of degree 8. Since `𝒲` commutes with `𝐢`, the frame is the
+/// Euler–Rodrigues frame turned about the tangent by `2ψ`, `ψ = arg w`
+/// (`w = a + ib` as a complex polynomial), and it is rotation-minimising iff
+/// `ψ′ = scal(𝒜′𝐢𝒜*)/|𝒜|²` — condition (2.5) with the sign of ERRATA 001.1
+/// (as printed it would double the twist instead of cancelling it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RrmfQuintic {
     /// The PH quintic.
@@ -328,8 +321,9 @@ pub struct RrmfQuintic {
 }
 
 impl RrmfQuintic {
-    /// Find `𝒲` for `curve` (module docs). `NotRrmf` when the best of the four
-    /// root pairings leaves a relative residual above `1e-8` in (2.5).
+    /// Find `𝒲` for `curve` (see **Finding 𝒲** below). `NotRrmf` when the best
+    /// of the four root pairings leaves a relative residual above `1e-8` in
+    /// (2.5).
     ///
     /// A class I quintic (`𝒜₁ = √(vect(𝒜₂𝐢𝒜₀*))`) has its rational RMF, starting
     /// as the Euler–Rodrigues frame; a generic PH quintic has none:
@@ -345,6 +339,17 @@ impl RrmfQuintic {
     /// let generic = PhQuintic::new(DVec3::ZERO, [a0, Quat::ONE, a2]);
     /// assert!(matches!(RrmfQuintic::new(generic), Err(RmfError::NotRrmf(_))));
     /// ```
+    ///
+    /// **Finding 𝒲.** The paper does not spell it out; we derive it. With
+    /// `w = c(t − ζ₁)(t − ζ₂)`, `ψ′ = Σ Im ζₖ / |t − ζₖ|²`, a rational function
+    /// with denominator `|w|²`; matching `scal(𝒜′𝐢𝒜*)/|𝒜|²` forces `|w|² ∝
+    /// |𝒜|²`, so `ζ₁, ζ₂` are roots of the real quartic `σ = |𝒜|²` (no real
+    /// roots: the curve is regular), one from each conjugate pair. Of the four
+    /// choices exactly one satisfies the condition for a class I quintic (2.17)
+    /// — the one we keep, checked at three parameters. The roots come from
+    /// Aberth–Ehrlich iteration polished by Newton steps; `𝒲` is scaled so
+    /// that `𝒲(0) = 1`, which makes the frame start as the Euler–Rodrigues frame
+    /// (Section 4 places that on the prescribed initial frame with `α₀`).
     pub fn new(curve: PhQuintic) -> Result<Self, RmfError> {
         // σ = |𝒜|² in monomial form from its Bernstein weights (2.12).
         let wts = curve.speed_weights();

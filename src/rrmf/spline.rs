@@ -1,22 +1,6 @@
 //! G1 splines of RRMF quintics through a stream of points with a globally
-//! continuous rational RMF (Section 5).
-//!
-//! Segment `k` starts with the frame the previous one ended with (the given
-//! frame for `k = 0`), so the frame is continuous; its end tangent must
-//! satisfy (4.1), i.e. be `𝐮ᵢ` turned about `𝚫𝐮` by some angle `β`. Among
-//! those, (5.4) takes the one closest to a reference tangent — analytic
-//! tangents, or MinAJ2 estimates for raw streams ([`minaj2_references`]) —
-//! within the admissible set: `γ > 2π/5` (Proposition 4.4) or the
-//! sufficient condition (4.30). When the unconstrained best turn is not
-//! admissible the paper does not say what to take; we take the admissible
-//! turn closest to it, on the boundary of the admissible set found by
-//! bisection and nudged inside by [`NUDGE`] rad (ERRATA 001.3). When
-//! `τ = ∠(𝐮ᵢ, 𝚫𝐮) ≥ 4π/5` no turn is admissible (Proposition 5.1) and
-//! Algorithm 1 inserts a point first.
-//!
-//! A segment whose chord is along the incoming tangent (`τ < 1e-9`) is the
-//! straight segment with a constant pre-image: a degenerate class I quintic
-//! (all `𝒜ᵢ` equal satisfy 2.17) whose RMF is the constant frame.
+//! continuous rational RMF (Section 5); the construction is described on
+//! `RrmfSpline`.
 
 use glam::{DMat3, DQuat, DVec3};
 use std::f64::consts::{FRAC_PI_3, PI};
@@ -102,6 +86,25 @@ pub struct MotionSegment {
 
 /// The motion: a G1 spline of RRMF quintics with a continuous RMF, knots at
 /// cumulative chord lengths.
+///
+/// # Construction
+///
+/// Segment `k` starts with the frame the previous one ended with (the given
+/// frame for `k = 0`), so the frame is continuous; its end tangent must
+/// satisfy (4.1), i.e. be `𝐮ᵢ` turned about `𝚫𝐮` by some angle `β`. Among
+/// those, (5.4) takes the one closest to a reference tangent — analytic
+/// tangents, or MinAJ2 estimates for raw streams ([`minaj2_references`]) —
+/// within the admissible set: `γ > 2π/5` (Proposition 4.4) or the
+/// sufficient condition (4.30). When the unconstrained best turn is not
+/// admissible the paper does not say what to take; we take the admissible
+/// turn closest to it, on the boundary of the admissible set found by
+/// bisection and nudged inside by [`NUDGE`] rad (ERRATA 001.3). When
+/// `τ = ∠(𝐮ᵢ, 𝚫𝐮) ≥ 4π/5` no turn is admissible (Proposition 5.1) and
+/// Algorithm 1 inserts a point first.
+///
+/// A segment whose chord is along the incoming tangent (`τ < 1e-9`) is the
+/// straight segment with a constant pre-image: a degenerate class I quintic
+/// (all `𝒜ᵢ` equal satisfy 2.17) whose RMF is the constant frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RrmfSpline {
     /// The spline segments, in order.

@@ -1,44 +1,5 @@
-//! Polyline → G1 cubic Bézier spline within a tolerance: Schneider's
-//! algorithm ("An Algorithm for Automatically Fitting Digitized Curves",
-//! Graphics Gems, 1990 — the one Inkscape and the floating-tangents paper
-//! use to smooth their data), in 3D.
-//!
-//! For the points `d_first..=d_last` with unit end tangents `t̂₁` (leaving
-//! the first point) and `t̂₂` (pointing from the last point back into the
-//! curve):
-//!
-//! 1. Parameters `uᵢ` by chord length.
-//! 2. The cubic `P₀ = d_first`, `P₁ = P₀ + α₁t̂₁`, `P₂ = P₃ + α₂t̂₂`,
-//!    `P₃ = d_last` whose `α₁, α₂` minimise `Σ |Q(uᵢ) − dᵢ|²`: a 2×2 normal
-//!    system. Every operation is on vectors, so the 3D version is the 2D
-//!    one with three components.
-//! 3. If the largest `|Q(uᵢ) − dᵢ|` is within the tolerance, done. If it is
-//!    within [`SchneiderOptions::reparam_factor`] times the tolerance, move
-//!    each `uᵢ` by a Newton step on `(Q(u) − dᵢ)·Q'(u) = 0` and refit, up to
-//!    `max_iterations` times.
-//! 4. Otherwise split at the worst point, with the tangent there taken from
-//!    its neighbours (so the two halves join with G1 continuity), and fit
-//!    each half.
-//!
-//! The distance checked is the one at the assigned parameter, an upper bound
-//! on the distance from `dᵢ` to the curve, so every input point ends within
-//! the tolerance of the spline.
-//!
-//! Robustness (our additions; the original assumes clean, evenly spaced
-//! pen input):
-//! * consecutive points that coincide (to `1e-12` of the extent) are merged
-//!   first; they would give zero chord steps and undefined tangents;
-//! * end tangents come from a parabola through the end and the next points
-//!   spaced farther apart than the tolerance, not from the nearest
-//!   neighbour: second-order accurate on smooth data, and noise below the
-//!   tolerance cannot turn them arbitrarily;
-//! * `α` that the least squares makes non-positive or longer than twice the
-//!   chord (loops, cusps) falls back to Schneider's heuristic `chord/3`;
-//! * a Newton step that would leave `[0, 1]` or break the order of the
-//!   parameters is not taken;
-//! * the split tangent at `dₛ` is `d_{s+1} − d_{s−1}` weighted by chord
-//!   length (Bessel's central difference), which stays right on unevenly
-//!   spaced samples where the plain difference does not.
+//! Polyline → G1 cubic Bézier spline within a tolerance (Schneider's
+//! algorithm in 3D); the method is described on `fit_polyline`.
 
 use glam::DVec3;
 
@@ -102,6 +63,49 @@ pub enum PolylineFitError {
 ///     assert!(dense.iter().map(|q| q.distance(*p)).fold(f64::MAX, f64::min) < 1e-3);
 /// }
 /// ```
+///
+/// # Method
+///
+/// Schneider's algorithm ("An Algorithm for Automatically Fitting Digitized
+/// Curves", Graphics Gems, 1990 — the one Inkscape and the floating-tangents
+/// paper use to smooth their data), in 3D.
+///
+/// For the points `d_first..=d_last` with unit end tangents `t̂₁` (leaving
+/// the first point) and `t̂₂` (pointing from the last point back into the
+/// curve):
+///
+/// 1. Parameters `uᵢ` by chord length.
+/// 2. The cubic `P₀ = d_first`, `P₁ = P₀ + α₁t̂₁`, `P₂ = P₃ + α₂t̂₂`,
+///    `P₃ = d_last` whose `α₁, α₂` minimise `Σ |Q(uᵢ) − dᵢ|²`: a 2×2 normal
+///    system. Every operation is on vectors, so the 3D version is the 2D
+///    one with three components.
+/// 3. If the largest `|Q(uᵢ) − dᵢ|` is within the tolerance, done. If it is
+///    within [`SchneiderOptions::reparam_factor`] times the tolerance, move
+///    each `uᵢ` by a Newton step on `(Q(u) − dᵢ)·Q'(u) = 0` and refit, up to
+///    `max_iterations` times.
+/// 4. Otherwise split at the worst point, with the tangent there taken from
+///    its neighbours (so the two halves join with G1 continuity), and fit
+///    each half.
+///
+/// The distance checked is the one at the assigned parameter, an upper bound
+/// on the distance from `dᵢ` to the curve, so every input point ends within
+/// the tolerance of the spline.
+///
+/// Robustness (our additions; the original assumes clean, evenly spaced
+/// pen input):
+/// * consecutive points that coincide (to `1e-12` of the extent) are merged
+///   first; they would give zero chord steps and undefined tangents;
+/// * end tangents come from a parabola through the end and the next points
+///   spaced farther apart than the tolerance, not from the nearest
+///   neighbour: second-order accurate on smooth data, and noise below the
+///   tolerance cannot turn them arbitrarily;
+/// * `α` that the least squares makes non-positive or longer than twice the
+///   chord (loops, cusps) falls back to Schneider's heuristic `chord/3`;
+/// * a Newton step that would leave `[0, 1]` or break the order of the
+///   parameters is not taken;
+/// * the split tangent at `dₛ` is `d_{s+1} − d_{s−1}` weighted by chord
+///   length (Bessel's central difference), which stays right on unevenly
+///   spaced samples where the plain difference does not.
 pub fn fit_polyline(
     points: &[DVec3],
     opts: &SchneiderOptions,
