@@ -227,16 +227,20 @@ impl Neighbours {
     /// `(back, at_end, estimated bits)`.
     pub fn best_anchor(&self, start: [i64; 3], k: usize) -> Option<(usize, bool, u64)> {
         let mut best: Option<(usize, bool, u64)> = None;
-        for back in 1..=MAX_BACK.min(k) {
-            for at_end in [false, true] {
-                let Some(r) = self.anchor(k - back, at_end) else {
+        let k = k.min(self.anchors.len());
+        // Nearest first (`back` 1, 2, …; the start before the end), over
+        // the slice: this runs for every arcs curve against 256 anchors.
+        let window = &self.anchors[k - MAX_BACK.min(k)..k];
+        for (i, pair) in window.iter().rev().enumerate() {
+            for (at_end, anchor) in pair.iter().enumerate() {
+                let Some(r) = anchor else {
                     continue;
                 };
                 // A lattice difference: its parity, then halves.
                 let d = [0, 1, 2].map(|a| start[a].wrapping_sub(r[a]));
                 let bits = 7 + (0..3).map(|a| eg((d[a] - (d[0] & 1)) / 2)).sum::<u64>();
                 if best.is_none_or(|b| bits < b.2) {
-                    best = Some((back, at_end, bits));
+                    best = Some((i + 1, at_end == 1, bits));
                 }
             }
         }

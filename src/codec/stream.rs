@@ -210,12 +210,12 @@ pub fn compress_blocks(
     let n_cd = header.source.curve_data_names.len();
     let n_pd = header.point_data_names.len();
     let mut summary = CompressSummary::default();
-    // Blocks go in groups of one per thread: a group is fitted and coded in
+    // Blocks go in groups of two per thread: a group is fitted and coded in
     // parallel (each block's entropy coding is sequential), while the
     // group before it is verified (decoded back) before being written, and
     // the group after it is read on this thread (a reader need not be
     // `Send`; reading was a serial twentieth of the run).
-    let group = rayon::current_num_threads().max(2);
+    let group = GROUP_PER_THREAD * rayon::current_num_threads().max(2);
     let mut pending: Vec<(BlockBytes, u64)> = Vec::new();
     let mut ended = false;
     let mut read = 0u64;
@@ -282,6 +282,13 @@ pub fn compress_blocks(
     }
     Ok(summary)
 }
+
+/// Blocks per thread in a group of [`compress_blocks`]: each block's
+/// entropy coding is sequential, and with one block per thread a thread
+/// idles while the other finishes its block. Measured on a million fornix
+/// replicas at 0.5 mm (2 cores): 16.9 s with one, 16.3 s with two; four
+/// no faster on 100,000; each group holds about 5 MB per block.
+const GROUP_PER_THREAD: usize = 2;
 
 /// Up to `group` blocks of curves from `reader`, each with the index of
 /// its first curve (`read` counts the curves read so far); `ended` is set
