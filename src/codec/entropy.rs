@@ -200,6 +200,13 @@ impl Encoder {
         self.tag = tag;
     }
 
+    /// Bits written so far, to a fraction of a bit: the bytes out and
+    /// pending, less what the range still leaves open. Differences of it
+    /// measure what a stretch of the stream cost.
+    pub fn position_bits(&self) -> f64 {
+        8.0 * (self.out.len() as f64 + self.cache_size as f64) - (self.range as f64).log2()
+    }
+
     /// The ideal bits per tag so far, if tallying.
     pub fn tally(&self) -> Option<&[f64]> {
         self.tally.as_deref()

@@ -746,12 +746,18 @@ fn choose(
     trend: bool,
     neighbours: &mut Neighbours,
     prev: &Previous,
-) -> (CurveCode, usize) {
+    arcs_scale: f64,
+) -> (CurveCode, usize, u64) {
     if points.is_empty() {
         neighbours.push_grid(Vec::new());
-        return (CurveCode::Empty, 0);
+        return (CurveCode::Empty, 0, 0);
     }
-    let arc_bits = opt.arcs.as_ref().map(|(a, _)| estimated_bits(a));
+    // The arcs' estimate, scaled by what arcs have really cost against
+    // points so far in the block ([`Calibration`]).
+    let arc_bits = opt
+        .arcs
+        .as_ref()
+        .map(|(a, _)| (estimated_bits(a) as f64 * arcs_scale).round() as u64);
     let pts = opt.points.map(|g| {
         let own_start = lattice_bits([0, 1, 2].map(|a| g[0][a].wrapping_sub(prev.point_start[a])));
         // The own prediction's estimate, summed until it passes `bound`
@@ -799,7 +805,8 @@ fn choose(
         (Some((a, decoded)), Some((_, _, _, bits, _))) if arc_bits.is_some_and(|e| e < bits) => {
             let n = decoded.len();
             neighbours.push_points(decoded);
-            (a, n)
+            let est = estimated_bits(&a);
+            (a, n, est)
         }
         (_, Some((g, reference, helix, bits, start_bits))) => {
             // Arcs and points are weighed by the rounded points' estimate:
@@ -819,17 +826,57 @@ fn choose(
                     helix,
                 },
                 n,
+                bits,
             )
         }
         (Some((a, decoded)), None) => {
             let n = decoded.len();
             neighbours.push_points(decoded);
-            (a, n)
+            let est = estimated_bits(&a);
+            (a, n, est)
         }
         (None, None) => {
             neighbours.push_points(points.to_vec());
-            (CurveCode::Raw(points.to_vec()), points.len())
+            (CurveCode::Raw(points.to_vec()), points.len(), 0)
         }
+    }
+}
+
+/// What arcs and points curves have really cost in a block so far against
+/// their static estimates. Those estimates decide between the two
+/// ([`choose`]), but the adaptive coder does not pay them alike: on noisy
+/// fibres (the fornix replicas at 0.1 mm) arcs cost about a third more
+/// than estimated next to points, and the block came out 11 % larger than
+/// with no arcs at all. The arcs' estimate is scaled by the ratio of the
+/// two (from even odds: `PRIOR` bits of each at their estimate).
+#[derive(Default)]
+struct Calibration {
+    arcs: (f64, f64),
+    points: (f64, f64),
+}
+
+impl Calibration {
+    /// Measured: 500, 1,000, 2,000 and 4,000 within 0.1 % of each other
+    /// on every shared file and the replicas.
+    const PRIOR: f64 = 2000.0;
+
+    /// Curve `kind` (1 points, 2 arcs) was estimated at `estimate` bits
+    /// and cost `actual`.
+    fn add(&mut self, kind: u8, estimate: u64, actual: f64) {
+        let slot = match kind {
+            1 => &mut self.points,
+            2 => &mut self.arcs,
+            _ => return,
+        };
+        slot.0 += actual;
+        slot.1 += estimate as f64;
+    }
+
+    /// The factor on the arcs' estimate.
+    fn arcs_scale(&self) -> f64 {
+        let ratio =
+            |(actual, estimate): (f64, f64)| (actual + Self::PRIOR) / (estimate + Self::PRIOR);
+        ratio(self.arcs) / ratio(self.points)
     }
 }
 
@@ -1166,11 +1213,13 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     let mut output_points = 0;
     let mut decoded = Vec::with_capacity(if keep { curves.len() } else { 0 });
     let mut n_elements = 0;
+    let mut calibration = Calibration::default();
     // The block's decoded curves: the references.
     let mut neighbours = Neighbours::new(grid_step, q_start, curves.len());
     for (points, opt) in curves.iter().zip(options) {
         // The choice, in order: a points-mode curve may lean on those before.
-        let (code, n) = choose(
+        let before = enc.position_bits();
+        let (code, n, estimate) = choose(
             points.as_ref(),
             opt,
             params.tolerance,
@@ -1179,6 +1228,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
             offset_trend(params.model),
             &mut neighbours,
             &prev,
+            calibration.arcs_scale(),
         );
         if keep {
             decoded.push(neighbours.last_points().to_vec());
@@ -1351,6 +1401,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 }
             }
         }
+        calibration.add(kind, estimate, enc.position_bits() - before);
     }
     let tallied = enc.tally().map(<[f64]>::to_vec);
     Ok((
