@@ -555,6 +555,46 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
+    /// `position_bits` tracks the stream: never decreasing, within a few
+    /// bytes of the finished length, and each stretch within a bit of the
+    /// ideal cost (the tally's `−log₂ p`) of what it coded.
+    #[test]
+    fn position_bits_follow_the_stream_and_the_ideal_cost() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut enc = Encoder::with_tally(1, Adaptation::WarmUp);
+        let mut models = vec![IntModel::default(); 2];
+        let mut last = enc.position_bits();
+        let mut stretches = Vec::new();
+        for round in 0..200 {
+            let (before, ideal_before) = (enc.position_bits(), enc.tally().unwrap()[0]);
+            for _ in 0..rng.gen_range(1..60) {
+                let spread = if round % 2 == 0 { 4 } else { 4000 };
+                models[round % 2].put(&mut enc, rng.gen_range(-spread..=spread));
+                let now = enc.position_bits();
+                assert!(now >= last - 1e-9, "{now} < {last}");
+                last = now;
+            }
+            let spent = enc.position_bits() - before;
+            let ideal = enc.tally().unwrap()[0] - ideal_before;
+            stretches.push((spent, ideal));
+        }
+        // Each stretch's cost to within the coder's rounding (a range
+        // coder pays a small fraction of a bit per coded bit at most).
+        for (spent, ideal) in &stretches {
+            assert!(
+                (spent - ideal).abs() < 1.0 + 0.01 * ideal,
+                "{spent} vs {ideal}"
+            );
+        }
+        let end = enc.position_bits();
+        let bytes = enc.finish().len() as f64;
+        assert!(
+            (8.0 * bytes - end).abs() <= 40.0,
+            "{} bytes, position {end}",
+            bytes
+        );
+    }
+
     #[test]
     fn integers_round_trip_in_mixed_models() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);

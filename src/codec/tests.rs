@@ -405,3 +405,37 @@ fn the_tolerance_reads_back_exactly_from_its_decimal() {
     assert_eq!(sizes[0] + 3, old_size, "{sizes:?}");
     assert!(sizes[0] < sizes[3], "{sizes:?}");
 }
+
+/// The arcs' scale of [`Calibration`] starts at even odds, follows the
+/// ratio of what arcs and points really cost against their estimates, and
+/// leans on its prior only while little has been seen.
+#[test]
+fn calibration_scales_arcs_by_their_cost_against_points() {
+    let mut c = Calibration::default();
+    assert_eq!(c.arcs_scale(), 1.0);
+    // Empty and raw curves do not count.
+    c.add(0, 100, 500.0);
+    c.add(3, 100, 500.0);
+    assert_eq!(c.arcs_scale(), 1.0);
+    // Arcs at 1.5 times their estimate, points at theirs.
+    for _ in 0..1000 {
+        c.add(2, 100, 150.0);
+        c.add(1, 100, 100.0);
+    }
+    assert!((c.arcs_scale() - 1.5).abs() < 0.02, "{}", c.arcs_scale());
+    // Points dearer than estimated make arcs relatively cheaper.
+    let mut d = Calibration::default();
+    for _ in 0..1000 {
+        d.add(2, 100, 100.0);
+        d.add(1, 100, 200.0);
+    }
+    assert!((d.arcs_scale() - 0.5).abs() < 0.02, "{}", d.arcs_scale());
+    // One curve moves it little.
+    let mut e = Calibration::default();
+    e.add(2, 10, 100.0);
+    assert!(
+        e.arcs_scale() > 1.0 && e.arcs_scale() < 1.05,
+        "{}",
+        e.arcs_scale()
+    );
+}
