@@ -264,13 +264,13 @@ fn helix_prediction_continues_a_helix_where_second_order_misses() {
     // by the curvature, r·(2 − 2 cos δ) ≈ 500 units.
     let g = helix_lattice(40, 5_000.0, 1_500.0, 0.45);
     for k in 4..g.len() {
-        let screw = own_prediction(&g, k, true, HELIX_PAIRS);
-        let linear = own_prediction(&g, k, false, HELIX_PAIRS);
+        let turned = own_prediction(&g, k, true, screw(MODEL));
+        let linear = own_prediction(&g, k, false, screw(MODEL));
         let miss = |p: [i64; 3]| (0..3).map(|a| (g[k][a] - p[a]).abs()).max().unwrap();
         assert!(
-            miss(screw) <= 6,
+            miss(turned) <= 6,
             "point {k}: screw misses by {}",
-            miss(screw)
+            miss(turned)
         );
         assert!(
             miss(linear) > 300,
@@ -280,7 +280,9 @@ fn helix_prediction_continues_a_helix_where_second_order_misses() {
     }
     // Collinear steps have no rotation: second order stands in.
     let line: Vec<[i64; 3]> = (0..8).map(|k| [2 * k, 4 * k, 6 * k]).collect();
-    assert_eq!(own_prediction(&line, 5, true, HELIX_PAIRS), [10, 20, 30]);
+    for model in [8, 9] {
+        assert_eq!(own_prediction(&line, 5, true, screw(model)), [10, 20, 30]);
+    }
 }
 
 #[test]
@@ -325,6 +327,64 @@ fn model_7_screw_fits_more_step_pairs_and_model_6_streams_still_decode() {
     // The model matters: a model-6 stream read as model 7 is other curves.
     if let Ok(back) = decode_block(&b6.bytes, 1, &new) {
         assert!(hausdorff(&curl, &back[0]).unwrap() > tol);
+    }
+}
+
+#[test]
+fn model_9_screw_turns_a_mean_step_and_model_8_streams_still_decode() {
+    // Curls with drifting pitch and radius, noise a tenth of the
+    // tolerance, sampled at 0.8 rad: screw-predicted points, whose steps
+    // carry the lattice's error.
+    let tol = 0.1;
+    let mut rng = ChaCha8Rng::seed_from_u64(22);
+    let curves: Vec<Vec<DVec3>> = (0..6)
+        .map(|c| {
+            let r0 = 1.5 + 0.3 * c as f64;
+            (0..150)
+                .map(|k| {
+                    let a = k as f64 * 0.8;
+                    let r = r0 + 0.004 * k as f64;
+                    DVec3::new(r * a.cos(), r * a.sin(), (0.5 + 0.002 * k as f64) * a)
+                        + DVec3::new(
+                            rng.gen_range(-0.01..0.01),
+                            rng.gen_range(-0.01..0.01),
+                            rng.gen_range(-0.01..0.01),
+                        )
+                        + DVec3::new(20.0 * c as f64, 0.0, 0.0)
+                })
+                .collect()
+        })
+        .collect();
+    let new = CodecParams::new(tol);
+    assert_eq!(new.model, 9);
+    let old = CodecParams { model: 8, ..new };
+    let (b9, b8) = (
+        encode_block(&curves, &new).unwrap(),
+        encode_block(&curves, &old).unwrap(),
+    );
+    assert!(b9.kinds.iter().all(|&k| k == 1) && b8.kinds.iter().all(|&k| k == 1));
+    for (b, p) in [(&b9, &new), (&b8, &old)] {
+        let back = decode_block(&b.bytes, curves.len(), p).unwrap();
+        for (c, d) in curves.iter().zip(&back) {
+            let d = hausdorff(c, d).unwrap();
+            assert!(d <= tol, "model {}: {d}", p.model);
+        }
+    }
+    // The mean of two steps carries less of the lattice's error.
+    assert!(
+        b9.bytes.len() < b8.bytes.len(),
+        "model 9 {} B, model 8 {} B",
+        b9.bytes.len(),
+        b8.bytes.len()
+    );
+    // The model matters: a model-8 stream read as model 9 is other curves.
+    if let Ok(back) = decode_block(&b8.bytes, curves.len(), &new) {
+        let worst = curves
+            .iter()
+            .zip(&back)
+            .map(|(c, d)| hausdorff(c, d).unwrap())
+            .fold(0.0, f64::max);
+        assert!(worst > tol, "{worst}");
     }
 }
 
