@@ -559,17 +559,9 @@ fn lattice_bits(d: [i64; 3]) -> u64 {
 /// [`lattice_bits`] without its steps at powers of two: choosing among
 /// nearby lattice points, the smaller residual is the cheaper one.
 fn smooth_lattice_bits(d: [i64; 3]) -> f64 {
-    // log₂(1 + x) with the mantissa taken linearly (within 0.09 of it,
-    // increasing): a libm log₂ here was a tenth of the encoder's time.
-    // `e + (y / 2^e − 1)` for `y = 2^e (1 + f)`, read off `y`'s bits (the
-    // same number: dividing by a power of two is exact), without a
-    // division: this runs ~150 times per vertex in the slide.
-    let log2_1p = |x: u64| {
-        let bits = (x.saturating_add(1) as f64).to_bits();
-        let e = (bits >> 52) as i64 - 1023;
-        let mantissa = f64::from_bits((bits & ((1u64 << 52) - 1)) | (1023u64 << 52));
-        e as f64 + (mantissa - 1.0)
-    };
+    // log₂(1 + x) with the mantissa taken linearly: a libm log₂ here was a
+    // tenth of the encoder's time.
+    let log2_1p = |x: u64| entropy::linear_log2(x.saturating_add(1) as f64);
     let b = d[0] & 1;
     1.0 + (0..3)
         .map(|a| 1.0 + 2.0 * log2_1p(((d[a] - b) / 2).unsigned_abs()))
@@ -781,10 +773,8 @@ fn choose(
     }
     // The arcs' estimate, scaled by what arcs have really cost against
     // points so far in the block ([`Calibration`]).
-    let arc_bits = opt
-        .arcs
-        .as_ref()
-        .map(|(a, _)| (estimated_bits(a) as f64 * arcs_scale).round() as u64);
+    let arc_estimate = opt.arcs.as_ref().map(|(a, _)| estimated_bits(a));
+    let arc_bits = arc_estimate.map(|e| (e as f64 * arcs_scale).round() as u64);
     let pts = opt.points.map(|g| {
         let own_start = lattice_bits([0, 1, 2].map(|a| g[0][a].wrapping_sub(prev.point_start[a])));
         // The own prediction's estimate, summed until it passes `bound`
@@ -832,8 +822,7 @@ fn choose(
         (Some((a, decoded)), Some((_, _, _, bits, _))) if arc_bits.is_some_and(|e| e < bits) => {
             let n = decoded.len();
             neighbours.push_points(decoded);
-            let est = estimated_bits(&a);
-            (a, n, est)
+            (a, n, arc_estimate.unwrap_or(0))
         }
         (_, Some((g, reference, helix, bits, start_bits))) => {
             // Arcs and points are weighed by the rounded points' estimate:
@@ -859,8 +848,7 @@ fn choose(
         (Some((a, decoded)), None) => {
             let n = decoded.len();
             neighbours.push_points(decoded);
-            let est = estimated_bits(&a);
-            (a, n, est)
+            (a, n, arc_estimate.unwrap_or(0))
         }
         (None, None) => {
             neighbours.push_points(points.to_vec());
