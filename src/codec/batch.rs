@@ -167,6 +167,16 @@ pub struct BatchStats {
     pub fell_back: bool,
 }
 
+impl BatchStats {
+    /// Adds the counts of `other` (a later part of the same block).
+    pub fn add(&mut self, other: &BatchStats) {
+        self.checked += other.checked;
+        self.unsure += other.unsure;
+        self.rounds += other.rounds;
+        self.fell_back |= other.fell_back;
+    }
+}
+
 /// The checker's form of `req`, asked by the search of `enc`, whose points
 /// start at `base` in the block's flat points; `(origin, radius, origin
 /// scale)` as [`ArcCandidate`] says.
@@ -248,6 +258,7 @@ pub fn search_block(
                     tol2: e.tol2,
                     grid: e.grid,
                     mailbox: Some(m),
+                    give_up: e.give_up.clone(),
                 })
         })
         .collect();
@@ -385,6 +396,7 @@ mod tests {
                 tol2: tol * tol,
                 grid: tol,
                 mailbox: None,
+                give_up: None,
             };
             let o = pts[0];
             let radius = pts
@@ -423,6 +435,7 @@ mod tests {
                 // band is what decides there.
                 let mut enc = CurveEncoder {
                     mailbox: None,
+                    give_up: None,
                     ..base_enc
                 };
                 let d2 = two_sided2(&enc, &arc, from, to);

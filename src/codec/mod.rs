@@ -358,10 +358,17 @@ pub struct CurveOptions {
 ///
 /// Plumbing of [`encode_block`], not part of the public API: `half` is the
 /// block's lattice step, which the block computes from all its curves
-/// (the hidden `quantise` module).
+/// (the hidden `quantise` module), and `arcs_scale` the factor on the
+/// arcs' estimate the block has learned so far ([`Calibration`]), by which
+/// the arcs search gives up where the points are cheaper.
 #[doc(hidden)]
-pub fn curve_options(points: &[DVec3], params: &CodecParams, half: f64) -> CurveOptions {
-    match curve_encoder(points, params, half) {
+pub fn curve_options(
+    points: &[DVec3],
+    params: &CodecParams,
+    half: f64,
+    arcs_scale: f64,
+) -> CurveOptions {
+    match curve_encoder(points, params, half, arcs_scale) {
         None => CurveOptions {
             points: None,
             arcs: None,
@@ -378,11 +385,14 @@ pub fn curve_options(points: &[DVec3], params: &CodecParams, half: f64) -> Curve
 }
 
 /// The encoder of one curve (`None` for an empty curve, or one so far out
-/// that `f32` output leaves no tolerance).
+/// that `f32` output leaves no tolerance); its arcs search gives up where
+/// the points are cheaper, by the block's `arcs_scale` so far
+/// ([`encoder::GiveUp`]).
 fn curve_encoder<'a>(
     points: &'a [DVec3],
     params: &CodecParams,
     half: f64,
+    arcs_scale: f64,
 ) -> Option<CurveEncoder<'a>> {
     if points.is_empty() {
         return None;
@@ -397,7 +407,22 @@ fn curve_encoder<'a>(
         tol2: tol * tol,
         grid: half,
         mailbox: None,
+        give_up: Some(encoder::GiveUp::new(arcs_scale)),
     })
+}
+
+/// Second-order estimate of the rounded points `g` up to each vertex (bits;
+/// `[0] = 0`, the start not counted).
+fn points_bits_to(g: &[[i64; 3]]) -> Vec<u64> {
+    let mut out = Vec::with_capacity(g.len());
+    let mut bits = 0;
+    out.push(0);
+    for k in 1..g.len() {
+        let p = own_prediction(g, k, false, screw(MODEL));
+        bits += lattice_bits([0, 1, 2].map(|a| g[k][a].wrapping_sub(p[a])));
+        out.push(bits);
+    }
+    out
 }
 
 /// Bits per input point under which a curve's arcs are kept without
@@ -405,13 +430,13 @@ fn curve_encoder<'a>(
 const ARCS_ALONE_BITS: u64 = 5;
 
 /// A curve's options once its arcs are found: the points too, unless the
-/// arcs are cheap enough that the points are not worth quantising.
+/// arcs are cheap enough that the points are not worth weighing.
 fn finish_options(enc: &CurveEncoder, arcs: Option<(CurveCode, Vec<DVec3>)>) -> CurveOptions {
     let points = enc.points;
     // Points cost about 4 bits each or more on the lattice, even with a
     // neighbour's prediction (1.3 bits per coordinate on the smoothest
     // shared data): where the arcs take under 5 bits per point, the points
-    // are not worth quantising. Measured over the shared data at both
+    // are not worth weighing. Measured over the shared data at both
     // tolerances and the fornix replicas at 0.1 and 0.5 mm: the same bytes
     // with 3, 5 or 6 bits (no curve under 6 went to points; 8 lost 0.1 %),
     // and at 5 the replicas compress 12 % faster at 0.5 mm than at 3.
@@ -442,6 +467,21 @@ fn eg_bits(v: i64) -> u64 {
     }
 }
 
+/// [`estimated_bits`] of one element of an arcs curve.
+fn element_bits(e: &ElementCode) -> u64 {
+    if e.kind == ElementKind::Jump {
+        return 2 + e.jump.iter().map(|&v| eg_bits(v)).sum::<u64>();
+    }
+    let mut bits = 1 + eg_bits(e.length) + eg_bits(e.offset[0]) + eg_bits(e.offset[1]);
+    if e.kind != ElementKind::G1 {
+        bits += 1;
+    }
+    if e.kind == ElementKind::Corner {
+        bits += eg_bits(e.bulge[0]) + eg_bits(e.bulge[1]);
+    }
+    bits
+}
+
 fn estimated_bits(code: &CurveCode) -> u64 {
     match code {
         CurveCode::Empty => 2,
@@ -462,20 +502,7 @@ fn estimated_bits(code: &CurveCode) -> u64 {
         } => {
             let mut bits = 8 + first_end.iter().map(|&v| eg_bits(v)).sum::<u64>();
             bits += first_bulge.iter().map(|&v| eg_bits(v)).sum::<u64>();
-            for e in elements {
-                if e.kind == ElementKind::Jump {
-                    bits += 2 + e.jump.iter().map(|&v| eg_bits(v)).sum::<u64>();
-                    continue;
-                }
-                bits += 1 + eg_bits(e.length) + eg_bits(e.offset[0]) + eg_bits(e.offset[1]);
-                if e.kind != ElementKind::G1 {
-                    bits += 1;
-                }
-                if e.kind == ElementKind::Corner {
-                    bits += eg_bits(e.bulge[0]) + eg_bits(e.bulge[1]);
-                }
-            }
-            bits
+            bits + elements.iter().map(element_bits).sum::<u64>()
         }
     }
 }
@@ -1157,6 +1184,51 @@ pub fn encode_block_on<C: AsRef<[DVec3]> + Sync>(
     encode_block_with(curves, params, false, keep, checker).map(|(b, _)| b)
 }
 
+/// Curves whose searches run together between two updates of the arcs'
+/// calibration: the give-up of a chunk's searches knows the block's
+/// calibration from the curves before it ([`encoder::GiveUp`]). Small
+/// enough that the first chunks teach the rest, large enough to keep both
+/// cores and a GPU batch busy.
+const CALIBRATION_CHUNK: usize = 256;
+
+/// The options of a chunk of a block's curves, searched in parallel (or
+/// with `checker`, all together, their checks in batches).
+fn chunk_options<C: AsRef<[DVec3]> + Sync>(
+    curves: &[C],
+    params: &CodecParams,
+    half: f64,
+    arcs_scale: f64,
+    checker: Option<&dyn batch::ArcChecker>,
+) -> (Vec<CurveOptions>, batch::BatchStats) {
+    let Some(checker) = checker else {
+        let options = curves
+            .par_iter()
+            .map(|pts| curve_options(pts.as_ref(), params, half, arcs_scale))
+            .collect();
+        return (options, batch::BatchStats::default());
+    };
+    let encoders: Vec<Option<CurveEncoder>> = curves
+        .iter()
+        .map(|pts| curve_encoder(pts.as_ref(), params, half, arcs_scale))
+        .collect();
+    let (arcs, stats) = batch::search_block(&encoders, checker);
+    drop(encoders);
+    let options = curves
+        .par_iter()
+        .zip(arcs)
+        .map(
+            |(pts, arcs)| match curve_encoder(pts.as_ref(), params, half, arcs_scale) {
+                Some(enc) => finish_options(&enc, arcs),
+                None => CurveOptions {
+                    points: None,
+                    arcs: None,
+                },
+            },
+        )
+        .collect();
+    (options, stats)
+}
+
 fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
@@ -1189,35 +1261,6 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
         Encoder::with_adaptation(Adaptation::of_model(params.model))
     };
     enc.direct((scale_exp + 128) as u64, 8);
-    let options: Vec<CurveOptions> = match checker {
-        None => curves
-            .par_iter()
-            .map(|pts| curve_options(pts.as_ref(), params, half))
-            .collect(),
-        Some(checker) => {
-            // All curves' searches together, their checks in batches.
-            let encoders: Vec<Option<CurveEncoder>> = curves
-                .iter()
-                .map(|pts| curve_encoder(pts.as_ref(), params, half))
-                .collect();
-            let (arcs, s) = batch::search_block(&encoders, checker);
-            checks = s;
-            drop(encoders);
-            curves
-                .par_iter()
-                .zip(arcs)
-                .map(
-                    |(pts, arcs)| match curve_encoder(pts.as_ref(), params, half) {
-                        Some(enc) => finish_options(&enc, arcs),
-                        None => CurveOptions {
-                            points: None,
-                            arcs: None,
-                        },
-                    },
-                )
-                .collect()
-        }
-    };
     let grid_step = half;
     let q_start = params.quantiser().start;
     let q_first = params.quantiser().first;
@@ -1231,192 +1274,200 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     let mut calibration = Calibration::default();
     // The block's decoded curves: the references.
     let mut neighbours = Neighbours::new(grid_step, q_start, curves.len());
-    for (points, opt) in curves.iter().zip(options) {
-        // The choice, in order: a points-mode curve may lean on those before.
-        let before = enc.position_bits();
-        let (code, n, estimate) = choose(
-            points.as_ref(),
-            opt,
-            params.tolerance,
-            half,
-            screw(params.model),
-            offset_trend(params.model),
-            &mut neighbours,
-            &prev,
-            calibration.arcs_scale(),
-        );
-        if keep {
-            decoded.push(neighbours.last_points().to_vec());
+    for chunk in curves.chunks(CALIBRATION_CHUNK) {
+        // Each chunk's searches with what the curves before it taught
+        // ([`encoder::GiveUp`]).
+        let options = chunk_options(chunk, params, half, calibration.arcs_scale(), checker);
+        checks.add(&options.1);
+        for (points, opt) in chunk.iter().zip(options.0) {
+            // The choice, in order: a points-mode curve may lean on those
+            // before.
+            let before = enc.position_bits();
+            let (code, n, estimate) = choose(
+                points.as_ref(),
+                opt,
+                params.tolerance,
+                half,
+                screw(params.model),
+                offset_trend(params.model),
+                &mut neighbours,
+                &prev,
+                calibration.arcs_scale(),
+            );
+            if keep {
+                decoded.push(neighbours.last_points().to_vec());
+            }
+            let code = &code;
+            output_points += n;
+            let kind = kind_of(code);
+            kinds.push(kind);
+            enc.set_tag(0);
+            put_kind(&mut enc, &mut m, kind);
+            match code {
+                CurveCode::Empty => {}
+                CurveCode::Raw(p) => {
+                    enc.set_tag(12);
+                    m.raw_count.put_unsigned(&mut enc, p.len() as u64);
+                    for v in p.iter().flat_map(|v| v.to_array()) {
+                        enc.direct(v.to_bits(), 64);
+                    }
+                }
+                CurveCode::Points {
+                    grid,
+                    reference,
+                    helix,
+                } => {
+                    enc.set_tag(1);
+                    m.count.put_unsigned(&mut enc, grid.len() as u64 - 1);
+                    enc.set_tag(10);
+                    if neighbours.len() > 1 {
+                        enc.bit(&mut m.has_reference, reference.is_some());
+                    }
+                    match reference {
+                        Some(rf) => {
+                            m.back.put_unsigned(&mut enc, rf.back as u64 - 1);
+                            enc.bit(&mut m.reversed, rf.reversed);
+                            enc.bit(&mut m.has_second, rf.second.is_some());
+                            if let Some((back, reversed)) = rf.second {
+                                m.back.put_unsigned(&mut enc, back as u64 - 1);
+                                enc.bit(&mut m.reversed, reversed);
+                            }
+                            // `neighbours` holds this curve last: its reference
+                            // is `back` before that.
+                            let grids = neighbours.window();
+                            let at_back = |b: usize| &grids[grids.len() - 1 - b][..];
+                            let res = reference::Resolved {
+                                first: (at_back(rf.back), rf.reversed),
+                                second: rf.second.map(|(b, rev)| (at_back(b), rev)),
+                                trend: offset_trend(params.model),
+                            };
+                            let start = res.start();
+                            let d = [0, 1, 2].map(|a| grid[0][a] - start[a]);
+                            put_lattice(&mut enc, &mut m.parity[0], &mut m.ref_start, d);
+                            let n = grid.len();
+                            enc.set_tag(11);
+                            let mut ctx = RESIDUAL_CONTEXTS - 1;
+                            for k in 1..n {
+                                let pred = res.predict_in(grid, k, n);
+                                let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
+                                put_lattice(
+                                    &mut enc,
+                                    &mut m.ref_residual_parity[ctx],
+                                    &mut m.ref_residual[ctx],
+                                    d,
+                                );
+                                ctx = residual_context(d);
+                            }
+                        }
+                        None => {
+                            enc.bit(&mut m.helix, *helix);
+                            let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
+                            put_lattice(&mut enc, &mut m.parity[1], &mut m.point_start, d);
+                            enc.set_tag(11);
+                            let mut ctx = RESIDUAL_CONTEXTS - 1;
+                            for k in 1..grid.len() {
+                                let pred = own_prediction(grid, k, *helix, screw(params.model));
+                                let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
+                                put_lattice(
+                                    &mut enc,
+                                    &mut m.residual_parity[ctx],
+                                    &mut m.residual[ctx],
+                                    d,
+                                );
+                                ctx = residual_context(d);
+                            }
+                        }
+                    }
+                    prev.point_start = grid[0];
+                }
+                CurveCode::Arcs {
+                    start,
+                    first_end,
+                    first_bulge,
+                    elements,
+                } => {
+                    enc.set_tag(1);
+                    m.count.put_unsigned(&mut enc, elements.len() as u64);
+                    n_elements += 1 + elements.len();
+                    enc.set_tag(2);
+                    // `neighbours` holds this curve last; its anchors are the
+                    // curves before it.
+                    let before = neighbours.len() - 1;
+                    let own = lattice_bits([0, 1, 2].map(|a| start[a] - prev.arc_start[a]));
+                    let anchor = if before > 0 {
+                        let best = neighbours.best_anchor(*start, before);
+                        let pick = best.filter(|&(_, _, bits)| bits < own);
+                        enc.bit(&mut m.has_anchor, pick.is_some());
+                        pick
+                    } else {
+                        None
+                    };
+                    match anchor {
+                        Some((back, at_end, _)) => {
+                            m.back_anchor.put_unsigned(&mut enc, back as u64 - 1);
+                            enc.bit(&mut m.anchor_end, at_end);
+                            let r = neighbours.anchor(before - back, at_end).unwrap_or([0; 3]);
+                            let d = [0, 1, 2].map(|a| start[a] - r[a]);
+                            put_lattice(&mut enc, &mut m.start_parity[0], &mut m.anchor_start, d);
+                        }
+                        None => {
+                            let d = [0, 1, 2].map(|a| start[a] - prev.arc_start[a]);
+                            put_lattice(&mut enc, &mut m.start_parity[1], &mut m.start, d);
+                        }
+                    }
+                    let (fe_pred, walk) = first_end_prediction(
+                        &neighbours,
+                        before,
+                        anchor.map(|a| (a.0, a.1)),
+                        &prev,
+                        q_first,
+                    );
+                    enc.set_tag(3);
+                    for a in 0..3 {
+                        m.first_end[a].put(&mut enc, first_end[a] - fe_pred[a]);
+                    }
+                    enc.set_tag(4);
+                    prev.arc_start = *start;
+                    prev.first_end = *first_end;
+                    let q0 =
+                        DVec3::new(start[0] as f64, start[1] as f64, start[2] as f64) * q_start;
+                    let fb_pred = first_bulge_prediction(
+                        walk,
+                        q0,
+                        encoder::first_end(q0, *first_end, q_first),
+                        q_offset,
+                    );
+                    for a in 0..2 {
+                        m.first_bulge[a].put(&mut enc, first_bulge[a] - fb_pred[a]);
+                    }
+                    let mut prev_kind = ElementKind::Corner;
+                    for e in elements {
+                        let ctx = span_context(e.span);
+                        enc.set_tag(5);
+                        put_element_kind(&mut enc, &mut m, prev_kind, e.kind);
+                        prev_kind = e.kind;
+                        if e.kind == ElementKind::Jump {
+                            enc.set_tag(9);
+                            for a in 0..3 {
+                                m.jump[a].put(&mut enc, e.jump[a]);
+                            }
+                            continue;
+                        }
+                        enc.set_tag(6);
+                        m.length[ctx].put(&mut enc, e.length);
+                        enc.set_tag(7);
+                        m.offset[ctx][0].put(&mut enc, e.offset[0]);
+                        m.offset[ctx][1].put(&mut enc, e.offset[1]);
+                        if e.kind == ElementKind::Corner {
+                            enc.set_tag(8);
+                            m.bulge[0].put(&mut enc, e.bulge[0]);
+                            m.bulge[1].put(&mut enc, e.bulge[1]);
+                        }
+                    }
+                }
+            }
+            calibration.add(kind, estimate, enc.position_bits() - before);
         }
-        let code = &code;
-        output_points += n;
-        let kind = kind_of(code);
-        kinds.push(kind);
-        enc.set_tag(0);
-        put_kind(&mut enc, &mut m, kind);
-        match code {
-            CurveCode::Empty => {}
-            CurveCode::Raw(p) => {
-                enc.set_tag(12);
-                m.raw_count.put_unsigned(&mut enc, p.len() as u64);
-                for v in p.iter().flat_map(|v| v.to_array()) {
-                    enc.direct(v.to_bits(), 64);
-                }
-            }
-            CurveCode::Points {
-                grid,
-                reference,
-                helix,
-            } => {
-                enc.set_tag(1);
-                m.count.put_unsigned(&mut enc, grid.len() as u64 - 1);
-                enc.set_tag(10);
-                if neighbours.len() > 1 {
-                    enc.bit(&mut m.has_reference, reference.is_some());
-                }
-                match reference {
-                    Some(rf) => {
-                        m.back.put_unsigned(&mut enc, rf.back as u64 - 1);
-                        enc.bit(&mut m.reversed, rf.reversed);
-                        enc.bit(&mut m.has_second, rf.second.is_some());
-                        if let Some((back, reversed)) = rf.second {
-                            m.back.put_unsigned(&mut enc, back as u64 - 1);
-                            enc.bit(&mut m.reversed, reversed);
-                        }
-                        // `neighbours` holds this curve last: its reference
-                        // is `back` before that.
-                        let grids = neighbours.window();
-                        let at_back = |b: usize| &grids[grids.len() - 1 - b][..];
-                        let res = reference::Resolved {
-                            first: (at_back(rf.back), rf.reversed),
-                            second: rf.second.map(|(b, rev)| (at_back(b), rev)),
-                            trend: offset_trend(params.model),
-                        };
-                        let start = res.start();
-                        let d = [0, 1, 2].map(|a| grid[0][a] - start[a]);
-                        put_lattice(&mut enc, &mut m.parity[0], &mut m.ref_start, d);
-                        let n = grid.len();
-                        enc.set_tag(11);
-                        let mut ctx = RESIDUAL_CONTEXTS - 1;
-                        for k in 1..n {
-                            let pred = res.predict_in(grid, k, n);
-                            let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
-                            put_lattice(
-                                &mut enc,
-                                &mut m.ref_residual_parity[ctx],
-                                &mut m.ref_residual[ctx],
-                                d,
-                            );
-                            ctx = residual_context(d);
-                        }
-                    }
-                    None => {
-                        enc.bit(&mut m.helix, *helix);
-                        let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
-                        put_lattice(&mut enc, &mut m.parity[1], &mut m.point_start, d);
-                        enc.set_tag(11);
-                        let mut ctx = RESIDUAL_CONTEXTS - 1;
-                        for k in 1..grid.len() {
-                            let pred = own_prediction(grid, k, *helix, screw(params.model));
-                            let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
-                            put_lattice(
-                                &mut enc,
-                                &mut m.residual_parity[ctx],
-                                &mut m.residual[ctx],
-                                d,
-                            );
-                            ctx = residual_context(d);
-                        }
-                    }
-                }
-                prev.point_start = grid[0];
-            }
-            CurveCode::Arcs {
-                start,
-                first_end,
-                first_bulge,
-                elements,
-            } => {
-                enc.set_tag(1);
-                m.count.put_unsigned(&mut enc, elements.len() as u64);
-                n_elements += 1 + elements.len();
-                enc.set_tag(2);
-                // `neighbours` holds this curve last; its anchors are the
-                // curves before it.
-                let before = neighbours.len() - 1;
-                let own = lattice_bits([0, 1, 2].map(|a| start[a] - prev.arc_start[a]));
-                let anchor = if before > 0 {
-                    let best = neighbours.best_anchor(*start, before);
-                    let pick = best.filter(|&(_, _, bits)| bits < own);
-                    enc.bit(&mut m.has_anchor, pick.is_some());
-                    pick
-                } else {
-                    None
-                };
-                match anchor {
-                    Some((back, at_end, _)) => {
-                        m.back_anchor.put_unsigned(&mut enc, back as u64 - 1);
-                        enc.bit(&mut m.anchor_end, at_end);
-                        let r = neighbours.anchor(before - back, at_end).unwrap_or([0; 3]);
-                        let d = [0, 1, 2].map(|a| start[a] - r[a]);
-                        put_lattice(&mut enc, &mut m.start_parity[0], &mut m.anchor_start, d);
-                    }
-                    None => {
-                        let d = [0, 1, 2].map(|a| start[a] - prev.arc_start[a]);
-                        put_lattice(&mut enc, &mut m.start_parity[1], &mut m.start, d);
-                    }
-                }
-                let (fe_pred, walk) = first_end_prediction(
-                    &neighbours,
-                    before,
-                    anchor.map(|a| (a.0, a.1)),
-                    &prev,
-                    q_first,
-                );
-                enc.set_tag(3);
-                for a in 0..3 {
-                    m.first_end[a].put(&mut enc, first_end[a] - fe_pred[a]);
-                }
-                enc.set_tag(4);
-                prev.arc_start = *start;
-                prev.first_end = *first_end;
-                let q0 = DVec3::new(start[0] as f64, start[1] as f64, start[2] as f64) * q_start;
-                let fb_pred = first_bulge_prediction(
-                    walk,
-                    q0,
-                    encoder::first_end(q0, *first_end, q_first),
-                    q_offset,
-                );
-                for a in 0..2 {
-                    m.first_bulge[a].put(&mut enc, first_bulge[a] - fb_pred[a]);
-                }
-                let mut prev_kind = ElementKind::Corner;
-                for e in elements {
-                    let ctx = span_context(e.span);
-                    enc.set_tag(5);
-                    put_element_kind(&mut enc, &mut m, prev_kind, e.kind);
-                    prev_kind = e.kind;
-                    if e.kind == ElementKind::Jump {
-                        enc.set_tag(9);
-                        for a in 0..3 {
-                            m.jump[a].put(&mut enc, e.jump[a]);
-                        }
-                        continue;
-                    }
-                    enc.set_tag(6);
-                    m.length[ctx].put(&mut enc, e.length);
-                    enc.set_tag(7);
-                    m.offset[ctx][0].put(&mut enc, e.offset[0]);
-                    m.offset[ctx][1].put(&mut enc, e.offset[1]);
-                    if e.kind == ElementKind::Corner {
-                        enc.set_tag(8);
-                        m.bulge[0].put(&mut enc, e.bulge[0]);
-                        m.bulge[1].put(&mut enc, e.bulge[1]);
-                    }
-                }
-            }
-        }
-        calibration.add(kind, estimate, enc.position_bits() - before);
     }
     let tallied = enc.tally().map(<[f64]>::to_vec);
     Ok((

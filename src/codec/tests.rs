@@ -499,3 +499,63 @@ fn calibration_scales_arcs_by_their_cost_against_points() {
         e.arcs_scale()
     );
 }
+
+#[test]
+fn the_arcs_search_gives_up_where_the_calibration_says_points_are_cheaper() {
+    // A jittered fibre, whose arcs and points are estimated alike: its
+    // search runs to the end while arcs cost what they are estimated at,
+    // and gives up once the block has learned that they cost three times
+    // that. A smooth helix, whose arcs are far cheaper, never gives up.
+    let tol = 0.1;
+    let params = CodecParams::new(tol);
+    let half = quantise::lattice_half(tol, 128.0).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(41);
+    // A bending fibre sampled every 1.5 mm, jittered by Gaussian noise of
+    // T/2 on each axis (the fornix replicas' kind).
+    let mut gauss = || {
+        let (u, v): (f64, f64) = (rng.gen_range(1e-12..1.0), rng.gen_range(0.0..1.0));
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos() * tol / 2.0
+    };
+    let fibre: Vec<DVec3> = (0..200)
+        .map(|k| {
+            let s = 1.5 * k as f64;
+            DVec3::new(s, 20.0 * (s / 25.0).sin(), 10.0 * (s / 15.0).cos())
+                + DVec3::new(gauss(), gauss(), gauss())
+        })
+        .collect();
+    let helix: Vec<DVec3> = (0..200)
+        .map(|k| 0.05 * k as f64)
+        .map(|s| DVec3::new(4.0 * s.cos(), 4.0 * s.sin(), 0.7 * s))
+        .collect();
+    let estimates = |curve: &[DVec3]| {
+        let mut enc = curve_encoder(curve, &params, half, 1.0).unwrap();
+        enc.give_up = None;
+        let (arcs, _) = batch::now(enc.arcs()).expect("the full search finds arcs");
+        let Some(CurveCode::Points { grid, .. }) = enc.points_code() else {
+            panic!("the points round");
+        };
+        (
+            estimated_bits(&arcs),
+            *points_bits_to(&grid).last().unwrap(),
+        )
+    };
+    let (arcs, points) = estimates(&fibre);
+    assert!(
+        (0.8..1.25).contains(&(arcs as f64 / points as f64)),
+        "{arcs} / {points}"
+    );
+    let kept = curve_options(&fibre, &params, half, 1.0);
+    let (code, _) = kept.arcs.expect("no give-up at the estimates");
+    assert_eq!(estimated_bits(&code), arcs);
+    let dear = curve_options(&fibre, &params, half, 3.0);
+    assert!(dear.arcs.is_none(), "the search went on");
+    assert!(dear.points.is_some());
+
+    let (arcs, points) = estimates(&helix);
+    assert!(3 * arcs < points, "{arcs} / {points}");
+    let (code, decoded) = curve_options(&helix, &params, half, 3.0)
+        .arcs
+        .expect("a smooth curve keeps its arcs");
+    assert_eq!(estimated_bits(&code), arcs);
+    assert!(hausdorff(&helix, &decoded).unwrap() <= tol);
+}
