@@ -1558,7 +1558,8 @@ pub fn decode_block(
                     return Err(bad("points in a block without a lattice".into()));
                 }
                 let with_reference = !neighbours.is_empty() && dec.bit(&mut m.has_reference);
-                let mut g: Vec<[i64; 3]> = Vec::with_capacity(n.min(1 << 16));
+                let mut g = neighbours.spare_grid();
+                g.reserve(n.min(1 << 16));
                 if with_reference {
                     let mut read_ref = |dec: &mut Decoder| -> Result<(usize, bool), DecodeError> {
                         let back = m.back.get_unsigned(dec) as usize + 1;

@@ -170,6 +170,11 @@ pub struct Neighbours {
     /// costs its start against 64 of them).
     start_half: f64,
     anchors: Vec<[Option<[i64; 3]>; 2]>,
+    /// Storage of forgotten curves, for the next ones: a block's curves
+    /// would otherwise each take fresh memory, whose zeroing by the kernel
+    /// was a fifth of decoding.
+    spare_points: Vec<Vec<DVec3>>,
+    spare_grids: Vec<Vec<[i64; 3]>>,
 }
 
 impl Neighbours {
@@ -182,12 +187,24 @@ impl Neighbours {
             ends: Vec::with_capacity(capacity),
             start_half,
             anchors: Vec::with_capacity(capacity),
+            spare_points: Vec::new(),
+            spare_grids: Vec::new(),
         }
+    }
+
+    /// An empty vector for a curve's lattice points, from a forgotten
+    /// curve's where there is one.
+    pub fn spare_grid(&mut self) -> Vec<[i64; 3]> {
+        let mut g = self.spare_grids.pop().unwrap_or_default();
+        g.clear();
+        g
     }
 
     /// A points curve, on the lattice (its points are `k · half`).
     pub fn push_lattice(&mut self, g: Vec<[i64; 3]>) {
-        let p: Vec<DVec3> = g.iter().map(|&k| bcc_point(k, self.half)).collect();
+        let mut p = self.spare_points.pop().unwrap_or_default();
+        p.clear();
+        p.extend(g.iter().map(|&k| bcc_point(k, self.half)));
         self.push_ends(match (p.first(), p.last()) {
             (Some(&a), Some(&b)) => Some((a, b)),
             _ => None,
@@ -299,20 +316,32 @@ impl Neighbours {
         self.forget_old();
     }
 
-    /// Points further back than a reference can reach are dropped. The
-    /// encoder pushes a curve before coding it and the decoder after
-    /// decoding it, so one more than [`MAX_BACK`] is kept: both then see the
-    /// same [`MAX_BACK`] curves before the one being coded.
     /// The decoded points of the curve pushed last (empty for an empty
     /// curve).
     pub fn last_points(&self) -> &[DVec3] {
         self.points.last().and_then(|p| p.as_deref()).unwrap_or(&[])
     }
 
+    /// Points and grids further back than a reference can reach are
+    /// dropped (their storage kept for the next curves). The encoder pushes
+    /// a curve before coding it and the decoder after decoding it, so one
+    /// more than [`MAX_BACK`] is kept: both then see the same [`MAX_BACK`]
+    /// curves before the one being coded.
     fn forget_old(&mut self) {
+        /// Spare vectors kept at most (one or two are reused per curve).
+        const SPARE: usize = 4;
         let n = self.points.len();
         if n > MAX_BACK + 1 {
-            self.points[n - MAX_BACK - 2] = None;
+            let old = n - MAX_BACK - 2;
+            if let Some(p) = self.points[old].take() {
+                if self.spare_points.len() < SPARE {
+                    self.spare_points.push(p);
+                }
+            }
+            let g = std::mem::take(&mut self.grids[old]);
+            if g.capacity() > 0 && self.spare_grids.len() < SPARE {
+                self.spare_grids.push(g);
+            }
         }
     }
 
