@@ -580,4 +580,46 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn batched_searches_agree_across_chunks_and_give_ups() {
+        // More curves than one chunk of searches, smooth and noisy mixed:
+        // noisy fibres' searches give up (by the calibration the curves
+        // before them taught), and the batched path must decide as the
+        // CPU's.
+        use crate::codec::{encode_block, encode_block_on, CodecParams};
+        use crate::kernels::arc_check::TwinArcChecker;
+        let tol = 0.05;
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        let curves: Vec<Vec<DVec3>> = (0..300)
+            .map(|k| {
+                if k % 3 == 0 {
+                    return wiggle(&mut rng, 40, 0.0);
+                }
+                // A bending fibre sampled every 0.75, jittered by up to 2 T.
+                let phase = rng.gen_range(0.0..6.0);
+                (0..60)
+                    .map(|i| {
+                        let s = 0.75 * i as f64;
+                        DVec3::new(s, 5.0 * (s / 12.0 + phase).sin(), 3.0 * (s / 9.0).cos())
+                            + DVec3::new(
+                                rng.gen_range(-2.0 * tol..2.0 * tol),
+                                rng.gen_range(-2.0 * tol..2.0 * tol),
+                                rng.gen_range(-2.0 * tol..2.0 * tol),
+                            )
+                    })
+                    .collect()
+            })
+            .collect();
+        let params = CodecParams::new(tol);
+        let cpu = encode_block(&curves, &params).unwrap();
+        assert!(
+            cpu.kinds.contains(&1) && cpu.kinds.contains(&2),
+            "points and arcs both"
+        );
+        let twin = TwinArcChecker::<f64>::default();
+        let b = encode_block_on(&curves, &params, false, Some(&twin)).unwrap();
+        assert_eq!(b.bytes, cpu.bytes);
+        assert_eq!(b.kinds, cpu.kinds);
+    }
 }

@@ -43,9 +43,11 @@ pub struct CurveEncoder<'a> {
 /// 8 vertices), once the arcs so far are estimated (scaled by the block's
 /// calibration, [`GiveUp::arcs_scale`]) at more than 1.3× the rounded
 /// points' second-order estimate to the same vertex, plus a byte. On noisy
-/// fibres, where points win, most of the search is then skipped; the
-/// points' estimate it is held to is an upper bound of theirs (a
-/// neighbour's prediction or the screw may only lower it).
+/// fibres, where points win, most of the search is then skipped. The
+/// points' estimate it is held to is their residuals' by their own
+/// second-order prediction (a neighbour's prediction or the screw may
+/// only lower it; their start, which the choice counts too, is left out,
+/// which the margin covers).
 ///
 /// Measured (estimates logged over the shared data at both tolerances and
 /// 10,000 fornix replicas at 0.1 mm): the fornix replicas skip 66 % of
