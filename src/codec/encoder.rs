@@ -421,11 +421,8 @@ impl<'a> CurveEncoder<'a> {
         let first_end_z = first.code.length;
         let first_bulge = first.code.bulge;
         // The estimate so far, as `estimated_bits` counts it.
-        let mut bits = 8 + [first_end[0], first_end[1], first_end_z]
-            .into_iter()
-            .chain(first_bulge)
-            .map(super::eg_bits)
-            .sum::<u64>();
+        let mut bits =
+            super::first_element_bits([first_end[0], first_end[1], first_end_z], first_bulge);
         while from < n - 1 {
             // Cheapest kind first; a costlier one only where it reaches
             // further (a straight segment costs a kind flag, a corner also

@@ -467,6 +467,15 @@ fn eg_bits(v: i64) -> u64 {
     }
 }
 
+/// [`estimated_bits`] of an arcs curve's header and first element.
+fn first_element_bits(first_end: [i64; 3], first_bulge: [i64; 2]) -> u64 {
+    8 + first_end
+        .into_iter()
+        .chain(first_bulge)
+        .map(eg_bits)
+        .sum::<u64>()
+}
+
 /// [`estimated_bits`] of one element of an arcs curve.
 fn element_bits(e: &ElementCode) -> u64 {
     if e.kind == ElementKind::Jump {
@@ -500,9 +509,8 @@ fn estimated_bits(code: &CurveCode) -> u64 {
             elements,
             ..
         } => {
-            let mut bits = 8 + first_end.iter().map(|&v| eg_bits(v)).sum::<u64>();
-            bits += first_bulge.iter().map(|&v| eg_bits(v)).sum::<u64>();
-            bits + elements.iter().map(element_bits).sum::<u64>()
+            first_element_bits(*first_end, *first_bulge)
+                + elements.iter().map(element_bits).sum::<u64>()
         }
     }
 }
@@ -593,6 +601,45 @@ fn smooth_lattice_bits(d: [i64; 3]) -> f64 {
     1.0 + (0..3)
         .map(|a| 1.0 + 2.0 * log2_1p(((d[a] - b) / 2).unsigned_abs()))
         .sum::<f64>()
+}
+
+/// Codes the residuals of a points curve's `grid` after its start against
+/// `predict(k)`, each in the contexts of the one before
+/// ([`residual_context`]).
+fn put_residuals(
+    enc: &mut Encoder,
+    parity: &mut [Bit; RESIDUAL_CONTEXTS],
+    models: &mut [[IntModel; 3]; RESIDUAL_CONTEXTS],
+    grid: &[[i64; 3]],
+    predict: impl Fn(usize) -> [i64; 3],
+) {
+    let mut ctx = RESIDUAL_CONTEXTS - 1;
+    for k in 1..grid.len() {
+        let pred = predict(k);
+        let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
+        put_lattice(enc, &mut parity[ctx], &mut models[ctx], d);
+        ctx = residual_context(d);
+    }
+}
+
+/// The decoder's [`put_residuals`]: points `g.len()..n` of a points curve
+/// whose start `g` holds, each `predict(points so far, k)` plus its
+/// residual.
+fn get_residuals(
+    dec: &mut Decoder,
+    parity: &mut [Bit; RESIDUAL_CONTEXTS],
+    models: &mut [[IntModel; 3]; RESIDUAL_CONTEXTS],
+    g: &mut Vec<[i64; 3]>,
+    n: usize,
+    predict: impl Fn(&[[i64; 3]], usize) -> [i64; 3],
+) {
+    let mut ctx = RESIDUAL_CONTEXTS - 1;
+    for k in g.len()..n {
+        let pred = predict(g, k);
+        let d = get_lattice(dec, &mut parity[ctx], &mut models[ctx]);
+        ctx = residual_context(d);
+        g.push([0, 1, 2].map(|a| pred[a].wrapping_add(d[a])));
+    }
 }
 
 /// Contexts of a points-mode residual: the size of the one before (a curve's
@@ -1346,36 +1393,26 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                             put_lattice(&mut enc, &mut m.parity[0], &mut m.ref_start, d);
                             let n = grid.len();
                             enc.set_tag(11);
-                            let mut ctx = RESIDUAL_CONTEXTS - 1;
-                            for k in 1..n {
-                                let pred = res.predict_in(grid, k, n);
-                                let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
-                                put_lattice(
-                                    &mut enc,
-                                    &mut m.ref_residual_parity[ctx],
-                                    &mut m.ref_residual[ctx],
-                                    d,
-                                );
-                                ctx = residual_context(d);
-                            }
+                            put_residuals(
+                                &mut enc,
+                                &mut m.ref_residual_parity,
+                                &mut m.ref_residual,
+                                grid,
+                                |k| res.predict_in(grid, k, n),
+                            );
                         }
                         None => {
                             enc.bit(&mut m.helix, *helix);
                             let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
                             put_lattice(&mut enc, &mut m.parity[1], &mut m.point_start, d);
                             enc.set_tag(11);
-                            let mut ctx = RESIDUAL_CONTEXTS - 1;
-                            for k in 1..grid.len() {
-                                let pred = own_prediction(grid, k, *helix, screw(params.model));
-                                let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
-                                put_lattice(
-                                    &mut enc,
-                                    &mut m.residual_parity[ctx],
-                                    &mut m.residual[ctx],
-                                    d,
-                                );
-                                ctx = residual_context(d);
-                            }
+                            put_residuals(
+                                &mut enc,
+                                &mut m.residual_parity,
+                                &mut m.residual,
+                                grid,
+                                |k| own_prediction(grid, k, *helix, screw(params.model)),
+                            );
                         }
                     }
                     prev.point_start = grid[0];
@@ -1590,32 +1627,26 @@ pub fn decode_block(
                     let start = res.start();
                     let d = get_lattice(&mut dec, &mut m.parity[0], &mut m.ref_start);
                     g.push([0, 1, 2].map(|a| start[a].wrapping_add(d[a])));
-                    let mut ctx = RESIDUAL_CONTEXTS - 1;
-                    for k in 1..n {
-                        let pred = res.predict_in(&g, k, n);
-                        let d = get_lattice(
-                            &mut dec,
-                            &mut m.ref_residual_parity[ctx],
-                            &mut m.ref_residual[ctx],
-                        );
-                        ctx = residual_context(d);
-                        g.push([0, 1, 2].map(|a| pred[a].wrapping_add(d[a])));
-                    }
+                    get_residuals(
+                        &mut dec,
+                        &mut m.ref_residual_parity,
+                        &mut m.ref_residual,
+                        &mut g,
+                        n,
+                        |g, k| res.predict_in(g, k, n),
+                    );
                 } else {
                     let helix = dec.bit(&mut m.helix);
                     let d = get_lattice(&mut dec, &mut m.parity[1], &mut m.point_start);
                     g.push([0, 1, 2].map(|a| prev.point_start[a].wrapping_add(d[a])));
-                    let mut ctx = RESIDUAL_CONTEXTS - 1;
-                    for k in 1..n {
-                        let pred = own_prediction(&g, k, helix, screw(params.model));
-                        let d = get_lattice(
-                            &mut dec,
-                            &mut m.residual_parity[ctx],
-                            &mut m.residual[ctx],
-                        );
-                        ctx = residual_context(d);
-                        g.push([0, 1, 2].map(|a| pred[a].wrapping_add(d[a])));
-                    }
+                    get_residuals(
+                        &mut dec,
+                        &mut m.residual_parity,
+                        &mut m.residual,
+                        &mut g,
+                        n,
+                        |g, k| own_prediction(g, k, helix, screw(params.model)),
+                    );
                 }
                 prev.point_start = g[0];
                 let p = g
