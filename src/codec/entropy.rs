@@ -95,6 +95,7 @@ pub struct Bit {
 }
 
 impl Bit {
+    #[cold]
     fn start(&mut self, a: Adaptation) {
         if self.p == 0 {
             *self = match a {
@@ -110,6 +111,7 @@ impl Bit {
         }
     }
 
+    #[inline]
     fn prob_bits(self) -> u32 {
         if self.n == LEGACY {
             LEGACY_PROB_BITS
@@ -130,6 +132,7 @@ impl Bit {
         (-p.log2() * 256.0) as u32
     }
 
+    #[inline]
     fn update(&mut self, bit: bool) {
         let shift = if self.n == LEGACY {
             LEGACY_SHIFT
@@ -333,6 +336,7 @@ impl<'a> Decoder<'a> {
         d
     }
 
+    #[inline]
     fn byte(&mut self) -> u8 {
         match self.data.get(self.pos) {
             Some(&b) => {
@@ -358,30 +362,51 @@ impl<'a> Decoder<'a> {
         self.overrun || self.pos > self.data.len() + SLACK
     }
 
+    #[inline]
     pub fn bit(&mut self, ctx: &mut Bit) -> bool {
-        ctx.start(self.adaptation);
+        if ctx.p == 0 {
+            ctx.start(self.adaptation);
+        }
         let bound = (self.range >> ctx.prob_bits()) * ctx.p as u32;
-        let bit = if self.code < bound {
-            self.range = bound;
-            false
-        } else {
+        let bit = self.code >= bound;
+        if bit {
             self.code -= bound;
             self.range -= bound;
-            true
-        };
+        } else {
+            self.range = bound;
+        }
         ctx.update(bit);
+        self.normalise();
+        bit
+    }
+
+    #[inline]
+    fn normalise(&mut self) {
         while self.range < TOP {
             self.range <<= 8;
             self.code = (self.code << 8) | self.byte() as u32;
         }
-        bit
     }
 
+    /// `n` bits at probability one half, high first: as [`bit`](Self::bit)
+    /// in a fresh context each, whose probability is exactly one half.
     pub fn direct(&mut self, n: usize) -> u64 {
+        let bits = match self.adaptation {
+            Adaptation::Fixed => LEGACY_PROB_BITS,
+            Adaptation::WarmUp => PROB_BITS,
+        };
         let mut v = 0u64;
         for _ in 0..n {
-            let mut half = Bit::default();
-            v = (v << 1) | self.bit(&mut half) as u64;
+            let bound = (self.range >> bits) << (bits - 1);
+            let bit = self.code >= bound;
+            if bit {
+                self.code -= bound;
+                self.range -= bound;
+            } else {
+                self.range = bound;
+            }
+            self.normalise();
+            v = (v << 1) | bit as u64;
         }
         v
     }
@@ -513,6 +538,7 @@ impl IntModel {
         enc.direct(m, below - modelled);
     }
 
+    #[inline]
     pub fn get(&mut self, dec: &mut Decoder) -> i64 {
         if !dec.bit(&mut self.zero) {
             return 0;

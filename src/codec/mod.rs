@@ -580,9 +580,13 @@ fn put_lattice(enc: &mut Encoder, parity: &mut Bit, m: &mut [IntModel; 3], d: [i
     }
 }
 
+#[inline]
 fn get_lattice(dec: &mut Decoder, parity: &mut Bit, m: &mut [IntModel; 3]) -> [i64; 3] {
     let b = dec.bit(parity) as i64;
-    [0, 1, 2].map(|a| m[a].get(dec).wrapping_mul(2).wrapping_add(b))
+    let x = m[0].get(dec);
+    let y = m[1].get(dec);
+    let z = m[2].get(dec);
+    [x, y, z].map(|v| v.wrapping_mul(2).wrapping_add(b))
 }
 
 /// Static cost of a lattice difference (for the encoder's choices).
@@ -1649,13 +1653,9 @@ pub fn decode_block(
                     );
                 }
                 prev.point_start = g[0];
-                let p = g
-                    .iter()
-                    .map(|k| DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * grid)
-                    .collect();
                 neighbours.push_lattice(g);
                 pushed = true;
-                p
+                neighbours.last_points().to_vec()
             }
             2 => {
                 let n = m.count.get_unsigned(&mut dec) as usize;
@@ -1745,9 +1745,12 @@ pub fn decode_block(
         }
         // Usable points only (finite, within float32, as every reader
         // guarantees): a corrupt stream could decode to anything.
-        for (k, p) in pts.iter().enumerate() {
-            if let Some(why) = crate::io::point_problem(*p) {
-                return Err(bad(format!("point {k} decodes badly: {why}")));
+        let usable = |p: &DVec3| p.abs().max_element() <= crate::io::MAX_COORDINATE;
+        if !pts.iter().all(usable) {
+            for (k, p) in pts.iter().enumerate() {
+                if let Some(why) = crate::io::point_problem(*p) {
+                    return Err(bad(format!("point {k} decodes badly: {why}")));
+                }
             }
         }
         if !pushed {

@@ -9,7 +9,7 @@ use super::batch::ArcChecker;
 
 use super::container::{
     encode_block_bytes_on, BlockBytes, CodecHeader, CodecReader, CodecWriter, CurveIn,
-    DecodedCurve, BLOCK_CURVES,
+    DecodedCurve, RawBlock, BLOCK_CURVES,
 };
 use crate::io::{Curve, CurveReader, CurveWriter, IoError};
 
@@ -321,7 +321,7 @@ fn read_group(
 }
 
 /// Blocks decoded at once (in parallel) by [`decompress_stream`].
-const BLOCKS_AT_ONCE: usize = 8;
+const BLOCKS_AT_ONCE: usize = 4;
 
 /// Writes every curve of the container to `writer` (which the caller
 /// finishes), `map` turning each decoded curve into the curve written
@@ -445,13 +445,8 @@ pub fn decompress_range(
             first < range.end && first + count > range.start
         })
         .collect();
-    for group in wanted.chunks(BLOCKS_AT_ONCE) {
-        let raw = group
-            .iter()
-            .map(|&b| reader.read_block_bytes(b))
-            .collect::<Result<Vec<_>, _>>()?;
-        let decoded: Vec<Result<Vec<Curve>, IoError>> = raw
-            .par_iter()
+    let decode_group = |raw: Vec<RawBlock>| -> Vec<Result<Vec<Curve>, IoError>> {
+        raw.par_iter()
             .map(|b| {
                 b.decode(&path, &header).map(|cs| {
                     cs.into_iter()
@@ -461,7 +456,10 @@ pub fn decompress_range(
                         .collect()
                 })
             })
-            .collect();
+            .collect()
+    };
+    let decode_group = &decode_group;
+    let mut write_group = |decoded: Vec<Result<Vec<Curve>, IoError>>| -> Result<(), IoError> {
         for block in decoded {
             for c in block? {
                 writer.write_curve(&c)?;
@@ -469,8 +467,36 @@ pub fn decompress_range(
             }
         }
         progress(written);
-    }
+        Ok(())
+    };
+    // The writer (this thread) writes one group while the next decodes on
+    // the pool: the writing is sequential, and in turns it left a core
+    // idle for a fifth of the run.
+    std::thread::scope(|scope| -> Result<(), IoError> {
+        let mut pending: Option<std::thread::ScopedJoinHandle<_>> = None;
+        for group in wanted.chunks(BLOCKS_AT_ONCE) {
+            let raw = group
+                .iter()
+                .map(|&b| reader.read_block_bytes(b))
+                .collect::<Result<Vec<_>, _>>()?;
+            let next = scope.spawn(move || decode_group(raw));
+            if let Some(decoding) = pending.replace(next) {
+                write_group(joined(decoding))?;
+            }
+        }
+        match pending {
+            Some(decoding) => write_group(joined(decoding)),
+            None => Ok(()),
+        }
+    })?;
     Ok(written)
+}
+
+/// What a scoped thread returned; its panic goes on in this thread.
+fn joined<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
+    handle
+        .join()
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
 }
 
 /// Curves `first..first + count` of the container, reading only the

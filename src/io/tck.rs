@@ -561,6 +561,8 @@ impl CurveWriter for TckWriter {
     fn write_curve(&mut self, curve: &Curve) -> Result<(), IoError> {
         let index = self.count;
         self.buf.clear();
+        let width = if self.dtype.wide { 8 } else { 4 };
+        self.buf.reserve(3 * width * (curve.points.len() + 1));
         for (j, p) in curve.points.iter().enumerate() {
             let bad = |why: &str| {
                 IoError::new(self.out.target(), format!("point {j} ({p}) {why}")).curve(index)
