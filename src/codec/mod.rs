@@ -1745,8 +1745,7 @@ pub fn decode_block(
         }
         // Usable points only (finite, within float32, as every reader
         // guarantees): a corrupt stream could decode to anything.
-        let usable = |p: &DVec3| p.abs().max_element() <= crate::io::MAX_COORDINATE;
-        if !pts.iter().all(usable) {
+        if !pts.iter().all(|p| crate::io::fits_f32(*p)) {
             for (k, p) in pts.iter().enumerate() {
                 if let Some(why) = crate::io::point_problem(*p) {
                     return Err(bad(format!("point {k} decodes badly: {why}")));

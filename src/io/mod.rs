@@ -221,6 +221,23 @@ pub trait CurveReader: Iterator<Item = Result<Curve, IoError>> {
 /// reading, where the file and curve can still be named.
 pub const MAX_COORDINATE: f64 = f32::MAX as f64;
 
+/// Whether every coordinate of `p` is a number within the float32 range
+/// (`|x| ≤ MAX_COORDINATE`; NaN fails the comparison): the quick test
+/// before [`point_problem`] says why not.
+///
+/// ```
+/// use strandfit::{io::fits_f32, DVec3};
+///
+/// assert!(fits_f32(DVec3::new(1.0, -2.0, 3.0)));
+/// assert!(!fits_f32(DVec3::new(0.0, f64::NAN, 0.0)));
+/// assert!(!fits_f32(DVec3::new(f64::INFINITY, 0.0, 0.0)));
+/// assert!(!fits_f32(DVec3::new(0.0, 0.0, -1e39)));
+/// ```
+#[inline]
+pub fn fits_f32(p: DVec3) -> bool {
+    p.x.abs() <= MAX_COORDINATE && p.y.abs() <= MAX_COORDINATE && p.z.abs() <= MAX_COORDINATE
+}
+
 /// Why a point cannot be used (a non-finite coordinate, or one beyond
 /// [`MAX_COORDINATE`]), or `None` when it can.
 ///
@@ -233,6 +250,9 @@ pub const MAX_COORDINATE: f64 = f32::MAX as f64;
 /// assert!(point_problem(DVec3::new(1e39, 0.0, 0.0)).is_some()); // beyond f32
 /// ```
 pub fn point_problem(p: DVec3) -> Option<String> {
+    if fits_f32(p) {
+        return None;
+    }
     let a = p.to_array();
     if let Some(k) = a.iter().position(|x| !x.is_finite()) {
         return Some(format!(

@@ -567,7 +567,7 @@ impl CurveWriter for TckWriter {
             // Float32 little-endian, the common case, a point at a time
             // where it plainly fits (no NaN, within float32): writing was
             // a tenth of decompressing. Anything else takes the checks.
-            if little_f32 && p.abs().max_element() <= f32::MAX as f64 {
+            if little_f32 && crate::io::fits_f32(*p) {
                 let mut b = [0u8; 12];
                 b[0..4].copy_from_slice(&(p.x as f32).to_le_bytes());
                 b[4..8].copy_from_slice(&(p.y as f32).to_le_bytes());
