@@ -1346,7 +1346,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 calibration.arcs_scale(),
             );
             if keep {
-                decoded.push(neighbours.last_points().to_vec());
+                decoded.push(neighbours.last_decoded());
             }
             let code = &code;
             output_points += n;
@@ -1653,9 +1653,10 @@ pub fn decode_block(
                     );
                 }
                 prev.point_start = g[0];
+                let p = g.iter().map(|&k| quantise::bcc_point(k, grid)).collect();
                 neighbours.push_lattice(g);
                 pushed = true;
-                neighbours.last_points().to_vec()
+                p
             }
             2 => {
                 let n = m.count.get_unsigned(&mut dec) as usize;

@@ -195,10 +195,9 @@ pub struct Neighbours {
     /// costs its start against 64 of them).
     start_half: f64,
     anchors: Vec<[Option<[i64; 3]>; 2]>,
-    /// Storage of forgotten curves, for the next ones: a block's curves
-    /// would otherwise each take fresh memory, whose zeroing by the kernel
-    /// was a fifth of decoding.
-    spare_points: Vec<Vec<DVec3>>,
+    /// Storage of forgotten curves' lattice points, for the next ones: a
+    /// block's curves would otherwise each take fresh memory, whose zeroing
+    /// by the kernel was a fifth of decoding.
     spare_grids: Vec<Vec<[i64; 3]>>,
 }
 
@@ -212,7 +211,6 @@ impl Neighbours {
             ends: Vec::with_capacity(capacity),
             start_half,
             anchors: Vec::with_capacity(capacity),
-            spare_points: Vec::new(),
             spare_grids: Vec::new(),
         }
     }
@@ -225,19 +223,32 @@ impl Neighbours {
         g
     }
 
-    /// A points curve, on the lattice (its points are `k · half`).
+    /// A points curve, on the lattice (its points are `k · half`, made
+    /// when asked for: [`walk_with_middle`](Self::walk_with_middle),
+    /// [`last_decoded`](Self::last_decoded)).
     pub fn push_lattice(&mut self, g: Vec<[i64; 3]>) {
-        let mut p = self.spare_points.pop().unwrap_or_default();
-        p.clear();
-        p.extend(g.iter().map(|&k| bcc_point(k, self.half)));
-        self.push_ends(match (p.first(), p.last()) {
-            (Some(&a), Some(&b)) => Some((a, b)),
+        let h = self.half;
+        self.push_ends(match (g.first(), g.last()) {
+            (Some(&a), Some(&b)) => Some((bcc_point(a, h), bcc_point(b, h))),
             _ => None,
         });
         self.grids.push(g);
         self.gridded.push(true);
-        self.points.push(Some(p));
+        self.points.push(None);
         self.forget_old();
+    }
+
+    /// The decoded points of the curve pushed last (empty for an empty
+    /// curve).
+    pub fn last_decoded(&self) -> Vec<DVec3> {
+        match self.points.last() {
+            Some(Some(p)) => p.clone(),
+            Some(None) => {
+                let g = self.grids.last().map_or(&[][..], |g| &g[..]);
+                g.iter().map(|&k| bcc_point(k, self.half)).collect()
+            }
+            None => Vec::new(),
+        }
     }
 
     /// The point of curve `k` (run backwards when `at_end`) reached by
@@ -253,24 +264,14 @@ impl Neighbours {
         at_end: bool,
         distance: f64,
     ) -> Option<(DVec3, DVec3)> {
-        let p = self.points.get(k)?.as_ref()?;
-        if p.len() < 2 {
-            return None;
-        }
-        let at = |i: usize| if at_end { p[p.len() - 1 - i] } else { p[i] };
-        let mut walked = 0.0;
-        let mut middle = None;
-        for i in 1..p.len() {
-            walked += at(i).distance(at(i - 1));
-            if middle.is_none() && walked >= 0.5 * distance {
-                middle = Some(at(i) - at(0));
-            }
-            if walked >= distance {
-                return Some((at(i) - at(0), middle.unwrap_or(at(i) - at(0))));
+        match self.points.get(k)? {
+            Some(p) => walk_with_middle(p.len(), |i| p[i], at_end, distance),
+            None => {
+                // A lattice curve (an empty grid: an empty curve).
+                let (g, h) = (self.grids.get(k)?, self.half);
+                walk_with_middle(g.len(), |i| bcc_point(g[i], h), at_end, distance)
             }
         }
-        let end = at(p.len() - 1) - at(0);
-        Some((end, middle.unwrap_or(end)))
     }
 
     fn push_ends(&mut self, ends: Option<(DVec3, DVec3)>) {
@@ -341,12 +342,6 @@ impl Neighbours {
         self.forget_old();
     }
 
-    /// The decoded points of the curve pushed last (empty for an empty
-    /// curve).
-    pub fn last_points(&self) -> &[DVec3] {
-        self.points.last().and_then(|p| p.as_deref()).unwrap_or(&[])
-    }
-
     /// Points and grids further back than a reference can reach are
     /// dropped (their storage kept for the next curves). The encoder pushes
     /// a curve before coding it and the decoder after decoding it, so one
@@ -358,11 +353,7 @@ impl Neighbours {
         let n = self.points.len();
         if n > MAX_BACK + 1 {
             let old = n - MAX_BACK - 2;
-            if let Some(p) = self.points[old].take() {
-                if self.spare_points.len() < SPARE {
-                    self.spare_points.push(p);
-                }
-            }
+            self.points[old] = None;
             let g = std::mem::take(&mut self.grids[old]);
             if g.capacity() > 0 && self.spare_grids.len() < SPARE {
                 self.spare_grids.push(g);
@@ -383,6 +374,32 @@ impl Neighbours {
         }
         &self.grids
     }
+}
+
+/// [`Neighbours::walk_with_middle`] along the `n` points `point(i)`.
+fn walk_with_middle(
+    n: usize,
+    point: impl Fn(usize) -> DVec3,
+    at_end: bool,
+    distance: f64,
+) -> Option<(DVec3, DVec3)> {
+    if n < 2 {
+        return None;
+    }
+    let at = |i: usize| if at_end { point(n - 1 - i) } else { point(i) };
+    let mut walked = 0.0;
+    let mut middle = None;
+    for i in 1..n {
+        walked += at(i).distance(at(i - 1));
+        if middle.is_none() && walked >= 0.5 * distance {
+            middle = Some(at(i) - at(0));
+        }
+        if walked >= distance {
+            return Some((at(i) - at(0), middle.unwrap_or(at(i) - at(0))));
+        }
+    }
+    let end = at(n - 1) - at(0);
+    Some((end, middle.unwrap_or(end)))
 }
 
 /// Index into a reference of `m` points matching point `i` of `n`.
@@ -601,6 +618,30 @@ mod tests {
         // Beyond the codable range (and beyond i64 when doubled): `a`.
         assert_eq!(midpoint([limit, 0, 0], [limit, 0, 0]), [limit, 0, 0]);
         assert_eq!(midpoint([i64::MAX, 0, 0], [1, 0, 0]), [i64::MAX, 0, 0]);
+    }
+
+    #[test]
+    fn a_lattice_curve_walks_and_decodes_as_its_points_do() {
+        // The same curve pushed as lattice points (its points made when
+        // asked for) and as decoded points: the same walks, ends, points.
+        let half = 0.05;
+        let g: Vec<[i64; 3]> = (0..30i64).map(|i| [2 * i, (i * i) % 7 * 2, 4]).collect();
+        let pts: Vec<DVec3> = g.iter().map(|&k| bcc_point(k, half)).collect();
+        let mut a = Neighbours::new(half, 0.2, 4);
+        a.push_lattice(g);
+        assert_eq!(a.last_decoded(), pts);
+        let mut b = Neighbours::new(half, 0.2, 4);
+        b.push_points(pts);
+        for at_end in [false, true] {
+            for d in [0.0, 0.3, 1.0, 2.5, 100.0] {
+                assert_eq!(
+                    a.walk_with_middle(0, at_end, d),
+                    b.walk_with_middle(0, at_end, d)
+                );
+            }
+            assert_eq!(a.anchor(0, at_end), b.anchor(0, at_end));
+        }
+        assert!(a.walk_with_middle(0, false, 1.0).is_some());
     }
 
     #[test]

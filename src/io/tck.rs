@@ -561,7 +561,8 @@ impl CurveWriter for TckWriter {
     fn write_curve(&mut self, curve: &Curve) -> Result<(), IoError> {
         let index = self.count;
         self.buf.clear();
-        self.buf.reserve(self.dtype.triplet_bytes() * (curve.points.len() + 1));
+        self.buf
+            .reserve(self.dtype.triplet_bytes() * (curve.points.len() + 1));
         let little_f32 = !self.dtype.wide && self.dtype.endian == Endian::Little;
         for (j, p) in curve.points.iter().enumerate() {
             // Float32 little-endian, the common case, a point at a time
