@@ -108,7 +108,17 @@ pub struct AtomicFile {
     temp_path: PathBuf,
     /// `None` once committed.
     writer: Option<BufWriter<tempfile::NamedTempFile>>,
+    /// Bytes written since the kernel was last asked to start writing the
+    /// file back ([`WRITEBACK_EVERY`]).
+    unsent: u64,
 }
+
+/// Bytes after which the kernel is asked to start writing the temporary
+/// back to disk (Linux `sync_file_range`, without waiting): otherwise a
+/// large output waits in the page cache until the commit's `fsync`, which
+/// for 600 MB of decompressed streamlines was a tenth of the run; started
+/// early, the disk writes while the codec works.
+const WRITEBACK_EVERY: u64 = 32 << 20;
 
 impl AtomicFile {
     /// A temporary file in the directory of `target` (so that the final
@@ -157,6 +167,7 @@ impl AtomicFile {
             destination,
             temp_path,
             writer: Some(BufWriter::with_capacity(1 << 20, temp)),
+            unsent: 0,
         })
     }
 
@@ -210,6 +221,27 @@ impl AtomicFile {
             .ok_or_else(|| io::Error::other("output already committed"))
     }
 
+    /// Counts `n` bytes written, and every [`WRITEBACK_EVERY`] asks the
+    /// kernel to start writing back what has reached the file (advice:
+    /// the commit's `fsync` is what makes the file durable).
+    fn sent(&mut self, n: usize) {
+        self.unsent += n as u64;
+        if self.unsent < WRITEBACK_EVERY {
+            return;
+        }
+        self.unsent = 0;
+        #[cfg(target_os = "linux")]
+        if let Some(w) = &self.writer {
+            use std::os::unix::io::AsRawFd;
+            let fd = w.get_ref().as_file().as_raw_fd();
+            // SAFETY: `fd` is the open temporary's descriptor, borrowed for
+            // the call; offset 0 and length 0 mean the whole file.
+            unsafe {
+                libc::sync_file_range(fd, 0, 0, libc::SYNC_FILE_RANGE_WRITE);
+            }
+        }
+    }
+
     /// An `IoError` about this file from an I/O error while writing.
     pub fn err(&self, e: io::Error) -> IoError {
         IoError::os(&self.target, "cannot write", e)
@@ -226,10 +258,14 @@ impl Drop for AtomicFile {
 
 impl Write for AtomicFile {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        self.writer()?.write(buf)
+        let n = self.writer()?.write(buf)?;
+        self.sent(n);
+        Ok(n)
     }
     fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
-        self.writer()?.write_all(buf)
+        self.writer()?.write_all(buf)?;
+        self.sent(buf.len());
+        Ok(())
     }
     fn flush(&mut self) -> io::Result<()> {
         self.writer()?.flush()
@@ -252,6 +288,37 @@ mod tests {
         let mut f = AtomicFile::create(target)?;
         f.write_all(text.as_bytes()).map_err(|e| f.err(e))?;
         f.commit()
+    }
+
+    #[test]
+    fn a_large_output_is_written_whole_past_the_early_writebacks() {
+        // Past WRITEBACK_EVERY twice (the kernel asked to start writing
+        // back on the way): every byte arrives, in order, only at commit.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.bin");
+        let chunk = |k: u64| -> Vec<u8> { (0..1u64 << 20).map(|i| (i * 31 + k) as u8).collect() };
+        let chunks = 2 * (WRITEBACK_EVERY >> 20) + 3;
+        let mut f = AtomicFile::create(&path).unwrap();
+        for k in 0..chunks {
+            let c = chunk(k);
+            if k % 2 == 0 {
+                f.write_all(&c).unwrap();
+            } else {
+                let mut rest = &c[..];
+                while !rest.is_empty() {
+                    let n = f.write(rest).unwrap();
+                    rest = &rest[n..];
+                }
+            }
+        }
+        assert!(!path.exists());
+        f.commit().unwrap();
+        let back = std::fs::read(&path).unwrap();
+        assert_eq!(back.len() as u64, chunks << 20);
+        for k in 0..chunks {
+            let at = (k << 20) as usize;
+            assert!(back[at..at + (1 << 20)] == chunk(k)[..], "chunk {k}");
+        }
     }
 
     #[cfg(unix)]
