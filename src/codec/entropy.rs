@@ -367,7 +367,15 @@ impl<'a> Decoder<'a> {
         if ctx.p == 0 {
             ctx.start(self.adaptation);
         }
-        let bound = (self.range >> ctx.prob_bits()) * ctx.p as u32;
+        let bit = self.decide((self.range >> ctx.prob_bits()) * ctx.p as u32);
+        ctx.update(bit);
+        bit
+    }
+
+    /// The bit whose 0 takes the range's first `bound`, the range then
+    /// renormalised.
+    #[inline]
+    fn decide(&mut self, bound: u32) -> bool {
         let bit = self.code >= bound;
         if bit {
             self.code -= bound;
@@ -375,7 +383,6 @@ impl<'a> Decoder<'a> {
         } else {
             self.range = bound;
         }
-        ctx.update(bit);
         self.normalise();
         bit
     }
@@ -397,15 +404,7 @@ impl<'a> Decoder<'a> {
         };
         let mut v = 0u64;
         for _ in 0..n {
-            let bound = (self.range >> bits) << (bits - 1);
-            let bit = self.code >= bound;
-            if bit {
-                self.code -= bound;
-                self.range -= bound;
-            } else {
-                self.range = bound;
-            }
-            self.normalise();
+            let bit = self.decide((self.range >> bits) << (bits - 1));
             v = (v << 1) | bit as u64;
         }
         v
