@@ -250,7 +250,9 @@ impl Encoder {
 
     /// Codes `bit` in the adaptive context `ctx`.
     pub fn bit(&mut self, ctx: &mut Bit, bit: bool) {
-        ctx.start(self.adaptation);
+        if ctx.p == 0 {
+            ctx.start(self.adaptation);
+        }
         if let Some(t) = self.tally.as_mut() {
             t[self.tag] += ctx.cost(bit) as f64 / 256.0;
         }

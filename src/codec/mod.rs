@@ -846,7 +846,7 @@ fn choose(
     arcs_scale: f64,
 ) -> (CurveCode, usize, u64) {
     if points.is_empty() {
-        neighbours.push_grid(Vec::new());
+        neighbours.push_empty();
         return (CurveCode::Empty, 0, 0);
     }
     // The arcs' estimate, scaled by what arcs have really cost against

@@ -114,23 +114,22 @@ impl Resolved<'_> {
 /// is exact where the `f64` form is (every codable input) and took a fifth
 /// of the decoder's time in `f64`.
 fn quarter_nearest(base: [i64; 3], trend: [i64; 3]) -> [i64; 3] {
-    match quarters([0, 1, 2].map(|a| base[a].checked_mul(4).and_then(|b| b.checked_add(trend[a]))))
-    {
+    match quarters([0, 1, 2].map(|a| 4 * base[a] as i128 + trend[a] as i128)) {
         Some(x) => nearest_in_quarters(x),
         None => base,
     }
 }
 
 /// Quarter-unit coordinates that are codable ([`bcc_nearest`]'s limit),
-/// or `None` (also for an overflowed `None` coordinate).
+/// as `i64`, or `None`. In `i128`: a corrupt stream's wrapped lattice
+/// values can be anything.
 #[inline]
-fn quarters(x: [Option<i64>; 3]) -> Option<[i64; 3]> {
-    let limit = 4 * (1i64 << super::entropy::MAX_BITS);
-    match x {
-        [Some(a), Some(b), Some(c)] if a.abs() < limit && b.abs() < limit && c.abs() < limit => {
-            Some([a, b, c])
-        }
-        _ => None,
+fn quarters(x: [i128; 3]) -> Option<[i64; 3]> {
+    let limit = 4 * (1i128 << super::entropy::MAX_BITS);
+    if x.iter().all(|c| c.abs() < limit) {
+        Some(x.map(|c| c as i64))
+    } else {
+        None
     }
 }
 
@@ -153,10 +152,16 @@ fn nearest_in_quarters(x: [i64; 3]) -> [i64; 3] {
 /// The lattice point nearest the midpoint of two lattice points (in
 /// half-step units; all coordinates of a point share a parity), or `a`
 /// where that is not codable: as `bcc_nearest` finds it from the midpoint
-/// in `f64`, exactly (for coordinates below 2^52), in integers, which
-/// halved the time two-reference curves take to decode.
+/// in `f64`, exactly: in integers, which halved the time two-reference
+/// curves take to decode, and in `f64` as before for coordinates from
+/// 2^52 on (only a corrupt stream's), where the `f64` sum rounds.
 fn midpoint(a: [i64; 3], b: [i64; 3]) -> [i64; 3] {
-    match quarters([0, 1, 2].map(|k| a[k].checked_add(b[k]).and_then(|s| s.checked_mul(2)))) {
+    const EXACT: u64 = 1 << 52;
+    if a.iter().chain(&b).any(|v| v.unsigned_abs() >= EXACT) {
+        let m = [0, 1, 2].map(|k| (a[k] as f64 + b[k] as f64) * 0.5);
+        return bcc_nearest(DVec3::from_array(m), 1.0).unwrap_or(a);
+    }
+    match quarters([0, 1, 2].map(|k| 2 * (a[k] as i128 + b[k] as i128))) {
         Some(x) => nearest_in_quarters(x),
         None => a,
     }
@@ -183,7 +188,9 @@ pub fn regrid(points: &[DVec3], half: f64) -> Vec<[i64; 3]> {
 pub struct Neighbours {
     half: f64,
     grids: Vec<Vec<[i64; 3]>>,
-    /// Decoded points of the last [`MAX_BACK`] curves (older ones dropped).
+    /// Decoded points of the last [`MAX_BACK`] curves sent as arcs or raw
+    /// (`None` for lattice curves, whose points `grids` holds, for empty
+    /// ones, and once dropped).
     points: Vec<Option<Vec<DVec3>>>,
     /// Whether `grids[k]` holds curve `k` on the lattice yet.
     gridded: Vec<bool>,
@@ -267,7 +274,8 @@ impl Neighbours {
         match self.points.get(k)? {
             Some(p) => walk_with_middle(p.len(), |i| p[i], at_end, distance),
             None => {
-                // A lattice curve (an empty grid: an empty curve).
+                // A lattice curve (an empty grid: an empty or a dropped
+                // curve, no walk).
                 let (g, h) = (self.grids.get(k)?, self.half);
                 walk_with_middle(g.len(), |i| bcc_point(g[i], h), at_end, distance)
             }
@@ -321,9 +329,9 @@ impl Neighbours {
         self.grids.is_empty()
     }
 
-    /// A curve already on the lattice.
-    pub fn push_grid(&mut self, g: Vec<[i64; 3]>) {
-        self.grids.push(g);
+    /// An empty curve (no reference, no anchor, no walk).
+    pub fn push_empty(&mut self) {
+        self.grids.push(Vec::new());
         self.gridded.push(true);
         self.points.push(None);
         self.push_ends(None);
@@ -343,7 +351,7 @@ impl Neighbours {
     }
 
     /// Points and grids further back than a reference can reach are
-    /// dropped (their storage kept for the next curves). The encoder pushes
+    /// dropped (the grids' storage kept for the next curves). The encoder pushes
     /// a curve before coding it and the decoder after decoding it, so one
     /// more than [`MAX_BACK`] is kept: both then see the same [`MAX_BACK`]
     /// curves before the one being coded.
@@ -579,6 +587,20 @@ mod tests {
             [limit - 1, 0, 0]
         );
         assert_eq!(quarter_nearest([i64::MAX, 0, 0], [0; 3]), [i64::MAX, 0, 0]);
+        // Where 4·base leaves i64 but the sum comes back: as in i128 (the
+        // f64 form rounds there; these only come from corrupt streams).
+        assert_eq!(
+            quarter_nearest([-(1 << 61), 1, 1], [0; 3]),
+            [-(1 << 61), 1, 1]
+        );
+        assert_eq!(
+            quarter_nearest([1 << 61, 0, 0], [i64::MIN, 0, 0]),
+            [0, 0, 0]
+        );
+        assert_eq!(
+            quarter_nearest([-(1 << 61) - 1, 1, 1], [i64::MAX, 0, 0]),
+            [-1, 1, 1]
+        );
     }
 
     #[test]
@@ -615,9 +637,17 @@ mod tests {
             let (a, b) = (lattice(&mut rng), lattice(&mut rng));
             assert_eq!(midpoint(a, b), f64_form(a, b), "{a:?} {b:?}");
         }
-        // Beyond the codable range (and beyond i64 when doubled): `a`.
+        // Beyond the codable range (and beyond i64 when doubled): `a`; and
+        // a corrupt stream's huge values, as the f64 form has them.
         assert_eq!(midpoint([limit, 0, 0], [limit, 0, 0]), [limit, 0, 0]);
         assert_eq!(midpoint([i64::MAX, 0, 0], [1, 0, 0]), [i64::MAX, 0, 0]);
+        for (a, b) in [
+            ([-(1i64 << 61), 0, 0], [-(1i64 << 61), 0, 0]),
+            ([(1i64 << 60) + 3, 3, 3], [-(1i64 << 60) + 3, 3, 3]),
+            ([i64::MIN, 1, 1], [i64::MAX, 1, 1]),
+        ] {
+            assert_eq!(midpoint(a, b), f64_form(a, b), "{a:?} {b:?}");
+        }
     }
 
     #[test]

@@ -559,3 +559,73 @@ fn the_arcs_search_gives_up_where_the_calibration_says_points_are_cheaper() {
     assert_eq!(estimated_bits(&code), arcs);
     assert!(hausdorff(&helix, &decoded).unwrap() <= tol);
 }
+
+/// `decompress_range` writes the curves in order however its groups are
+/// pipelined, from any thread: a one-thread pool's only worker (which
+/// must decode the next group itself while it waits), a two-thread pool,
+/// and a range that starts and ends inside groups.
+#[test]
+fn decompress_writes_in_order_from_inside_any_pool() {
+    use crate::io::{Curve, CurveWriter, Format, IoError, Metadata, SourceMeta};
+    use container::{encode_block_bytes, CodecHeader, CodecReader, CodecWriter, CurveIn};
+    struct Collect(Vec<Curve>);
+    impl CurveWriter for Collect {
+        fn write_curve(&mut self, c: &Curve) -> Result<(), IoError> {
+            self.0.push(c.clone());
+            Ok(())
+        }
+        fn finish(self: Box<Self>) -> Result<(), IoError> {
+            Ok(())
+        }
+    }
+    let meta = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);
+    let header = CodecHeader::new(0.01, meta, vec![]);
+    let mut w = CodecWriter::in_memory(&header);
+    // 11 blocks of one curve: groups of at least four, the last partial.
+    let blocks = 11;
+    for k in 0..blocks {
+        let points: Vec<DVec3> = (0..20)
+            .map(|i| 0.2 * i as f64)
+            .map(|s| DVec3::new(s.cos(), s.sin(), 0.05 * s + k as f64))
+            .collect();
+        let id = format!("c{k}");
+        let c = CurveIn {
+            id: Some(&id),
+            points: &points,
+            point_data: &[],
+            curve_data: &[],
+        };
+        w.write_block(&encode_block_bytes(&[c], &header.params(), 0, 0).unwrap())
+            .unwrap();
+    }
+    let bytes = w.finish_bytes().unwrap();
+    let map = |c| stream::output_curve(c, None, None, 0);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for range in [0..blocks as u64, 3..9] {
+            let mut reader = CodecReader::from_bytes(bytes.clone()).unwrap();
+            let mut out = Collect(Vec::new());
+            let n = pool
+                .install(|| {
+                    stream::decompress_range(
+                        &mut reader,
+                        &mut out,
+                        &map,
+                        range.clone(),
+                        &mut |_| {},
+                    )
+                })
+                .unwrap();
+            let ids: Vec<String> = out.0.iter().map(|c| c.id.clone().unwrap()).collect();
+            let want: Vec<String> = range.clone().map(|k| format!("c{k}")).collect();
+            assert_eq!(
+                (n, ids),
+                (want.len() as u64, want),
+                "{threads} threads, {range:?}"
+            );
+        }
+    }
+}
