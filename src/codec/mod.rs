@@ -597,14 +597,22 @@ fn lattice_bits(d: [i64; 3]) -> u64 {
 
 /// [`lattice_bits`] without its steps at powers of two: choosing among
 /// nearby lattice points, the smaller residual is the cheaper one.
-fn smooth_lattice_bits(d: [i64; 3]) -> f64 {
+/// (The residual of two lattice points has one parity on all three axes,
+/// so each axis's part is its own: [`quantise::AxisCost`].)
+fn smooth_lattice_bits() -> quantise::AxisCost<impl Fn(i64) -> f64 + Copy> {
+    quantise::AxisCost {
+        base: 1.0,
+        axis: smooth_axis_bits,
+    }
+}
+
+/// One axis's part of [`smooth_lattice_bits`]: the zero flag, and the
+/// magnitude of the half residual as a log.
+fn smooth_axis_bits(v: i64) -> f64 {
     // log₂(1 + x) with the mantissa taken linearly: a libm log₂ here was a
     // tenth of the encoder's time.
     let log2_1p = |x: u64| entropy::linear_log2(x.saturating_add(1) as f64);
-    let b = d[0] & 1;
-    1.0 + (0..3)
-        .map(|a| 1.0 + 2.0 * log2_1p(((d[a] - b) / 2).unsigned_abs()))
-        .sum::<f64>()
+    1.0 + 2.0 * log2_1p(((v - (v & 1)) / 2).unsigned_abs())
 }
 
 /// Codes the residuals of a points curve's `grid` after its start against
@@ -798,7 +806,7 @@ fn slid_points(
             g[0],
             SLIDE_BEAM,
             |g: &[[i64; 3]], k| own_prediction(g, k, helix, screw),
-            smooth_lattice_bits,
+            smooth_lattice_bits(),
             lattice_bits,
         )
         .filter(|(_, residuals)| *residuals < bits - own_start_bits),
@@ -820,7 +828,7 @@ fn slid_points(
                 g[0],
                 SLIDE_BEAM,
                 |g: &[[i64; 3]], k| res.predict_in(g, k, n),
-                smooth_lattice_bits,
+                smooth_lattice_bits(),
                 lattice_bits,
             )
             .filter(|(_, residuals)| *residuals < bits - start_bits)
