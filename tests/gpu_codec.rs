@@ -21,6 +21,32 @@ fn curves(path: &Path, n: usize) -> Vec<Vec<DVec3>> {
     cs.into_iter().take(n).map(|c| c.points).collect()
 }
 
+/// `n` bending fibres of 40 points jittered by Gaussian noise of 0.05 on
+/// each axis: at 0.1 points win, so after the block's first chunk only a
+/// sample of the arcs searches runs (the GPU path must skip the same ones).
+fn jittered_fibres(n: usize) -> Vec<Vec<DVec3>> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let mut gauss = move || {
+        let (u, v): (f64, f64) = (rng.gen_range(1e-12..1.0), rng.gen_range(0.0..1.0));
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos() * 0.05
+    };
+    (0..n)
+        .map(|c| {
+            (0..40)
+                .map(|k| {
+                    let s = 1.5 * k as f64;
+                    DVec3::new(
+                        s,
+                        20.0 * (s / 25.0 + 0.01 * c as f64).sin(),
+                        10.0 * (s / 15.0).cos(),
+                    ) + DVec3::new(gauss(), gauss(), gauss())
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// A data set: name, curves, the two tolerances.
 type DataSet = (&'static str, Vec<Vec<DVec3>>, [f64; 2]);
 
@@ -37,6 +63,7 @@ fn data() -> Vec<DataSet> {
         ),
         [0.1, 0.5],
     )];
+    sets.push(("jittered fibres", jittered_fibres(600), [0.1, 0.5]));
     if let Some(p) = common::shared_data("hair/synthetic_hair.hair") {
         sets.push(("hair", curves(&p, 300), [0.1, 0.5]));
     }

@@ -629,3 +629,64 @@ fn decompress_writes_in_order_from_inside_any_pool() {
         }
     }
 }
+
+#[test]
+fn the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does() {
+    // The bookkeeping: nothing learned searches all; a saving under the
+    // share samples; at the share, all again.
+    let mut w = ArcsWorth::default();
+    assert!(w.pays());
+    w.add(10_000, 0);
+    assert!(!w.pays());
+    w.add(0, 60);
+    assert!(w.pays(), "{} of {}", w.saved, w.total);
+
+    // A block of 768 jittered fibres (points win) and then 512 smooth
+    // helices (arcs far cheaper): the fibres' later chunks search only a
+    // sample, and the helices' sample turns the full search back on, so
+    // the last chunk goes as arcs. Every curve within the tolerance.
+    let tol = 0.1;
+    let mut rng = ChaCha8Rng::seed_from_u64(43);
+    let gauss = move |rng: &mut ChaCha8Rng| {
+        let (u, v): (f64, f64) = (rng.gen_range(1e-12..1.0), rng.gen_range(0.0..1.0));
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos() * tol / 2.0
+    };
+    let mut curves = Vec::new();
+    for c in 0..768 {
+        let phase = c as f64 * 0.01;
+        curves.push(
+            (0..40)
+                .map(|k| {
+                    let s = 1.5 * k as f64;
+                    DVec3::new(s, 20.0 * (s / 25.0 + phase).sin(), 10.0 * (s / 15.0).cos())
+                        + DVec3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng))
+                })
+                .collect::<Vec<_>>(),
+        );
+    }
+    for c in 0..512 {
+        let r = 3.0 + (c % 7) as f64 * 0.5;
+        curves.push(
+            (0..80)
+                .map(|k| 0.05 * k as f64)
+                .map(|s| DVec3::new(r * s.cos(), r * s.sin(), 0.7 * s + c as f64))
+                .collect::<Vec<_>>(),
+        );
+    }
+    let block = check_block(&curves, tol);
+    let arcs =
+        |range: std::ops::Range<usize>| block.kinds[range].iter().filter(|&&k| k == 2).count();
+    let noisy = arcs(0..768);
+    assert!(noisy < 40, "{noisy} noisy fibres went as arcs");
+    let last = arcs(1024..1280);
+    assert!(
+        last >= 250,
+        "only {last} of the last 256 helices went as arcs"
+    );
+    // And the sampled chunk's helices: the sample's arcs, the rest points.
+    let sampled = arcs(768..1024);
+    assert!(
+        (8..=32).contains(&sampled),
+        "{sampled} of the first helix chunk as arcs"
+    );
+}
