@@ -597,6 +597,7 @@ impl<'a> CurveEncoder<'a> {
             grid: idx,
             reference: None,
             helix: false,
+            along: false,
         })
     }
 }

@@ -550,3 +550,106 @@ mod tests {
         assert!(best_rotation(&line, &line).is_none());
     }
 }
+
+/// The along-step prediction of a points residual (codec model 10).
+///
+/// A curve sampled at equal steps (tractography tracked at a fixed step or
+/// resampled to a fixed count, hair strands of equal segments) turns but
+/// keeps its step length, so a prediction misses across the step, not
+/// along it. With the predicted step `s = pred − g[k−1]` (lattice units)
+/// and the last step's squared length `ℓ² = |g[k−1] − g[k−2]|²`, the axis
+/// `m` on which `s` is longest is coded after the other two, against the
+/// value that makes the step `t = s + d` as long as the last:
+/// `t_m = sign(s_m)·√(ℓ² − Σ_{a≠m} t_a²)`. Where the root has no real
+/// value, or the values are beyond any lattice's, the prediction is 0 (the
+/// coding of model 9).
+///
+/// ```
+/// use strandfit::codec::AlongStep;
+/// // Last step (10, 0, 0); the prediction repeats it; the curve turns by
+/// // 6 lattice units in y: the step stays 10 long if x falls back by 2.
+/// let a = AlongStep::new([10, 0, 0], [10, 0, 0]);
+/// assert_eq!(a.axis(), 0);
+/// // Residual (?, 6, 0) of parity 0: t = (8, 6, 0), so d_x = −2, half −1.
+/// assert_eq!(a.half_prediction([0, 6, 0], 0), -1);
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct AlongStep {
+    step: [f64; 3],
+    axis: usize,
+    last2: f64,
+}
+
+impl AlongStep {
+    /// Beyond this (lattice units) the prediction is 0.
+    const LIMIT: f64 = (1u64 << 30) as f64;
+
+    /// From the predicted step `pred − g[k−1]` and the last step
+    /// `g[k−1] − g[k−2]`.
+    pub fn new(step: [i64; 3], last: [i64; 3]) -> Self {
+        let l = last.map(|v| v as f64);
+        AlongStep {
+            step: step.map(|v| v as f64),
+            axis: Self::axis_of(step),
+            last2: l[0] * l[0] + l[1] * l[1] + l[2] * l[2],
+        }
+    }
+
+    /// The axis on which `step` is longest (the first of equal ones), in
+    /// integers: all that a curve without the along flag needs.
+    pub fn axis_of(step: [i64; 3]) -> usize {
+        let s = step.map(i64::unsigned_abs);
+        if s[1] > s[0] {
+            if s[2] > s[1] {
+                2
+            } else {
+                1
+            }
+        } else if s[2] > s[0] {
+            2
+        } else {
+            0
+        }
+    }
+
+    /// The axis coded last, against the prediction.
+    pub fn axis(&self) -> usize {
+        self.axis
+    }
+
+    /// The predicted halved residual `(d_m − b)/2` on [`AlongStep::axis`],
+    /// given the residual's other two coordinates (`d[axis]` is not read)
+    /// and its parity `b`.
+    pub fn half_prediction(&self, d: [i64; 3], b: i64) -> i64 {
+        let m = self.axis;
+        let sm = self.step[m];
+        if !(sm != 0.0 && sm.abs() < Self::LIMIT && self.last2 < Self::LIMIT * Self::LIMIT) {
+            return 0;
+        }
+        let mut r = self.last2;
+        for a in 0..3 {
+            if a != m {
+                let t = self.step[a] + d[a] as f64;
+                r -= t * t;
+            }
+        }
+        if !(r > 0.0) {
+            return 0;
+        }
+        let h = ((r.sqrt().copysign(sm) - sm - b as f64) / 2.0).round();
+        if h.abs() < Self::LIMIT {
+            h as i64
+        } else {
+            0
+        }
+    }
+
+    /// The residual `d` as coded: its along coordinate less twice the
+    /// prediction (the same parity), the others as they are.
+    pub fn coded(&self, d: [i64; 3]) -> [i64; 3] {
+        let b = d[0] & 1;
+        let mut c = d;
+        c[self.axis] = d[self.axis].wrapping_sub(2 * self.half_prediction(d, b));
+        c
+    }
+}

@@ -293,6 +293,7 @@ pub fn cheapest_points(
     predict: impl Fn(&[[i64; 3]], usize) -> [i64; 3],
     cost: AxisCost<impl Fn(i64) -> f64>,
     rate: impl Fn([i64; 3]) -> u64,
+    along: bool,
 ) -> Option<(Vec<[i64; 3]>, u64)> {
     use super::check::dist2_to_segment;
     /// One partial choice: its last point, its parent (an index into
@@ -352,6 +353,15 @@ pub fn cheapest_points(
             };
             let pred = predict(&scratch[..k], k);
             let diff = |q: [i64; 3]| [0, 1, 2].map(|a| q[a].wrapping_sub(pred[a]));
+            // Model 10 codes the coordinate along the step against the
+            // step length (`AlongStep`): residuals are costed as coded.
+            let step = (along && k >= 2).then(|| {
+                super::predict::AlongStep::new(
+                    [0, 1, 2].map(|a| pred[a].wrapping_sub(node.q[a])),
+                    [0, 1, 2].map(|a| node.q[a].wrapping_sub(scratch[k - 2][a])),
+                )
+            });
+            let coded = |d: [i64; 3]| step.map_or(d, |st| st.coded(d));
             let parent = pi as u32;
             let mut push = |q: [i64; 3], c: f64| {
                 let cost = node.cost + c;
@@ -361,7 +371,7 @@ pub fn cheapest_points(
                             q,
                             parent,
                             cost,
-                            rate: node.rate + rate(diff(q)),
+                            rate: node.rate + rate(coded(diff(q))),
                         };
                     }
                 } else {
@@ -369,13 +379,13 @@ pub fn cheapest_points(
                         q,
                         parent,
                         cost,
-                        rate: node.rate + rate(diff(q)),
+                        rate: node.rate + rate(coded(diff(q))),
                     });
                 }
             };
             // The nearest point is always feasible: it is within the
             // tolerance of the vertex, which ends both segments.
-            let c_near = cost.of(diff(nearest));
+            let c_near = cost.of(coded(diff(nearest)));
             push(nearest, c_near);
             // Candidates: the prediction, and lattice points around the
             // places on the input nearest it and on the way from there
@@ -416,7 +426,7 @@ pub fn cheapest_points(
                 }
                 top[i] = (c, q);
             };
-            consider(pred, cost.of([0; 3]), &mut top, &mut kept);
+            consider(pred, cost.of(coded([0; 3])), &mut top, &mut kept);
             let p = bcc_point(pred, half);
             let foot = |a: glam::DVec3, b: glam::DVec3| {
                 let d = b - a;
@@ -459,10 +469,18 @@ pub fn cheapest_points(
                         least[a] = least[a].min(*t);
                     }
                 }
+                // Along the step the coded value is any: its cost is at
+                // least the axis cost's least, at 0.
+                if let Some(st) = step {
+                    least[st.axis()] = (cost.axis)(0);
+                }
                 if !(cost.sum(least) < bar(&top, kept)) {
                     continue;
                 }
-                let at = |d: [i64; 3]| cost.sum([0, 1, 2].map(|a| terms[a][(d[a] + 2) as usize]));
+                let at = |d: [i64; 3]| match step {
+                    Some(_) => cost.of(coded([0, 1, 2].map(|a| e[a] + d[a]))),
+                    None => cost.sum([0, 1, 2].map(|a| terms[a][(d[a] + 2) as usize])),
+                };
                 consider(centre, at([0; 3]), &mut top, &mut kept);
                 for d in BCC_NEIGHBOURS {
                     consider(
@@ -612,6 +630,7 @@ mod tests {
             second_order,
             RESIDUAL_COST,
             |_| 0,
+            false,
         )
         .unwrap()
         .0
