@@ -631,12 +631,9 @@ struct ResidualModels {
 }
 
 /// Model 10's along-step prediction of point `k ≥ 2` of `g` against
-/// `pred`.
-fn along_step(g: &[[i64; 3]], k: usize, pred: [i64; 3]) -> AlongStep {
-    AlongStep::new(
-        [0, 1, 2].map(|a| pred[a].wrapping_sub(g[k - 1][a])),
-        [0, 1, 2].map(|a| g[k - 1][a].wrapping_sub(g[k - 2][a])),
-    )
+/// `pred` (`window`: [`predict::step_window`] for `k`).
+fn along_step(g: &[[i64; 3]], k: usize, pred: [i64; 3], window: u64) -> AlongStep {
+    AlongStep::at(g, k, pred, window)
 }
 
 /// The two axes other than each, in order: coded before the along axis.
@@ -659,14 +656,18 @@ fn put_residuals(
     predict: impl Fn(usize) -> [i64; 3],
 ) {
     let mut ctx = RESIDUAL_CONTEXTS - 1;
+    let mut window = 0;
     for k in 1..grid.len() {
         let pred = predict(k);
         let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
+        if along == Some(true) {
+            window = predict::step_window(grid, k, window);
+        }
         match along.filter(|_| k >= 2) {
             Some(flag) => {
                 let b = d[0] & 1;
                 enc.bit(&mut models.parity[ctx], b != 0);
-                let step = flag.then(|| along_step(grid, k, pred));
+                let step = flag.then(|| along_step(grid, k, pred, window));
                 let m = step.map_or_else(|| along_axis(grid, k, pred), |s| s.axis());
                 for a in OTHER_AXES[m] {
                     models.axes[ctx][a].put(enc, (d[a] - b) / 2);
@@ -692,12 +693,21 @@ fn get_residuals(
     predict: impl Fn(&[[i64; 3]], usize) -> [i64; 3],
 ) {
     let mut ctx = RESIDUAL_CONTEXTS - 1;
+    let mut window = 0;
+    for k in 1..g.len() {
+        if along == Some(true) {
+            window = predict::step_window(g, k, window);
+        }
+    }
     for k in g.len()..n {
         let pred = predict(g, k);
+        if along == Some(true) {
+            window = predict::step_window(g, k, window);
+        }
         let d = match along.filter(|_| k >= 2) {
             Some(flag) => {
                 let b = dec.bit(&mut models.parity[ctx]) as i64;
-                let step = flag.then(|| along_step(g, k, pred));
+                let step = flag.then(|| along_step(g, k, pred, window));
                 let m = step.map_or_else(|| along_axis(g, k, pred), |s| s.axis());
                 let mut d = [0i64; 3];
                 for a in OTHER_AXES[m] {
@@ -729,10 +739,12 @@ fn along(model: u8) -> bool {
 /// start and the second point are coded alike either way).
 fn along_bits(g: &[[i64; 3]], predict: &dyn Fn(usize) -> [i64; 3]) -> (u64, u64) {
     let (mut on, mut off) = (0u64, 0u64);
+    let mut window = 0;
     for k in 2..g.len() {
         let p = predict(k);
         let d = [0, 1, 2].map(|a| g[k][a].wrapping_sub(p[a]));
-        on += lattice_bits(along_step(g, k, p).coded(d));
+        window = predict::step_window(g, k, window);
+        on += lattice_bits(along_step(g, k, p, window).coded(d));
         off += lattice_bits(d);
     }
     (on, off)

@@ -258,8 +258,10 @@ const SLIDE_CENTRES: [f64; 3] = [0.0, 0.5, 1.0];
 
 /// How far back a prediction given to [`cheapest_points`] may look: it
 /// reads only `g[k − PREDICT_LOOKBACK..k]` (the screw prediction reads
-/// seven points back, second order two, a reference's one).
-pub const PREDICT_LOOKBACK: usize = 8;
+/// seven points back, second order two, a reference's one, and model 10's
+/// along-step prediction `AlongStep::STEPS + 1`).
+pub const PREDICT_LOOKBACK: usize = 16;
+const _: () = assert!(super::predict::AlongStep::STEPS < PREDICT_LOOKBACK);
 
 /// Lattice points for the polyline `points`, the cheapest to code (`cost`
 /// of each difference from `predict`'s prediction, given the points chosen
@@ -304,6 +306,9 @@ pub fn cheapest_points(
         parent: u32,
         cost: f64,
         rate: u64,
+        /// The along-step window for the next vertex
+        /// (`predict::step_window`; 0 without `along`).
+        window: u64,
     }
     let n = points.len();
     if n == 0 {
@@ -320,6 +325,7 @@ pub fn cheapest_points(
         parent: 0,
         cost: 0.0,
         rate: 0,
+        window: 0,
     });
     level.push(1);
     let mut scratch = vec![[0i64; 3]; n];
@@ -355,12 +361,29 @@ pub fn cheapest_points(
             let diff = |q: [i64; 3]| [0, 1, 2].map(|a| q[a].wrapping_sub(pred[a]));
             // Model 10 codes the coordinate along the step against the
             // step length (`AlongStep`): residuals are costed as coded.
-            let step = (along && k >= 2).then(|| {
-                super::predict::AlongStep::new(
-                    [0, 1, 2].map(|a| pred[a].wrapping_sub(node.q[a])),
-                    [0, 1, 2].map(|a| node.q[a].wrapping_sub(scratch[k - 2][a])),
-                )
-            });
+            let step = (along && k >= 2)
+                .then(|| super::predict::AlongStep::at(&scratch[..k], k, pred, node.window));
+            // A child's window for the vertex after it: its step in, the
+            // step `STEPS` before out (in the scratch window).
+            let child_window = |q: [i64; 3]| {
+                if !along {
+                    return 0;
+                }
+                let step_in = (0..3)
+                    .map(|a| {
+                        let l = q[a].wrapping_sub(node.q[a]).unsigned_abs();
+                        l.saturating_mul(l)
+                    })
+                    .fold(0u64, u64::saturating_add);
+                let mut w = node.window.saturating_add(step_in);
+                if k > super::predict::AlongStep::STEPS {
+                    w = w.saturating_sub(super::predict::step_length2(
+                        &scratch[..k],
+                        k - super::predict::AlongStep::STEPS,
+                    ));
+                }
+                w
+            };
             let coded = |d: [i64; 3]| step.map_or(d, |st| st.coded(d));
             let parent = pi as u32;
             let mut push = |q: [i64; 3], c: f64| {
@@ -372,6 +395,7 @@ pub fn cheapest_points(
                             parent,
                             cost,
                             rate: node.rate + rate(coded(diff(q))),
+                            window: child_window(q),
                         };
                     }
                 } else {
@@ -380,6 +404,7 @@ pub fn cheapest_points(
                         parent,
                         cost,
                         rate: node.rate + rate(coded(diff(q))),
+                        window: child_window(q),
                     });
                 }
             };
@@ -477,9 +502,14 @@ pub fn cheapest_points(
                 if !(cost.sum(least) < bar(&top, kept)) {
                     continue;
                 }
-                let at = |d: [i64; 3]| match step {
-                    Some(_) => cost.of(coded([0, 1, 2].map(|a| e[a] + d[a]))),
-                    None => cost.sum([0, 1, 2].map(|a| terms[a][(d[a] + 2) as usize])),
+                let at = |d: [i64; 3]| {
+                    let mut t = [0, 1, 2].map(|a| terms[a][(d[a] + 2) as usize]);
+                    if let Some(st) = step {
+                        // Along the step: the coded value's cost.
+                        let m = st.axis();
+                        t[m] = (cost.axis)(coded([0, 1, 2].map(|a| e[a] + d[a]))[m]);
+                    }
+                    cost.sum(t)
                 };
                 consider(centre, at([0; 3]), &mut top, &mut kept);
                 for d in BCC_NEIGHBOURS {

@@ -806,3 +806,26 @@ fn along_step_prediction_keeps_the_step_length() {
         assert_eq!(coded[m] & 1, d[m] & 1);
     }
 }
+
+#[test]
+fn the_step_window_is_the_direct_sum_of_the_last_steps() {
+    // Random lattice walks: the running window (one step in, one out) is
+    // the sum of the squared lengths of steps max(1, k − STEPS)..k.
+    let mut rng = ChaCha8Rng::seed_from_u64(14);
+    for _ in 0..200 {
+        let n = rng.gen_range(2..60);
+        let mut g = vec![[0i64; 3]];
+        for _ in 1..n {
+            let last = *g.last().unwrap();
+            g.push(last.map(|v| v + rng.gen_range(-1000..1000)));
+        }
+        let mut w = 0;
+        for k in 1..n {
+            w = predict::step_window(&g, k, w);
+            let direct: u64 = (k.saturating_sub(AlongStep::STEPS).max(1)..k)
+                .map(|i| predict::step_length2(&g, i))
+                .sum();
+            assert_eq!(w, direct, "k {k}");
+        }
+    }
+}
