@@ -913,23 +913,28 @@ fn slid_points(
             (false, bits)
         }
     };
-    // The start stays: the residuals' estimates decide.
+    // The slide against `predict`, kept where its residuals are estimated
+    // under `limit` (the rounded points' residuals). The start stays: the
+    // residuals' estimates decide.
+    let slide = |predict: &dyn Fn(&[[i64; 3]], usize) -> [i64; 3], flag: bool, limit: u64| {
+        quantise::cheapest_points(
+            points,
+            half,
+            tol * tol,
+            g[0],
+            SLIDE_BEAM,
+            predict,
+            smooth_lattice_bits(),
+            lattice_bits,
+            flag,
+        )
+        .filter(|(_, residuals)| *residuals < limit)
+    };
     let (slid, flag) = match reference {
         None => {
             let (flag, bits) = flag(&|k| own_prediction(&g, k, helix, screw), bits);
-            let slid = quantise::cheapest_points(
-                points,
-                half,
-                tol * tol,
-                g[0],
-                SLIDE_BEAM,
-                |g: &[[i64; 3]], k| own_prediction(g, k, helix, screw),
-                smooth_lattice_bits(),
-                lattice_bits,
-                flag,
-            )
-            .filter(|(_, residuals)| *residuals < bits - own_start_bits);
-            (slid, flag)
+            let own = |g: &[[i64; 3]], k| own_prediction(g, k, helix, screw);
+            (slide(&own, flag, bits - own_start_bits), flag)
         }
         Some(rf) => {
             let grids = neighbours.window();
@@ -943,19 +948,8 @@ fn slid_points(
             // The estimate's part before the residuals (a one-point curve's).
             let start_bits = reference::reference_bits(&g[..1], &res, lattice_bits);
             let (flag, bits) = flag(&|k| res.predict_in(&g, k, n), bits);
-            let slid = quantise::cheapest_points(
-                points,
-                half,
-                tol * tol,
-                g[0],
-                SLIDE_BEAM,
-                |g: &[[i64; 3]], k| res.predict_in(g, k, n),
-                smooth_lattice_bits(),
-                lattice_bits,
-                flag,
-            )
-            .filter(|(_, residuals)| *residuals < bits - start_bits);
-            (slid, flag)
+            let predict = |g: &[[i64; 3]], k| res.predict_in(g, k, n);
+            (slide(&predict, flag, bits - start_bits), flag)
         }
     };
     (slid.map_or(g, |(c, _)| c), flag)
