@@ -866,6 +866,9 @@ fn helix_prediction(g: &[[i64; 3]], k: usize, screw: Screw) -> Option<[i64; 3]> 
     quantise::bcc_nearest(p, 1.0)
 }
 
+/// A prediction of lattice point `k` from the points before it.
+type LatticePredict<'a> = dyn Fn(&[[i64; 3]], usize) -> [i64; 3] + 'a;
+
 /// Partial choices the slide keeps from vertex to vertex
 /// ([`quantise::cheapest_points`]). Measured (2 cores, hair at 0.1 mm /
 /// fornix replicas at 0.1 mm): greedy 155,100 B in 0.58 s / 990 kB in
@@ -916,7 +919,7 @@ fn slid_points(
     // The slide against `predict`, kept where its residuals are estimated
     // under `limit` (the rounded points' residuals). The start stays: the
     // residuals' estimates decide.
-    let slide = |predict: &dyn Fn(&[[i64; 3]], usize) -> [i64; 3], flag: bool, limit: u64| {
+    let slide = |predict: &LatticePredict, flag: bool, limit: u64| {
         quantise::cheapest_points(
             points,
             half,
