@@ -142,11 +142,12 @@ impl Bit {
             s
         };
         let one = 1u16 << self.prob_bits();
-        if bit {
-            self.p -= self.p >> shift;
-        } else {
-            self.p += (one - self.p) >> shift;
-        }
+        // Both moves, one selected by a mask: a branch on the bit would be
+        // mispredicted about as often as the bit is hard to predict.
+        let mask = (bit as u16).wrapping_neg();
+        let down = self.p >> shift;
+        let up = (one - self.p) >> shift;
+        self.p = self.p.wrapping_sub(down & mask).wrapping_add(up & !mask);
     }
 }
 
@@ -379,12 +380,10 @@ impl<'a> Decoder<'a> {
     #[inline]
     fn decide(&mut self, bound: u32) -> bool {
         let bit = self.code >= bound;
-        if bit {
-            self.code -= bound;
-            self.range -= bound;
-        } else {
-            self.range = bound;
-        }
+        // Without a branch on the bit (as in `Bit::update`).
+        let mask = (bit as u32).wrapping_neg();
+        self.code = self.code.wrapping_sub(bound & mask);
+        self.range = (self.range.wrapping_sub(bound) & mask) | (bound & !mask);
         self.normalise();
         bit
     }

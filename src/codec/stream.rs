@@ -320,10 +320,9 @@ fn read_group(
     Ok(batches)
 }
 
-/// Blocks decoded at once (in parallel) by [`decompress_stream`], at least
-/// (one per thread where there are more): while one group is written the
-/// next decodes, so a group a few blocks long keeps the pipeline's start
-/// and end short (8 measured no faster on 2 cores, 2 no faster either).
+/// Blocks [`decompress_stream`] decodes at once, at least (one per thread
+/// where there are more): up to twice as many are decoded or decoding and
+/// not yet written (a window of 4 or 16 on 2 cores measured no faster).
 const BLOCKS_AT_ONCE: usize = 4;
 
 /// Writes every curve of the container to `writer` (which the caller
@@ -448,67 +447,87 @@ pub fn decompress_range(
             first < range.end && first + count > range.start
         })
         .collect();
-    let decode_group = |raw: Vec<RawBlock>| -> Vec<Result<Vec<Curve>, IoError>> {
-        raw.par_iter()
-            .map(|b| {
-                b.decode(&path, &header).map(|cs| {
-                    cs.into_iter()
-                        .enumerate()
-                        .filter(|(k, _)| range.contains(&(b.first + *k as u64)))
-                        .map(|(_, c)| map(c))
-                        .collect()
-                })
-            })
-            .collect()
+    let decode = |b: RawBlock| -> Result<Vec<Curve>, IoError> {
+        b.decode(&path, &header).map(|cs| {
+            cs.into_iter()
+                .enumerate()
+                .filter(|(k, _)| range.contains(&(b.first + *k as u64)))
+                .map(|(_, c)| map(c))
+                .collect()
+        })
     };
-    let decode_group = &decode_group;
-    let mut write_group = |decoded: Vec<Result<Vec<Curve>, IoError>>| -> Result<(), IoError> {
-        for block in decoded {
-            for c in block? {
-                writer.write_curve(&c)?;
-                written += 1;
-            }
-        }
-        progress(written);
-        Ok(())
-    };
-    // The writer (this thread) writes one group while the next decodes on
-    // the pool: the writing is sequential, and in turns it left a core
-    // idle for a fifth of the run. In the caller's pool (`in_place_scope`:
-    // from a worker, this thread helps while it waits).
-    let group = BLOCKS_AT_ONCE.max(rayon::current_num_threads());
-    let mut ready: Option<Vec<Result<Vec<Curve>, IoError>>> = None;
-    for blocks in wanted.chunks(group) {
-        let raw = match blocks
-            .iter()
-            .map(|&b| reader.read_block_bytes(b))
-            .collect::<Result<Vec<_>, _>>()
-        {
-            Ok(raw) => raw,
-            Err(e) => {
-                // The curves before the unreadable block first, as they
-                // come in the file.
-                if let Some(decoded) = ready.take() {
-                    write_group(decoded)?;
+    let decode = &decode;
+    // A window of blocks decodes on the pool, each block as soon as a
+    // thread is free, while this thread writes them in order: with groups
+    // of blocks between barriers, a group's last block left a core idle
+    // (a twentieth of the run on 2 cores). At most `window` blocks are
+    // decoded and not yet written, which bounds the memory.
+    let window = 2 * BLOCKS_AT_ONCE.max(rayon::current_num_threads());
+    let (sender, receiver) = std::sync::mpsc::channel::<(usize, Result<Vec<Curve>, IoError>)>();
+    let mut waiting: Vec<Option<Result<Vec<Curve>, IoError>>> = Vec::new();
+    waiting.resize_with(wanted.len(), || None);
+    let mut outcome = Ok(());
+    rayon::in_place_scope_fifo(|s| {
+        let mut spawned = 0;
+        let mut unreadable: Option<IoError> = None;
+        for i in 0..wanted.len() {
+            while unreadable.is_none() && spawned < wanted.len() && spawned < i + window {
+                match reader.read_block_bytes(wanted[spawned]) {
+                    Ok(raw) => {
+                        let (sender, k) = (sender.clone(), spawned);
+                        s.spawn_fifo(move |_| {
+                            // The receiver is gone only after an error.
+                            let _ = sender.send((k, decode(raw)));
+                        });
+                        spawned += 1;
+                    }
+                    Err(e) => unreadable = Some(e),
                 }
-                return Err(e);
             }
-        };
-        let mut next = None;
-        let mut wrote = Ok(());
-        rayon::in_place_scope(|s| {
-            s.spawn(|_| next = Some(decode_group(raw)));
-            if let Some(decoded) = ready.take() {
-                wrote = write_group(decoded);
+            if i == spawned {
+                // The curves before the unreadable block are written.
+                outcome = Err(unreadable.take().expect("stopped at an unreadable block"));
+                return;
             }
-        });
-        wrote?;
-        ready = next;
-    }
-    if let Some(decoded) = ready {
-        write_group(decoded)?;
-    }
+            while waiting[i].is_none() {
+                let (k, decoded) = receive(&receiver);
+                waiting[k] = Some(decoded);
+            }
+            let written_block = waiting[i].take().expect("received").and_then(|curves| {
+                for c in curves {
+                    writer.write_curve(&c)?;
+                    written += 1;
+                }
+                Ok(())
+            });
+            if let Err(e) = written_block {
+                outcome = Err(e);
+                return;
+            }
+            progress(written);
+        }
+    });
+    outcome?;
     Ok(written)
+}
+
+/// The next decoded block from the pool: blocking where this thread is not
+/// one of the pool's, else running the pool's queued work while it waits
+/// (a blocked worker could leave the blocks it waits for undecoded).
+fn receive<T>(receiver: &std::sync::mpsc::Receiver<T>) -> T {
+    if rayon::current_thread_index().is_none() {
+        return receiver
+            .recv()
+            .expect("a sender is held while blocks are pending");
+    }
+    loop {
+        if let Ok(v) = receiver.try_recv() {
+            return v;
+        }
+        if rayon::yield_now() != Some(rayon::Yield::Executed) {
+            std::thread::yield_now();
+        }
+    }
 }
 
 /// Curves `first..first + count` of the container, reading only the
@@ -676,4 +695,103 @@ pub fn resample_polyline(
         out.push(p[seg].lerp(p[seg + 1], t));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::codec::{encode_block_bytes, output_curve, CodecWriter};
+    use crate::io::{Format, Metadata, SourceMeta};
+    use glam::DVec3;
+
+    /// A writer that keeps the curves' ids.
+    struct Ids(Vec<String>);
+    impl CurveWriter for Ids {
+        fn write_curve(&mut self, c: &Curve) -> Result<(), IoError> {
+            self.0.push(c.id.clone().unwrap_or_default());
+            Ok(())
+        }
+        fn finish(self: Box<Self>) -> Result<(), IoError> {
+            Ok(())
+        }
+    }
+
+    /// A container of `blocks` one-curve blocks (curve `k` named `c{k}`)
+    /// and each block's geometry bytes.
+    fn container(blocks: usize) -> (Vec<u8>, Vec<Vec<u8>>) {
+        let meta = SourceMeta::from_metadata(&Metadata::new(Format::Json), None);
+        let header = CodecHeader::new(0.01, meta, vec![]);
+        let mut w = CodecWriter::in_memory(&header);
+        let mut geometry = Vec::new();
+        for k in 0..blocks {
+            // Helices of different pitch and length: distinct streams.
+            let points: Vec<DVec3> = (0..20 + k)
+                .map(|i| 0.3 * i as f64)
+                .map(|s| DVec3::new(s.cos(), s.sin(), (0.05 + 0.01 * k as f64) * s))
+                .collect();
+            let id = format!("c{k}");
+            let c = CurveIn {
+                id: Some(&id),
+                points: &points,
+                point_data: &[],
+                curve_data: &[],
+            };
+            let b = encode_block_bytes(&[c], &header.params(), 0, 0).unwrap();
+            geometry.push(b.geometry.clone());
+            w.write_block(&b).unwrap();
+        }
+        (w.finish_bytes().unwrap(), geometry)
+    }
+
+    fn decompress_ids(bytes: Vec<u8>) -> (Ids, Result<u64, IoError>) {
+        let mut reader = CodecReader::from_bytes(bytes).unwrap();
+        let mut out = Ids(Vec::new());
+        let map = |c| output_curve(c, None, None, 0);
+        let n = decompress_stream(&mut reader, &mut out, &map, &mut |_| {});
+        (out, n)
+    }
+
+    #[test]
+    fn blocks_come_out_in_order_past_the_window() {
+        let blocks = 5 * 2 * BLOCKS_AT_ONCE.max(rayon::current_num_threads());
+        let (bytes, _) = container(blocks);
+        let (out, n) = decompress_ids(bytes);
+        assert_eq!(n.unwrap(), blocks as u64);
+        assert_eq!(
+            out.0,
+            (0..blocks).map(|k| format!("c{k}")).collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
+    fn a_corrupt_block_ends_the_output_after_every_curve_before_it() {
+        let blocks = 40;
+        let (mut bytes, geometry) = container(blocks);
+        let bad = 25;
+        let g = &geometry[bad];
+        let at: Vec<usize> = (0..bytes.len() - g.len())
+            .filter(|&i| bytes[i..i + g.len()] == g[..])
+            .collect();
+        assert_eq!(at.len(), 1, "block {bad}'s stream is found once");
+        bytes[at[0] + g.len() / 2] ^= 0x5a;
+        let (out, n) = decompress_ids(bytes);
+        let e = n.unwrap_err().to_string();
+        assert!(e.contains("checksum") || e.contains("corrupt"), "{e}");
+        assert_eq!(out.0, (0..bad).map(|k| format!("c{k}")).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn decoding_from_a_worker_of_a_one_thread_pool_finishes() {
+        // The waiting thread is the pool's only worker: it must decode the
+        // blocks it waits for itself.
+        let (bytes, _) = container(20);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let (out, n) = pool.install(|| decompress_ids(bytes));
+        assert_eq!(n.unwrap(), 20);
+        assert_eq!(out.0.len(), 20);
+        assert_eq!(out.0[19], "c19");
+    }
 }
