@@ -432,6 +432,13 @@ fn codec_model_9_containers_decode_to_the_points_they_did() {
 }
 
 #[test]
+fn codec_model_10_containers_decode_to_the_points_they_did() {
+    // Written by the last build of codec model 10 (model 11 codes each
+    // points-residual sign in a context of the sign before on its axis).
+    old_model_decodes_as_it_did_and_today_codes_smaller(10);
+}
+
+#[test]
 fn a_version_2_development_container_is_refused_by_name() {
     // Version 2 was written by development builds for a day; its streams
     // mean something else now, so it is refused, never misread.

@@ -628,6 +628,11 @@ struct ResidualModels {
     /// From model 10: the along-step coordinate less its prediction
     /// ([`AlongStep`]).
     along: [IntModel; RESIDUAL_CONTEXTS],
+    /// From model 11: a coordinate's sign is coded in a context of the
+    /// sign of the same axis's coordinate in the residual before
+    /// ([`IntModel::put_after`]): a curve's prediction errs the same way
+    /// for a stretch (where it bends more or less than predicted).
+    sign_after: bool,
 }
 
 /// Model 10's along-step prediction of point `k ≥ 2` of `g` against
@@ -647,7 +652,9 @@ fn along_axis(g: &[[i64; 3]], k: usize, pred: [i64; 3]) -> usize {
 /// Codes the residuals of a points curve's `grid` after its start against
 /// `predict(k)`, each in the contexts of the one before
 /// ([`residual_context`]); with `along` (model 10) the coordinate along
-/// the step against [`AlongStep`]'s prediction, after the other two.
+/// the step against [`AlongStep`]'s prediction, after the other two; from
+/// model 11 each sign in the context of the sign before on its axis
+/// ([`ResidualModels::sign_after`]).
 fn put_residuals(
     enc: &mut Encoder,
     models: &mut ResidualModels,
@@ -657,6 +664,7 @@ fn put_residuals(
 ) {
     let mut ctx = RESIDUAL_CONTEXTS - 1;
     let mut window = 0;
+    let mut before = [0i64; 3];
     for k in 1..grid.len() {
         let pred = predict(k);
         let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
@@ -670,14 +678,17 @@ fn put_residuals(
                 let step = flag.then(|| along_step(grid, k, pred, window));
                 let m = step.map_or_else(|| along_axis(grid, k, pred), |s| s.axis());
                 for a in OTHER_AXES[m] {
-                    models.axes[ctx][a].put(enc, (d[a] - b) / 2);
+                    models.axes[ctx][a].put_after(enc, (d[a] - b) / 2, before[a]);
                 }
                 let h = step.map_or(0, |s| s.half_prediction(d, b));
-                models.along[ctx].put(enc, (d[m] - b) / 2 - h);
+                models.along[ctx].put_after(enc, (d[m] - b) / 2 - h, before[m]);
             }
             None => put_lattice(enc, &mut models.parity[ctx], &mut models.axes[ctx], d),
         }
         ctx = residual_context(d);
+        if models.sign_after {
+            before = halves(d);
+        }
     }
 }
 
@@ -694,11 +705,7 @@ fn get_residuals(
 ) {
     let mut ctx = RESIDUAL_CONTEXTS - 1;
     let mut window = 0;
-    for k in 1..g.len() {
-        if along == Some(true) {
-            window = predict::step_window(g, k, window);
-        }
-    }
+    let mut before = [0i64; 3];
     for k in g.len()..n {
         let pred = predict(g, k);
         if along == Some(true) {
@@ -711,11 +718,14 @@ fn get_residuals(
                 let m = step.map_or_else(|| along_axis(g, k, pred), |s| s.axis());
                 let mut d = [0i64; 3];
                 for a in OTHER_AXES[m] {
-                    d[a] = models.axes[ctx][a].get(dec).wrapping_mul(2).wrapping_add(b);
+                    d[a] = models.axes[ctx][a]
+                        .get_after(dec, before[a])
+                        .wrapping_mul(2)
+                        .wrapping_add(b);
                 }
                 let h = step.map_or(0, |s| s.half_prediction(d, b));
                 d[m] = models.along[ctx]
-                    .get(dec)
+                    .get_after(dec, before[m])
                     .wrapping_add(h)
                     .wrapping_mul(2)
                     .wrapping_add(b);
@@ -724,6 +734,9 @@ fn get_residuals(
             None => get_lattice(dec, &mut models.parity[ctx], &mut models.axes[ctx]),
         };
         ctx = residual_context(d);
+        if models.sign_after {
+            before = halves(d);
+        }
         g.push([0, 1, 2].map(|a| pred[a].wrapping_add(d[a])));
     }
 }
@@ -748,6 +761,13 @@ fn along_bits(g: &[[i64; 3]], predict: &dyn Fn(usize) -> [i64; 3]) -> (u64, u64)
         off += lattice_bits(d);
     }
     (on, off)
+}
+
+/// The halved coordinates `(d − b)/2` of a lattice residual `d` of parity
+/// `b`, as coded.
+fn halves(d: [i64; 3]) -> [i64; 3] {
+    let b = d[0] & 1;
+    d.map(|v| v.wrapping_sub(b) / 2)
 }
 
 /// Contexts of a points-mode residual: the size of the one before (a curve's
@@ -1161,6 +1181,8 @@ impl Models {
         if model >= 8 {
             m.count = IntModel::with_mantissa(COUNT_MANTISSA);
         }
+        m.residual.sign_after = model >= 11;
+        m.ref_residual.sign_after = model >= 11;
         m
     }
 }

@@ -695,18 +695,11 @@ fn the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does()
     );
 }
 
-#[test]
-fn model_10_predicts_the_step_length_of_equal_step_fibres_and_model_9_streams_still_decode() {
-    // A bundle of 50 fibres resampled to 20 points at equal steps of 7 mm
-    // (70 times the tolerance), turning by up to 0.45 rad a step, a
-    // random part of it each step (so points win over arcs): a
-    // prediction misses across the step, and the coordinate along it
-    // follows from the step length. Model 10 codes them at least 5 %
-    // smaller than model 9, every curve within the tolerance both ways,
-    // and a model-9 stream still decodes as model 9.
-    let tol = 0.1;
-    let mut rng = ChaCha8Rng::seed_from_u64(10);
-    let curves: Vec<Vec<DVec3>> = (0..50)
+/// `count` fibres of a bundle resampled to 20 points at equal steps of
+/// 7 mm, turning by up to 0.45 rad a step, a random part of it each step.
+fn equal_step_fibres(count: usize, seed: u64) -> Vec<Vec<DVec3>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..count)
         .map(|c| {
             let mut p = DVec3::new(
                 rng.gen_range(-5.0..5.0),
@@ -730,9 +723,24 @@ fn model_10_predicts_the_step_length_of_equal_step_fibres_and_model_9_streams_st
                 })
                 .collect()
         })
-        .collect();
-    let new = CodecParams::new(tol);
-    assert_eq!(new.model, 10);
+        .collect()
+}
+
+#[test]
+fn model_10_predicts_the_step_length_of_equal_step_fibres_and_model_9_streams_still_decode() {
+    // A bundle of 50 fibres resampled to 20 points at equal steps of 7 mm
+    // (70 times the tolerance), turning by up to 0.45 rad a step, a
+    // random part of it each step (so points win over arcs): a
+    // prediction misses across the step, and the coordinate along it
+    // follows from the step length. Model 10 codes them at least 5 %
+    // smaller than model 9, every curve within the tolerance both ways,
+    // and a model-9 stream still decodes as model 9.
+    let tol = 0.1;
+    let curves = equal_step_fibres(50, 10);
+    let new = CodecParams {
+        model: 10,
+        ..CodecParams::new(tol)
+    };
     let old = CodecParams { model: 9, ..new };
     let (b10, b9) = (
         encode_block(&curves, &new).unwrap(),
@@ -751,6 +759,43 @@ fn model_10_predicts_the_step_length_of_equal_step_fibres_and_model_9_streams_st
         "model 10 {} B, model 9 {} B",
         b10.bytes.len(),
         b9.bytes.len()
+    );
+}
+
+#[test]
+fn model_11_codes_residual_signs_after_the_sign_before_and_model_10_streams_still_decode() {
+    // Fibres that turn steadily: the second-order prediction misses on the
+    // outside of each bend, stretch after stretch, so a residual's sign
+    // follows the one before on its axis. Model 11 codes the signs in
+    // that context: smaller, every curve within the tolerance both ways,
+    // and a model-10 stream still decodes as model 10.
+    let tol = 0.1;
+    let curves = equal_step_fibres(400, 11);
+    let new = CodecParams::new(tol);
+    assert_eq!(new.model, 11);
+    let old = CodecParams { model: 10, ..new };
+    let (b11, b10) = (
+        encode_block(&curves, &new).unwrap(),
+        encode_block(&curves, &old).unwrap(),
+    );
+    assert!(b11.kinds.iter().all(|&k| k == 1), "{:?}", b11.kinds);
+    for (b, p) in [(&b11, &new), (&b10, &old)] {
+        let back = decode_block(&b.bytes, curves.len(), p).unwrap();
+        for (c, d) in curves.iter().zip(&back) {
+            let d = hausdorff(c, d).unwrap();
+            assert!(d <= tol, "model {}: {d}", p.model);
+        }
+    }
+    // The same points either way (only the coding of signs differs).
+    assert_eq!(
+        decode_block(&b11.bytes, curves.len(), &new).unwrap(),
+        decode_block(&b10.bytes, curves.len(), &old).unwrap()
+    );
+    assert!(
+        (b11.bytes.len() as f64) < 0.99 * b10.bytes.len() as f64,
+        "model 11 {} B, model 10 {} B",
+        b11.bytes.len(),
+        b10.bytes.len()
     );
 }
 
