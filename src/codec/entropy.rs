@@ -571,6 +571,31 @@ impl IntModel {
         }
     }
 
+    /// Codes `v`, its sign in the context `sign` (kept by the caller).
+    pub fn put_signed_in(&mut self, enc: &mut Encoder, v: i64, sign: &mut Bit) {
+        enc.bit(&mut self.zero, v != 0);
+        if v == 0 {
+            return;
+        }
+        enc.bit(sign, v < 0);
+        self.put_magnitude(enc, v.unsigned_abs());
+    }
+
+    /// [`put_signed_in`](Self::put_signed_in)'s decoder.
+    #[inline]
+    pub fn get_signed_in(&mut self, dec: &mut Decoder, sign: &mut Bit) -> i64 {
+        if !dec.bit(&mut self.zero) {
+            return 0;
+        }
+        let neg = dec.bit(sign);
+        let m = self.get_magnitude(dec) as i64;
+        if neg {
+            -m
+        } else {
+            m
+        }
+    }
+
     /// Codes `v ≥ 0` (no sign bit).
     pub fn put_unsigned(&mut self, enc: &mut Encoder, v: u64) {
         enc.bit(&mut self.zero, v != 0);

@@ -629,10 +629,37 @@ struct ResidualModels {
     /// ([`AlongStep`]).
     along: [IntModel; RESIDUAL_CONTEXTS],
     /// From model 11: a coordinate's sign is coded in a context of the
-    /// sign of the same axis's coordinate in the residual before
-    /// ([`IntModel::put_after`]): a curve's prediction errs the same way
-    /// for a stretch (where it bends more or less than predicted).
+    /// sign of the same axis's coordinate in the residual before (`signs`
+    /// across the step, [`IntModel::put_after`] along it): a curve's
+    /// prediction errs the same way for a stretch (where it bends more or
+    /// less than predicted).
     sign_after: bool,
+    /// Model 11's sign contexts across the step: by residual context, axis
+    /// and the sign before (−, 0, +).
+    signs: [[[Bit; 3]; 3]; RESIDUAL_CONTEXTS],
+    /// From model 11, a block's choice: the magnitudes across the step in
+    /// one model for all axes (`axes[ctx][0]`) instead of one per axis.
+    shared: bool,
+}
+
+impl ResidualModels {
+    /// The magnitude model and the sign context of coordinate `a` across
+    /// the step in residual context `ctx`, after `before` on that axis.
+    #[inline]
+    fn across(&mut self, ctx: usize, a: usize, before: i64) -> (&mut IntModel, &mut Bit) {
+        let axis = if self.shared { 0 } else { a };
+        (
+            &mut self.axes[ctx][axis],
+            &mut self.signs[ctx][a][(before.signum() + 1) as usize],
+        )
+    }
+}
+
+/// Whether codec `model` codes a points residual's signs after the signs
+/// before, and has a block's choice of shared magnitudes
+/// ([`ResidualModels::sign_after`], [`ResidualModels::shared`]).
+fn sign_after(model: u8) -> bool {
+    model >= 11
 }
 
 /// Model 10's along-step prediction of point `k ≥ 2` of `g` against
@@ -678,7 +705,13 @@ fn put_residuals(
                 let step = flag.then(|| along_step(grid, k, pred, window));
                 let m = step.map_or_else(|| along_axis(grid, k, pred), |s| s.axis());
                 for a in OTHER_AXES[m] {
-                    models.axes[ctx][a].put_after(enc, (d[a] - b) / 2, before[a]);
+                    let v = (d[a] - b) / 2;
+                    if models.sign_after {
+                        let (model, sign) = models.across(ctx, a, before[a]);
+                        model.put_signed_in(enc, v, sign);
+                    } else {
+                        models.axes[ctx][a].put(enc, v);
+                    }
                 }
                 let h = step.map_or(0, |s| s.half_prediction(d, b));
                 models.along[ctx].put_after(enc, (d[m] - b) / 2 - h, before[m]);
@@ -718,10 +751,13 @@ fn get_residuals(
                 let m = step.map_or_else(|| along_axis(g, k, pred), |s| s.axis());
                 let mut d = [0i64; 3];
                 for a in OTHER_AXES[m] {
-                    d[a] = models.axes[ctx][a]
-                        .get_after(dec, before[a])
-                        .wrapping_mul(2)
-                        .wrapping_add(b);
+                    let v = if models.sign_after {
+                        let (model, sign) = models.across(ctx, a, before[a]);
+                        model.get_signed_in(dec, sign)
+                    } else {
+                        models.axes[ctx][a].get(dec)
+                    };
+                    d[a] = v.wrapping_mul(2).wrapping_add(b);
                 }
                 let h = step.map_or(0, |s| s.half_prediction(d, b));
                 d[m] = models.along[ctx]
@@ -1181,8 +1217,8 @@ impl Models {
         if model >= 8 {
             m.count = IntModel::with_mantissa(COUNT_MANTISSA);
         }
-        m.residual.sign_after = model >= 11;
-        m.ref_residual.sign_after = model >= 11;
+        m.residual.sign_after = sign_after(model);
+        m.ref_residual.sign_after = sign_after(model);
         m
     }
 }
@@ -1506,6 +1542,196 @@ fn chunk_options<C: AsRef<[DVec3]> + Sync>(
     (options, stats)
 }
 
+/// One coding of a block's curves: the stream, its models and the curve
+/// before's starts.
+struct BlockStream {
+    enc: Encoder,
+    m: Models,
+    prev: Previous,
+}
+
+impl BlockStream {
+    /// A stream of codec `model` with the lattice exponent `scale_exp`
+    /// and (from model 11) the shared-magnitudes flag.
+    fn new(params: &CodecParams, scale_exp: i32, tally: bool, shared: bool) -> Self {
+        let mut enc = if tally {
+            Encoder::with_tally(FIELDS.len(), Adaptation::of_model(params.model))
+        } else {
+            Encoder::with_adaptation(Adaptation::of_model(params.model))
+        };
+        enc.direct((scale_exp + 128) as u64, 8);
+        let mut m = Models::for_model(params.model);
+        if sign_after(params.model) {
+            enc.direct(shared as u64, 1);
+            m.residual.shared = shared;
+            m.ref_residual.shared = shared;
+        }
+        BlockStream {
+            enc,
+            m,
+            prev: Previous::default(),
+        }
+    }
+
+    /// Codes the curve chosen last (`neighbours` holds it last).
+    fn put_curve(&mut self, code: &CurveCode, neighbours: &mut Neighbours, params: &CodecParams) {
+        let (enc, m, prev) = (&mut self.enc, &mut self.m, &mut self.prev);
+        let q = params.quantiser();
+        let (q_start, q_first, q_offset) = (q.start, q.first, q.offset);
+        let kind = kind_of(code);
+        enc.set_tag(0);
+        put_kind(enc, m, kind);
+        match code {
+            CurveCode::Empty => {}
+            CurveCode::Raw(p) => {
+                enc.set_tag(12);
+                m.raw_count.put_unsigned(enc, p.len() as u64);
+                for v in p.iter().flat_map(|v| v.to_array()) {
+                    enc.direct(v.to_bits(), 64);
+                }
+            }
+            CurveCode::Points {
+                grid,
+                reference,
+                helix,
+                along: along_flag,
+            } => {
+                enc.set_tag(1);
+                m.count.put_unsigned(enc, grid.len() as u64 - 1);
+                enc.set_tag(10);
+                if neighbours.len() > 1 {
+                    enc.bit(&mut m.has_reference, reference.is_some());
+                }
+                let along = along(params.model).then_some(*along_flag);
+                if along.is_some() && grid.len() > 2 {
+                    enc.bit(&mut m.along, *along_flag);
+                }
+                match reference {
+                    Some(rf) => {
+                        m.back.put_unsigned(enc, rf.back as u64 - 1);
+                        enc.bit(&mut m.reversed, rf.reversed);
+                        enc.bit(&mut m.has_second, rf.second.is_some());
+                        if let Some((back, reversed)) = rf.second {
+                            m.back.put_unsigned(enc, back as u64 - 1);
+                            enc.bit(&mut m.reversed, reversed);
+                        }
+                        // `neighbours` holds this curve last: its reference
+                        // is `back` before that.
+                        let grids = neighbours.window();
+                        let at_back = |b: usize| &grids[grids.len() - 1 - b][..];
+                        let res = reference::Resolved {
+                            first: (at_back(rf.back), rf.reversed),
+                            second: rf.second.map(|(b, rev)| (at_back(b), rev)),
+                            trend: offset_trend(params.model),
+                        };
+                        let start = res.start();
+                        let d = [0, 1, 2].map(|a| grid[0][a] - start[a]);
+                        put_lattice(enc, &mut m.parity[0], &mut m.ref_start, d);
+                        let n = grid.len();
+                        enc.set_tag(11);
+                        put_residuals(enc, &mut m.ref_residual, along, grid, |k| {
+                            res.predict_in(grid, k, n)
+                        });
+                    }
+                    None => {
+                        enc.bit(&mut m.helix, *helix);
+                        let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
+                        put_lattice(enc, &mut m.parity[1], &mut m.point_start, d);
+                        enc.set_tag(11);
+                        put_residuals(enc, &mut m.residual, along, grid, |k| {
+                            own_prediction(grid, k, *helix, screw(params.model))
+                        });
+                    }
+                }
+                prev.point_start = grid[0];
+            }
+            CurveCode::Arcs {
+                start,
+                first_end,
+                first_bulge,
+                elements,
+            } => {
+                enc.set_tag(1);
+                m.count.put_unsigned(enc, elements.len() as u64);
+                enc.set_tag(2);
+                // `neighbours` holds this curve last; its anchors are the
+                // curves before it.
+                let before = neighbours.len() - 1;
+                let own = lattice_bits([0, 1, 2].map(|a| start[a] - prev.arc_start[a]));
+                let anchor = if before > 0 {
+                    let best = neighbours.best_anchor(*start, before);
+                    let pick = best.filter(|&(_, _, bits)| bits < own);
+                    enc.bit(&mut m.has_anchor, pick.is_some());
+                    pick
+                } else {
+                    None
+                };
+                match anchor {
+                    Some((back, at_end, _)) => {
+                        m.back_anchor.put_unsigned(enc, back as u64 - 1);
+                        enc.bit(&mut m.anchor_end, at_end);
+                        let r = neighbours.anchor(before - back, at_end).unwrap_or([0; 3]);
+                        let d = [0, 1, 2].map(|a| start[a] - r[a]);
+                        put_lattice(enc, &mut m.start_parity[0], &mut m.anchor_start, d);
+                    }
+                    None => {
+                        let d = [0, 1, 2].map(|a| start[a] - prev.arc_start[a]);
+                        put_lattice(enc, &mut m.start_parity[1], &mut m.start, d);
+                    }
+                }
+                let (fe_pred, walk) = first_end_prediction(
+                    neighbours,
+                    before,
+                    anchor.map(|a| (a.0, a.1)),
+                    prev,
+                    q_first,
+                );
+                enc.set_tag(3);
+                for a in 0..3 {
+                    m.first_end[a].put(enc, first_end[a] - fe_pred[a]);
+                }
+                enc.set_tag(4);
+                prev.arc_start = *start;
+                prev.first_end = *first_end;
+                let q0 = DVec3::new(start[0] as f64, start[1] as f64, start[2] as f64) * q_start;
+                let fb_pred = first_bulge_prediction(
+                    walk,
+                    q0,
+                    encoder::first_end(q0, *first_end, q_first),
+                    q_offset,
+                );
+                for a in 0..2 {
+                    m.first_bulge[a].put(enc, first_bulge[a] - fb_pred[a]);
+                }
+                let mut prev_kind = ElementKind::Corner;
+                for e in elements {
+                    let ctx = span_context(e.span);
+                    enc.set_tag(5);
+                    put_element_kind(enc, m, prev_kind, e.kind);
+                    prev_kind = e.kind;
+                    if e.kind == ElementKind::Jump {
+                        enc.set_tag(9);
+                        for a in 0..3 {
+                            m.jump[a].put(enc, e.jump[a]);
+                        }
+                        continue;
+                    }
+                    enc.set_tag(6);
+                    m.length[ctx].put(enc, e.length);
+                    enc.set_tag(7);
+                    m.offset[ctx][0].put(enc, e.offset[0]);
+                    m.offset[ctx][1].put(enc, e.offset[1]);
+                    if e.kind == ElementKind::Corner {
+                        enc.set_tag(8);
+                        m.bulge[0].put(enc, e.bulge[0]);
+                        m.bulge[1].put(enc, e.bulge[1]);
+                    }
+                }
+            }
+        }
+    }
+}
+
 fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
@@ -1532,18 +1758,18 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
         .fold(0.0, f64::max);
     let scale_exp = quantise::scale_exponent(scale);
     let half = quantise::lattice_half(params.tolerance, 2f64.powi(scale_exp)).unwrap_or(0.0);
-    let mut enc = if tally {
-        Encoder::with_tally(FIELDS.len(), Adaptation::of_model(params.model))
-    } else {
-        Encoder::with_adaptation(Adaptation::of_model(params.model))
-    };
-    enc.direct((scale_exp + 128) as u64, 8);
+    // From model 11 the block is coded twice, its points residuals'
+    // magnitudes in models per axis and in one shared by the axes (a flag
+    // says which): sharing learns three times as fast, which a small
+    // block needs, and a large one codes its axes' statistics apart. The
+    // smaller is kept (the choices are the same; the coding is a small
+    // part of the time).
+    let mut streams = vec![BlockStream::new(params, scale_exp, tally, false)];
+    if sign_after(params.model) {
+        streams.push(BlockStream::new(params, scale_exp, tally, true));
+    }
     let grid_step = half;
     let q_start = params.quantiser().start;
-    let q_first = params.quantiser().first;
-    let q_offset = params.quantiser().offset;
-    let mut m = Models::for_model(params.model);
-    let mut prev = Previous::default();
     let mut kinds = Vec::with_capacity(curves.len());
     let mut output_points = 0;
     let mut decoded = Vec::with_capacity(if keep { curves.len() } else { 0 });
@@ -1570,7 +1796,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
             let arcs_searched = searched(i);
             // The choice, in order: a points-mode curve may lean on those
             // before.
-            let before = enc.position_bits();
+            let before = streams[0].enc.position_bits();
             let (code, n, estimate, saving) = choose(
                 points.as_ref(),
                 opt,
@@ -1580,7 +1806,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 offset_trend(params.model),
                 along(params.model),
                 &mut neighbours,
-                &prev,
+                &streams[0].prev,
                 calibration.arcs_scale(),
             );
             if arcs_searched {
@@ -1593,165 +1819,26 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
             output_points += n;
             let kind = kind_of(code);
             kinds.push(kind);
-            enc.set_tag(0);
-            put_kind(&mut enc, &mut m, kind);
-            match code {
-                CurveCode::Empty => {}
-                CurveCode::Raw(p) => {
-                    enc.set_tag(12);
-                    m.raw_count.put_unsigned(&mut enc, p.len() as u64);
-                    for v in p.iter().flat_map(|v| v.to_array()) {
-                        enc.direct(v.to_bits(), 64);
-                    }
-                }
-                CurveCode::Points {
-                    grid,
-                    reference,
-                    helix,
-                    along: along_flag,
-                } => {
-                    enc.set_tag(1);
-                    m.count.put_unsigned(&mut enc, grid.len() as u64 - 1);
-                    enc.set_tag(10);
-                    if neighbours.len() > 1 {
-                        enc.bit(&mut m.has_reference, reference.is_some());
-                    }
-                    let along = along(params.model).then_some(*along_flag);
-                    if along.is_some() && grid.len() > 2 {
-                        enc.bit(&mut m.along, *along_flag);
-                    }
-                    match reference {
-                        Some(rf) => {
-                            m.back.put_unsigned(&mut enc, rf.back as u64 - 1);
-                            enc.bit(&mut m.reversed, rf.reversed);
-                            enc.bit(&mut m.has_second, rf.second.is_some());
-                            if let Some((back, reversed)) = rf.second {
-                                m.back.put_unsigned(&mut enc, back as u64 - 1);
-                                enc.bit(&mut m.reversed, reversed);
-                            }
-                            // `neighbours` holds this curve last: its reference
-                            // is `back` before that.
-                            let grids = neighbours.window();
-                            let at_back = |b: usize| &grids[grids.len() - 1 - b][..];
-                            let res = reference::Resolved {
-                                first: (at_back(rf.back), rf.reversed),
-                                second: rf.second.map(|(b, rev)| (at_back(b), rev)),
-                                trend: offset_trend(params.model),
-                            };
-                            let start = res.start();
-                            let d = [0, 1, 2].map(|a| grid[0][a] - start[a]);
-                            put_lattice(&mut enc, &mut m.parity[0], &mut m.ref_start, d);
-                            let n = grid.len();
-                            enc.set_tag(11);
-                            put_residuals(&mut enc, &mut m.ref_residual, along, grid, |k| {
-                                res.predict_in(grid, k, n)
-                            });
-                        }
-                        None => {
-                            enc.bit(&mut m.helix, *helix);
-                            let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
-                            put_lattice(&mut enc, &mut m.parity[1], &mut m.point_start, d);
-                            enc.set_tag(11);
-                            put_residuals(&mut enc, &mut m.residual, along, grid, |k| {
-                                own_prediction(grid, k, *helix, screw(params.model))
-                            });
-                        }
-                    }
-                    prev.point_start = grid[0];
-                }
-                CurveCode::Arcs {
-                    start,
-                    first_end,
-                    first_bulge,
-                    elements,
-                } => {
-                    enc.set_tag(1);
-                    m.count.put_unsigned(&mut enc, elements.len() as u64);
-                    n_elements += 1 + elements.len();
-                    enc.set_tag(2);
-                    // `neighbours` holds this curve last; its anchors are the
-                    // curves before it.
-                    let before = neighbours.len() - 1;
-                    let own = lattice_bits([0, 1, 2].map(|a| start[a] - prev.arc_start[a]));
-                    let anchor = if before > 0 {
-                        let best = neighbours.best_anchor(*start, before);
-                        let pick = best.filter(|&(_, _, bits)| bits < own);
-                        enc.bit(&mut m.has_anchor, pick.is_some());
-                        pick
-                    } else {
-                        None
-                    };
-                    match anchor {
-                        Some((back, at_end, _)) => {
-                            m.back_anchor.put_unsigned(&mut enc, back as u64 - 1);
-                            enc.bit(&mut m.anchor_end, at_end);
-                            let r = neighbours.anchor(before - back, at_end).unwrap_or([0; 3]);
-                            let d = [0, 1, 2].map(|a| start[a] - r[a]);
-                            put_lattice(&mut enc, &mut m.start_parity[0], &mut m.anchor_start, d);
-                        }
-                        None => {
-                            let d = [0, 1, 2].map(|a| start[a] - prev.arc_start[a]);
-                            put_lattice(&mut enc, &mut m.start_parity[1], &mut m.start, d);
-                        }
-                    }
-                    let (fe_pred, walk) = first_end_prediction(
-                        &neighbours,
-                        before,
-                        anchor.map(|a| (a.0, a.1)),
-                        &prev,
-                        q_first,
-                    );
-                    enc.set_tag(3);
-                    for a in 0..3 {
-                        m.first_end[a].put(&mut enc, first_end[a] - fe_pred[a]);
-                    }
-                    enc.set_tag(4);
-                    prev.arc_start = *start;
-                    prev.first_end = *first_end;
-                    let q0 =
-                        DVec3::new(start[0] as f64, start[1] as f64, start[2] as f64) * q_start;
-                    let fb_pred = first_bulge_prediction(
-                        walk,
-                        q0,
-                        encoder::first_end(q0, *first_end, q_first),
-                        q_offset,
-                    );
-                    for a in 0..2 {
-                        m.first_bulge[a].put(&mut enc, first_bulge[a] - fb_pred[a]);
-                    }
-                    let mut prev_kind = ElementKind::Corner;
-                    for e in elements {
-                        let ctx = span_context(e.span);
-                        enc.set_tag(5);
-                        put_element_kind(&mut enc, &mut m, prev_kind, e.kind);
-                        prev_kind = e.kind;
-                        if e.kind == ElementKind::Jump {
-                            enc.set_tag(9);
-                            for a in 0..3 {
-                                m.jump[a].put(&mut enc, e.jump[a]);
-                            }
-                            continue;
-                        }
-                        enc.set_tag(6);
-                        m.length[ctx].put(&mut enc, e.length);
-                        enc.set_tag(7);
-                        m.offset[ctx][0].put(&mut enc, e.offset[0]);
-                        m.offset[ctx][1].put(&mut enc, e.offset[1]);
-                        if e.kind == ElementKind::Corner {
-                            enc.set_tag(8);
-                            m.bulge[0].put(&mut enc, e.bulge[0]);
-                            m.bulge[1].put(&mut enc, e.bulge[1]);
-                        }
-                    }
-                }
+            for s in streams.iter_mut() {
+                s.put_curve(code, &mut neighbours, params);
             }
-            calibration.add(kind, estimate, enc.position_bits() - before);
+            if let CurveCode::Arcs { elements, .. } = code {
+                n_elements += 1 + elements.len();
+            }
+            calibration.add(kind, estimate, streams[0].enc.position_bits() - before);
         }
     }
-    let tallied = enc.tally().map(<[f64]>::to_vec);
+    let (bytes, tallied) = streams
+        .into_iter()
+        .map(|s| {
+            let tallied = s.enc.tally().map(<[f64]>::to_vec);
+            (s.enc.finish(), tallied)
+        })
+        .min_by_key(|(bytes, _)| bytes.len())
+        .expect("one stream at least");
     Ok((
         EncodedBlock {
-            bytes: enc.finish(),
+            bytes,
             kinds,
             output_points,
             elements: n_elements,
@@ -1795,6 +1882,11 @@ pub fn decode_block(
     let mut prev = Previous::default();
     let q = params.quantiser();
     let scale_exp = dec.direct(8) as i32 - 128;
+    if sign_after(params.model) {
+        let shared = dec.direct(1) == 1;
+        m.residual.shared = shared;
+        m.ref_residual.shared = shared;
+    }
     let grid = quantise::lattice_half(params.tolerance, 2f64.powi(scale_exp)).unwrap_or(0.0);
     // Capacities from counts read off the stream are capped: a count is
     // only trusted as far as the points it actually decodes.

@@ -324,9 +324,10 @@ fn model_7_screw_fits_more_step_pairs_and_model_6_streams_still_decode() {
         b7.bytes.len(),
         b6.bytes.len()
     );
-    // The model matters: a model-6 stream read as model 7 is other curves.
+    // The model matters: a model-6 stream read as today's is other curves
+    // (or too few points to measure).
     if let Ok(back) = decode_block(&b6.bytes, 1, &new) {
-        assert!(hausdorff(&curl, &back[0]).unwrap() > tol);
+        assert!(hausdorff(&curl, &back[0]).map_or(true, |h| h > tol));
     }
 }
 
@@ -797,6 +798,50 @@ fn model_11_codes_residual_signs_after_the_sign_before_and_model_10_streams_stil
         b11.bytes.len(),
         b10.bytes.len()
     );
+}
+
+/// The shared-magnitudes flag of a model-11 block (read as the decoder
+/// reads it: after the lattice's exponent).
+fn shared_flag(bytes: &[u8]) -> bool {
+    let mut dec = Decoder::new(bytes);
+    dec.direct(8);
+    dec.direct(1) == 1
+}
+
+#[test]
+fn model_11_blocks_share_magnitudes_across_axes_where_that_codes_smaller() {
+    let tol = 0.1;
+    let params = CodecParams::new(tol);
+    let round_trip = |curves: &[Vec<DVec3>]| {
+        let b = encode_block(curves, &params).unwrap();
+        let back = decode_block(&b.bytes, curves.len(), &params).unwrap();
+        for (c, d) in curves.iter().zip(&back) {
+            assert!(hausdorff(c, d).unwrap() <= tol);
+        }
+        b
+    };
+    // A small bundle: three models per field learn too slowly, one shared
+    // by the axes codes smaller.
+    let small = round_trip(&equal_step_fibres(30, 5));
+    assert!(shared_flag(&small.bytes));
+    // Many fibres along x that wander in z alone, rounded to 0.05 mm: the
+    // axes' residuals differ, and models per axis code smaller.
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let flat: Vec<Vec<DVec3>> = (0..400)
+        .map(|c| {
+            let (phase, y) = (rng.gen_range(0.0..6.0), c as f64 * 0.7);
+            (0..40)
+                .map(|k| {
+                    let x = 2.0 * k as f64;
+                    let z = 4.0 * (0.21 * k as f64 + phase).sin() + rng.gen_range(-0.3..0.3);
+                    (DVec3::new(x, y, z) * 20.0).round() / 20.0
+                })
+                .collect()
+        })
+        .collect();
+    let flat_block = round_trip(&flat);
+    assert!(flat_block.kinds.iter().filter(|&&k| k == 1).count() > 300);
+    assert!(!shared_flag(&flat_block.bytes));
 }
 
 #[test]
