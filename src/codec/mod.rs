@@ -1704,6 +1704,7 @@ impl BlockStream {
                     m.first_bulge[a].put(enc, first_bulge[a] - fb_pred[a]);
                 }
                 let mut prev_kind = ElementKind::Corner;
+                let mut last = [0i64; 3];
                 for e in elements {
                     let ctx = span_context(e.span);
                     enc.set_tag(5);
@@ -1717,10 +1718,13 @@ impl BlockStream {
                         continue;
                     }
                     enc.set_tag(6);
-                    m.length[ctx].put(enc, e.length);
+                    m.length[ctx].put_after(enc, e.length, last[0]);
                     enc.set_tag(7);
-                    m.offset[ctx][0].put(enc, e.offset[0]);
-                    m.offset[ctx][1].put(enc, e.offset[1]);
+                    m.offset[ctx][0].put_after(enc, e.offset[0], last[1]);
+                    m.offset[ctx][1].put_after(enc, e.offset[1], last[2]);
+                    if sign_after(params.model) {
+                        last = [e.length, e.offset[0], e.offset[1]];
+                    }
                     if e.kind == ElementKind::Corner {
                         enc.set_tag(8);
                         m.bulge[0].put(enc, e.bulge[0]);
@@ -2025,6 +2029,7 @@ pub fn decode_block(
                 arc.sample_into(q.sagitta, &mut p);
                 let mut state = arc.next_state(q.length);
                 let mut prev_kind = ElementKind::Corner;
+                let mut last = [0i64; 3];
                 for k in 0..n {
                     let kind = get_element_kind(&mut dec, &mut m, prev_kind);
                     prev_kind = kind;
@@ -2033,9 +2038,12 @@ pub fn decode_block(
                         let j = [0, 1, 2].map(|a| m.jump[a].get(&mut dec));
                         jump_end(state.point, j, q.first)
                     } else {
-                        let dl = m.length[ctx].get(&mut dec);
-                        let a1 = m.offset[ctx][0].get(&mut dec);
-                        let a2 = m.offset[ctx][1].get(&mut dec);
+                        let dl = m.length[ctx].get_after(&mut dec, last[0]);
+                        let a1 = m.offset[ctx][0].get_after(&mut dec, last[1]);
+                        let a2 = m.offset[ctx][1].get_after(&mut dec, last[2]);
+                        if sign_after(params.model) {
+                            last = [dl, a1, a2];
+                        }
                         let steps = state.chord_steps.wrapping_add(dl);
                         element_end(&state, steps, a1, a2, &q)
                     };

@@ -845,6 +845,49 @@ fn model_11_blocks_share_magnitudes_across_axes_where_that_codes_smaller() {
 }
 
 #[test]
+fn model_11_codes_arc_signs_after_the_element_before() {
+    // Smooth curls whose radius and pitch drift: a chain of arcs, each
+    // element's length and offsets against the continued arc before,
+    // which misses the same way element after element as the curl
+    // tightens. Model 11 codes their signs after the element before's:
+    // smaller, and each model decodes its own stream within tolerance.
+    let tol = 0.5;
+    let curves: Vec<Vec<DVec3>> = (0..40)
+        .map(|c| {
+            let (r0, p0) = (3.0 + 0.05 * c as f64, 0.8 + 0.01 * c as f64);
+            (0..300)
+                .map(|k| {
+                    let a = 0.15 * k as f64;
+                    let r = r0 * (1.0 + 0.002 * k as f64);
+                    DVec3::new(r * a.cos(), r * a.sin(), p0 * (1.0 + 0.001 * k as f64) * a)
+                        + DVec3::new(20.0 * c as f64, 0.0, 0.0)
+                })
+                .collect()
+        })
+        .collect();
+    let new = CodecParams::new(tol);
+    let old = CodecParams { model: 10, ..new };
+    let (b11, b10) = (
+        encode_block(&curves, &new).unwrap(),
+        encode_block(&curves, &old).unwrap(),
+    );
+    assert!(b11.kinds.iter().all(|&k| k == 2), "{:?}", b11.kinds);
+    for (b, p) in [(&b11, &new), (&b10, &old)] {
+        let back = decode_block(&b.bytes, curves.len(), p).unwrap();
+        for (c, d) in curves.iter().zip(&back) {
+            let d = hausdorff(c, d).unwrap();
+            assert!(d <= tol, "model {}: {d}", p.model);
+        }
+    }
+    assert!(
+        (b11.bytes.len() as f64) < 0.995 * b10.bytes.len() as f64,
+        "model 11 {} B, model 10 {} B",
+        b11.bytes.len(),
+        b10.bytes.len()
+    );
+}
+
+#[test]
 fn along_step_prediction_keeps_the_step_length() {
     // Random steps and turns: the predicted along coordinate makes the
     // step as long as the last one within the lattice's rounding (a unit
