@@ -285,6 +285,30 @@ fn helix_prediction_continues_a_helix_where_second_order_misses() {
     }
 }
 
+/// `curves` coded by codec models `new` and `old` at tolerance `tol`, each
+/// stream decoded by its own model within `tol` of every curve (two-sided).
+fn coded_by_both(
+    curves: &[Vec<DVec3>],
+    tol: f64,
+    new: u8,
+    old: u8,
+) -> (EncodedBlock, EncodedBlock) {
+    let [a, b] = [new, old].map(|model| {
+        let params = CodecParams {
+            model,
+            ..CodecParams::new(tol)
+        };
+        let block = encode_block(curves, &params).unwrap();
+        let back = decode_block(&block.bytes, curves.len(), &params).unwrap();
+        for (c, d) in curves.iter().zip(&back) {
+            let d = hausdorff(c, d).unwrap();
+            assert!(d <= tol, "model {model}: {d}");
+        }
+        block
+    });
+    (a, b)
+}
+
 #[test]
 fn model_7_screw_fits_more_step_pairs_and_model_6_streams_still_decode() {
     // A curl with its pitch and radius drifting, sampled coarsely, with
@@ -305,18 +329,9 @@ fn model_7_screw_fits_more_step_pairs_and_model_6_streams_still_decode() {
         .collect();
     let curves = [curl.clone()];
     let new = CodecParams::new(tol);
-    let old = CodecParams { model: 6, ..new };
-    let (b7, b6) = (
-        encode_block(&curves, &new).unwrap(),
-        encode_block(&curves, &old).unwrap(),
-    );
-    assert_eq!((b7.kinds[0], b6.kinds[0]), (1, 1), "points curves");
     // Each model decodes its own stream within the tolerance.
-    for (b, p) in [(&b7, &new), (&b6, &old)] {
-        let back = decode_block(&b.bytes, 1, p).unwrap();
-        let d = hausdorff(&curl, &back[0]).unwrap();
-        assert!(d <= tol, "model {}: {d}", p.model);
-    }
+    let (b7, b6) = coded_by_both(&curves, tol, new.model, 6);
+    assert_eq!((b7.kinds[0], b6.kinds[0]), (1, 1), "points curves");
     // The fitted rotation averages the lattice's error: fewer bytes.
     assert!(
         b7.bytes.len() < b6.bytes.len(),
@@ -360,19 +375,8 @@ fn model_9_screw_turns_a_mean_step_and_model_8_streams_still_decode() {
         model: 9,
         ..CodecParams::new(tol)
     };
-    let old = CodecParams { model: 8, ..new };
-    let (b9, b8) = (
-        encode_block(&curves, &new).unwrap(),
-        encode_block(&curves, &old).unwrap(),
-    );
+    let (b9, b8) = coded_by_both(&curves, tol, 9, 8);
     assert!(b9.kinds.iter().all(|&k| k == 1) && b8.kinds.iter().all(|&k| k == 1));
-    for (b, p) in [(&b9, &new), (&b8, &old)] {
-        let back = decode_block(&b.bytes, curves.len(), p).unwrap();
-        for (c, d) in curves.iter().zip(&back) {
-            let d = hausdorff(c, d).unwrap();
-            assert!(d <= tol, "model {}: {d}", p.model);
-        }
-    }
     // The mean of two steps carries less of the lattice's error.
     assert!(
         b9.bytes.len() < b8.bytes.len(),
@@ -738,23 +742,8 @@ fn model_10_predicts_the_step_length_of_equal_step_fibres_and_model_9_streams_st
     // and a model-9 stream still decodes as model 9.
     let tol = 0.1;
     let curves = equal_step_fibres(50, 10);
-    let new = CodecParams {
-        model: 10,
-        ..CodecParams::new(tol)
-    };
-    let old = CodecParams { model: 9, ..new };
-    let (b10, b9) = (
-        encode_block(&curves, &new).unwrap(),
-        encode_block(&curves, &old).unwrap(),
-    );
+    let (b10, b9) = coded_by_both(&curves, tol, 10, 9);
     assert!(b10.kinds.iter().all(|&k| k == 1), "{:?}", b10.kinds);
-    for (b, p) in [(&b10, &new), (&b9, &old)] {
-        let back = decode_block(&b.bytes, curves.len(), p).unwrap();
-        for (c, d) in curves.iter().zip(&back) {
-            let d = hausdorff(c, d).unwrap();
-            assert!(d <= tol, "model {}: {d}", p.model);
-        }
-    }
     assert!(
         (b10.bytes.len() as f64) < 0.95 * b9.bytes.len() as f64,
         "model 10 {} B, model 9 {} B",
@@ -775,18 +764,8 @@ fn model_11_codes_residual_signs_after_the_sign_before_and_model_10_streams_stil
     let new = CodecParams::new(tol);
     assert_eq!(new.model, 11);
     let old = CodecParams { model: 10, ..new };
-    let (b11, b10) = (
-        encode_block(&curves, &new).unwrap(),
-        encode_block(&curves, &old).unwrap(),
-    );
+    let (b11, b10) = coded_by_both(&curves, tol, 11, 10);
     assert!(b11.kinds.iter().all(|&k| k == 1), "{:?}", b11.kinds);
-    for (b, p) in [(&b11, &new), (&b10, &old)] {
-        let back = decode_block(&b.bytes, curves.len(), p).unwrap();
-        for (c, d) in curves.iter().zip(&back) {
-            let d = hausdorff(c, d).unwrap();
-            assert!(d <= tol, "model {}: {d}", p.model);
-        }
-    }
     // The same points either way (only the coding of signs differs).
     assert_eq!(
         decode_block(&b11.bytes, curves.len(), &new).unwrap(),
@@ -865,20 +844,8 @@ fn model_11_codes_arc_signs_after_the_element_before() {
                 .collect()
         })
         .collect();
-    let new = CodecParams::new(tol);
-    let old = CodecParams { model: 10, ..new };
-    let (b11, b10) = (
-        encode_block(&curves, &new).unwrap(),
-        encode_block(&curves, &old).unwrap(),
-    );
+    let (b11, b10) = coded_by_both(&curves, tol, 11, 10);
     assert!(b11.kinds.iter().all(|&k| k == 2), "{:?}", b11.kinds);
-    for (b, p) in [(&b11, &new), (&b10, &old)] {
-        let back = decode_block(&b.bytes, curves.len(), p).unwrap();
-        for (c, d) in curves.iter().zip(&back) {
-            let d = hausdorff(c, d).unwrap();
-            assert!(d <= tol, "model {}: {d}", p.model);
-        }
-    }
     assert!(
         (b11.bytes.len() as f64) < 0.995 * b10.bytes.len() as f64,
         "model 11 {} B, model 10 {} B",
