@@ -501,15 +501,20 @@ pub fn codable(v: i64) -> bool {
     v.unsigned_abs() < (1u64 << MAX_BITS)
 }
 
+/// Which context a value's sign is coded in.
+enum SignContext<'a> {
+    /// The model's own: the plain one where the value before (on the same
+    /// axis or field) was 0 or there was none, else one each for − and +.
+    After(i64),
+    /// One the caller keeps.
+    In(&'a mut Bit),
+}
+
 impl IntModel {
     /// Codes `v`; `|v|` must be below `2^MAX_BITS` (see [`codable`]).
+    #[inline]
     pub fn put(&mut self, enc: &mut Encoder, v: i64) {
-        enc.bit(&mut self.zero, v != 0);
-        if v == 0 {
-            return;
-        }
-        enc.bit(&mut self.sign, v < 0);
-        self.put_magnitude(enc, v.unsigned_abs());
+        self.put_with(enc, v, SignContext::After(0));
     }
 
     /// Codes `v`, its sign in a context of `before`'s sign (the plain
@@ -539,55 +544,66 @@ impl IntModel {
     ///     before = got;
     /// }
     /// ```
+    #[inline]
     pub fn put_after(&mut self, enc: &mut Encoder, v: i64, before: i64) {
-        enc.bit(&mut self.zero, v != 0);
-        if v == 0 {
-            return;
-        }
-        let sign = match before.signum() {
-            0 => &mut self.sign,
-            s => &mut self.signs[(s > 0) as usize],
-        };
-        enc.bit(sign, v < 0);
-        self.put_magnitude(enc, v.unsigned_abs());
+        self.put_with(enc, v, SignContext::After(before));
     }
 
     /// [`put_after`](Self::put_after)'s decoder.
     #[inline]
     pub fn get_after(&mut self, dec: &mut Decoder, before: i64) -> i64 {
-        if !dec.bit(&mut self.zero) {
-            return 0;
-        }
-        let sign = match before.signum() {
-            0 => &mut self.sign,
-            s => &mut self.signs[(s > 0) as usize],
-        };
-        let neg = dec.bit(sign);
-        let m = self.get_magnitude(dec) as i64;
-        if neg {
-            -m
-        } else {
-            m
-        }
+        self.get_with(dec, SignContext::After(before))
     }
 
     /// Codes `v`, its sign in the context `sign` (kept by the caller).
+    #[inline]
     pub fn put_signed_in(&mut self, enc: &mut Encoder, v: i64, sign: &mut Bit) {
-        enc.bit(&mut self.zero, v != 0);
-        if v == 0 {
-            return;
-        }
-        enc.bit(sign, v < 0);
-        self.put_magnitude(enc, v.unsigned_abs());
+        self.put_with(enc, v, SignContext::In(sign));
     }
 
     /// [`put_signed_in`](Self::put_signed_in)'s decoder.
     #[inline]
     pub fn get_signed_in(&mut self, dec: &mut Decoder, sign: &mut Bit) -> i64 {
+        self.get_with(dec, SignContext::In(sign))
+    }
+
+    /// The sign's context.
+    #[inline]
+    fn sign_bit<'a>(
+        sign: &'a mut Bit,
+        signs: &'a mut [Bit; 2],
+        which: SignContext<'a>,
+    ) -> &'a mut Bit {
+        match which {
+            SignContext::After(before) => match before.signum() {
+                0 => sign,
+                s => &mut signs[(s > 0) as usize],
+            },
+            SignContext::In(bit) => bit,
+        }
+    }
+
+    /// Codes `v`: its zero flag, its sign in `which`, its magnitude.
+    #[inline]
+    fn put_with(&mut self, enc: &mut Encoder, v: i64, which: SignContext) {
+        enc.bit(&mut self.zero, v != 0);
+        if v == 0 {
+            return;
+        }
+        enc.bit(
+            Self::sign_bit(&mut self.sign, &mut self.signs, which),
+            v < 0,
+        );
+        self.put_magnitude(enc, v.unsigned_abs());
+    }
+
+    /// [`put_with`](Self::put_with)'s decoder.
+    #[inline]
+    fn get_with(&mut self, dec: &mut Decoder, which: SignContext) -> i64 {
         if !dec.bit(&mut self.zero) {
             return 0;
         }
-        let neg = dec.bit(sign);
+        let neg = dec.bit(Self::sign_bit(&mut self.sign, &mut self.signs, which));
         let m = self.get_magnitude(dec) as i64;
         if neg {
             -m
@@ -627,16 +643,7 @@ impl IntModel {
 
     #[inline]
     pub fn get(&mut self, dec: &mut Decoder) -> i64 {
-        if !dec.bit(&mut self.zero) {
-            return 0;
-        }
-        let neg = dec.bit(&mut self.sign);
-        let m = self.get_magnitude(dec) as i64;
-        if neg {
-            -m
-        } else {
-            m
-        }
+        self.get_with(dec, SignContext::After(0))
     }
 
     pub fn get_unsigned(&mut self, dec: &mut Decoder) -> u64 {

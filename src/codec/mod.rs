@@ -1548,6 +1548,8 @@ struct BlockStream {
     enc: Encoder,
     m: Models,
     prev: Previous,
+    /// The block's quantisation steps (once, not per curve).
+    q: Quantiser,
 }
 
 impl BlockStream {
@@ -1570,14 +1572,14 @@ impl BlockStream {
             enc,
             m,
             prev: Previous::default(),
+            q: params.quantiser(),
         }
     }
 
     /// Codes the curve chosen last (`neighbours` holds it last).
     fn put_curve(&mut self, code: &CurveCode, neighbours: &mut Neighbours, params: &CodecParams) {
         let (enc, m, prev) = (&mut self.enc, &mut self.m, &mut self.prev);
-        let q = params.quantiser();
-        let (q_start, q_first, q_offset) = (q.start, q.first, q.offset);
+        let (q_start, q_first, q_offset) = (self.q.start, self.q.first, self.q.offset);
         let kind = kind_of(code);
         enc.set_tag(0);
         put_kind(enc, m, kind);

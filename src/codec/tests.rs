@@ -309,6 +309,19 @@ fn coded_by_both(
     (a, b)
 }
 
+/// That block `new` (model `models.0`) has fewer than `fraction` times
+/// the bytes of block `old` (model `models.1`).
+fn assert_under(new: &EncodedBlock, old: &EncodedBlock, fraction: f64, models: (u8, u8)) {
+    assert!(
+        (new.bytes.len() as f64) < fraction * old.bytes.len() as f64,
+        "model {} {} B, model {} {} B",
+        models.0,
+        new.bytes.len(),
+        models.1,
+        old.bytes.len()
+    );
+}
+
 #[test]
 fn model_7_screw_fits_more_step_pairs_and_model_6_streams_still_decode() {
     // A curl with its pitch and radius drifting, sampled coarsely, with
@@ -333,12 +346,7 @@ fn model_7_screw_fits_more_step_pairs_and_model_6_streams_still_decode() {
     let (b7, b6) = coded_by_both(&curves, tol, new.model, 6);
     assert_eq!((b7.kinds[0], b6.kinds[0]), (1, 1), "points curves");
     // The fitted rotation averages the lattice's error: fewer bytes.
-    assert!(
-        b7.bytes.len() < b6.bytes.len(),
-        "model 7 {} B, model 6 {} B",
-        b7.bytes.len(),
-        b6.bytes.len()
-    );
+    assert_under(&b7, &b6, 1.0, (7, 6));
     // The model matters: a model-6 stream read as today's is other curves
     // (or too few points to measure).
     if let Ok(back) = decode_block(&b6.bytes, 1, &new) {
@@ -378,12 +386,7 @@ fn model_9_screw_turns_a_mean_step_and_model_8_streams_still_decode() {
     let (b9, b8) = coded_by_both(&curves, tol, 9, 8);
     assert!(b9.kinds.iter().all(|&k| k == 1) && b8.kinds.iter().all(|&k| k == 1));
     // The mean of two steps carries less of the lattice's error.
-    assert!(
-        b9.bytes.len() < b8.bytes.len(),
-        "model 9 {} B, model 8 {} B",
-        b9.bytes.len(),
-        b8.bytes.len()
-    );
+    assert_under(&b9, &b8, 1.0, (9, 8));
     // The model matters: a model-8 stream read as model 9 is other curves.
     if let Ok(back) = decode_block(&b8.bytes, curves.len(), &new) {
         let worst = curves
@@ -744,12 +747,7 @@ fn model_10_predicts_the_step_length_of_equal_step_fibres_and_model_9_streams_st
     let curves = equal_step_fibres(50, 10);
     let (b10, b9) = coded_by_both(&curves, tol, 10, 9);
     assert!(b10.kinds.iter().all(|&k| k == 1), "{:?}", b10.kinds);
-    assert!(
-        (b10.bytes.len() as f64) < 0.95 * b9.bytes.len() as f64,
-        "model 10 {} B, model 9 {} B",
-        b10.bytes.len(),
-        b9.bytes.len()
-    );
+    assert_under(&b10, &b9, 0.95, (10, 9));
 }
 
 #[test]
@@ -771,12 +769,7 @@ fn model_11_codes_residual_signs_after_the_sign_before_and_model_10_streams_stil
         decode_block(&b11.bytes, curves.len(), &new).unwrap(),
         decode_block(&b10.bytes, curves.len(), &old).unwrap()
     );
-    assert!(
-        (b11.bytes.len() as f64) < 0.99 * b10.bytes.len() as f64,
-        "model 11 {} B, model 10 {} B",
-        b11.bytes.len(),
-        b10.bytes.len()
-    );
+    assert_under(&b11, &b10, 0.99, (11, 10));
 }
 
 /// The shared-magnitudes flag of a model-11 block (read as the decoder
@@ -846,12 +839,7 @@ fn model_11_codes_arc_signs_after_the_element_before() {
         .collect();
     let (b11, b10) = coded_by_both(&curves, tol, 11, 10);
     assert!(b11.kinds.iter().all(|&k| k == 2), "{:?}", b11.kinds);
-    assert!(
-        (b11.bytes.len() as f64) < 0.995 * b10.bytes.len() as f64,
-        "model 11 {} B, model 10 {} B",
-        b11.bytes.len(),
-        b10.bytes.len()
-    );
+    assert_under(&b11, &b10, 0.995, (11, 10));
 }
 
 #[test]
