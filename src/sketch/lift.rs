@@ -754,7 +754,7 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
                 vertices: &vertices,
                 sigma: noise / length,
             };
-            merge_noisy(&unit, &mut pieces, &cover_opts, &drawn);
+            merge_noisy(&unit, &geometry, &mut pieces, &cover_opts, &drawn);
         }
     }
     choose_mirrors(&mut pieces);
