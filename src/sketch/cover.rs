@@ -976,13 +976,11 @@ fn merge_while(
         alpha_t: 0.0,
         emax: opts.emax,
     };
-    let mut i = 1;
-    while i < pieces.len() {
-        let (first, last) = (pieces[i - 1].first, pieces[i].last);
-        let pair = &pieces[i - 1..=i];
-        let trials: Vec<Option<(f64, Piece)>> = [&pieces[i - 1], &pieces[i]]
+    merge_pairs(pieces, |pair| {
+        let (first, last) = (pair[0].first, pair[1].last);
+        [&pair[0], &pair[1]]
             .into_par_iter()
-            .map(|start| {
+            .filter_map(|start| {
                 let mut trial = start.clone();
                 // Grown into the neighbour in steps, each refitted by a
                 // short probe (a helix extrapolated over the whole
@@ -1000,16 +998,38 @@ fn merge_while(
                     }
                 }
                 refine(points, &mut trial, &obj, opts.gain, GROW_ITERATIONS);
-                hop(points, &mut trial, &obj, opts.gain);
-                if !plausible(&trial) {
-                    return None;
-                }
-                accept(pair, &trial).map(|score| (score, trial))
+                judged(points, trial, &obj, opts.gain, pair, &accept)
             })
-            .collect();
-        let best = trials
+            .collect()
+    });
+}
+
+/// A merged trial of `pair` restarted where it is stuck ([`hop`]), and
+/// scored by `accept` if it is [`plausible`].
+fn judged(
+    points: &[DVec2],
+    mut trial: Piece,
+    obj: &Objective,
+    gain: f64,
+    pair: &[Piece],
+    accept: impl Fn(&[Piece], &Piece) -> Option<f64>,
+) -> Option<(f64, Piece)> {
+    hop(points, &mut trial, obj, gain);
+    if !plausible(&trial) {
+        return None;
+    }
+    accept(pair, &trial).map(|score| (score, trial))
+}
+
+/// Replaces neighbours `i − 1` and `i` by the best (lowest-scored) of the
+/// merged trials `trials(pair)` gives (in a fixed order: ties go to the
+/// first), stepping back after a merge so that the merged piece is tried
+/// with the one before it too, until no pair merges.
+fn merge_pairs(pieces: &mut Vec<Piece>, trials: impl Fn(&[Piece]) -> Vec<(f64, Piece)>) {
+    let mut i = 1;
+    while i < pieces.len() {
+        let best = trials(&pieces[i - 1..=i])
             .into_iter()
-            .flatten()
             .min_by(|x, y| x.0.total_cmp(&y.0));
         match best {
             Some((_, merged)) => {
@@ -1128,17 +1148,13 @@ fn merge_short(
         emax: opts.emax,
     };
     let near = 0.5 * opts.emax;
-    let mut i = 1;
-    while i < pieces.len() {
-        let (first, last) = (pieces[i - 1].first, pieces[i].last);
-        let lengths = [&pieces[i - 1], &pieces[i]].map(|p| p.last - p.first);
+    merge_pairs(pieces, |pair| {
+        let (first, last) = (pair[0].first, pair[1].last);
+        let lengths = [&pair[0], &pair[1]].map(|p| p.last - p.first);
         if SHORT_RATIO * lengths[0].min(lengths[1]) > lengths[0].max(lengths[1]) {
-            i += 1;
-            continue;
+            return Vec::new();
         }
-        let pair = &pieces[i - 1..=i];
-        let starts = [None, Some(&pair[0]), Some(&pair[1])];
-        let best = starts
+        [None, Some(&pair[0]), Some(&pair[1])]
             .into_par_iter()
             .filter_map(|start| {
                 let mut trial = match start {
@@ -1150,23 +1166,10 @@ fn merge_short(
                     nearest_feet(&mut trial, points, near);
                     refine(points, &mut trial, &obj, opts.gain, GROW_ITERATIONS);
                 }
-                hop(points, &mut trial, &obj, opts.gain);
-                if !plausible(&trial) {
-                    return None;
-                }
-                accept(pair, &trial).map(|score| (score, trial))
+                judged(points, trial, &obj, opts.gain, pair, &accept)
             })
-            .collect::<Vec<_>>()
-            .into_iter()
-            .min_by(|x, y| x.0.total_cmp(&y.0));
-        match best {
-            Some((_, merged)) => {
-                pieces[i - 1] = merged;
-                pieces.remove(i);
-            }
-            None => i += 1,
-        }
-    }
+            .collect()
+    });
 }
 
 /// How far beyond a piece's parameter range (radians, each way)
