@@ -662,16 +662,10 @@ fn sign_after(model: u8) -> bool {
     model >= 11
 }
 
-/// Model 10's along-step prediction of point `k ≥ 2` of `g` against
-/// `pred` (`window`: [`predict::step_window`] for `k`).
-fn along_step(g: &[[i64; 3]], k: usize, pred: [i64; 3], window: u64) -> AlongStep {
-    AlongStep::at(g, k, pred, window)
-}
-
 /// The two axes other than each, in order: coded before the along axis.
 const OTHER_AXES: [[usize; 2]; 3] = [[1, 2], [0, 2], [0, 1]];
 
-/// [`along_step`]'s axis alone.
+/// [`AlongStep::at`]'s axis alone.
 fn along_axis(g: &[[i64; 3]], k: usize, pred: [i64; 3]) -> usize {
     AlongStep::axis_of([0, 1, 2].map(|a| pred[a].wrapping_sub(g[k - 1][a])))
 }
@@ -702,7 +696,7 @@ fn put_residuals(
             Some(flag) => {
                 let b = d[0] & 1;
                 enc.bit(&mut models.parity[ctx], b != 0);
-                let step = flag.then(|| along_step(grid, k, pred, window));
+                let step = flag.then(|| AlongStep::at(grid, k, pred, window));
                 let m = step.map_or_else(|| along_axis(grid, k, pred), |s| s.axis());
                 for a in OTHER_AXES[m] {
                     let v = (d[a] - b) / 2;
@@ -747,7 +741,7 @@ fn get_residuals(
         let d = match along.filter(|_| k >= 2) {
             Some(flag) => {
                 let b = dec.bit(&mut models.parity[ctx]) as i64;
-                let step = flag.then(|| along_step(g, k, pred, window));
+                let step = flag.then(|| AlongStep::at(g, k, pred, window));
                 let m = step.map_or_else(|| along_axis(g, k, pred), |s| s.axis());
                 let mut d = [0i64; 3];
                 for a in OTHER_AXES[m] {
@@ -793,7 +787,7 @@ fn along_bits(g: &[[i64; 3]], predict: &dyn Fn(usize) -> [i64; 3]) -> (u64, u64)
         let p = predict(k);
         let d = [0, 1, 2].map(|a| g[k][a].wrapping_sub(p[a]));
         window = predict::step_window(g, k, window);
-        on += lattice_bits(along_step(g, k, p, window).coded(d));
+        on += lattice_bits(AlongStep::at(g, k, p, window).coded(d));
         off += lattice_bits(d);
     }
     (on, off)

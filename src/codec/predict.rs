@@ -598,7 +598,7 @@ impl AlongStep {
 
     /// The prediction of point `k ≥ 2` of `g` against `pred`, the step
     /// length from `window`, the sum of the squared lengths of the last
-    /// [`AlongStep::STEPS`] steps (fewer near the start: [`step_window`]).
+    /// [`AlongStep::STEPS`] steps (fewer near the start: `predict::step_window`).
     pub fn at(g: &[[i64; 3]], k: usize, pred: [i64; 3], window: u64) -> Self {
         let step = [0, 1, 2].map(|a| pred[a].wrapping_sub(g[k - 1][a]));
         let n = (k - 1).min(Self::STEPS);
