@@ -1063,7 +1063,7 @@ impl CodecWriter {
     /// assert_eq!(w.finish_bytes().unwrap(), bytes);
     /// ```
     pub fn copy_block(&mut self, b: &RawBlock) -> Result<(), IoError> {
-        self.write_parts(b.curves, &b.geometry, &b.side, b.side_len)
+        self.write_parts(b.curves, b.geometry(), b.side(), b.side_len)
     }
 
     fn write_parts(
@@ -1836,12 +1836,15 @@ impl CodecReader {
                 "block lengths do not add up to the block (corrupt file)".into(),
             ));
         }
-        let geometry = body[c.pos..c.pos + g as usize].to_vec();
-        let side = body[c.pos + g as usize..].to_vec();
+        // The parts stay in the buffer read: no copies (measured no faster
+        // on 2 cores, but two fresh allocations fewer per block).
+        let geometry = c.pos..c.pos + g as usize;
+        let side = geometry.end..body.len();
         Ok(RawBlock {
             index: k,
             first,
             curves,
+            bytes: b,
             geometry,
             side,
             side_len: s_raw as u32,
@@ -1884,12 +1887,24 @@ pub struct RawBlock {
     pub first: u64,
     /// Number of curves in the block.
     pub curves: u32,
-    geometry: Vec<u8>,
-    side: Vec<u8>,
+    /// The block as read, checksum included; the parts are ranges of it.
+    bytes: Vec<u8>,
+    geometry: std::ops::Range<usize>,
+    side: std::ops::Range<usize>,
     side_len: u32,
 }
 
 impl RawBlock {
+    /// The geometry stream.
+    fn geometry(&self) -> &[u8] {
+        &self.bytes[self.geometry.clone()]
+    }
+
+    /// The side data, compressed.
+    fn side(&self) -> &[u8] {
+        &self.bytes[self.side.clone()]
+    }
+
     /// The block's curves (pure computation: run blocks in parallel).
     ///
     /// ```
@@ -1932,13 +1947,13 @@ impl RawBlock {
                 .at(format!("block {}", self.index))
         };
         let n = self.curves as usize;
-        let pts = decode_block(&self.geometry, n, &header.params()).map_err(|e| match e {
+        let pts = decode_block(self.geometry(), n, &header.params()).map_err(|e| match e {
             super::DecodeError::Curve { curve, why } => err(self.first + curve as u64, why),
             e => err(self.first, e.to_string()),
         })?;
         let n_cd = header.source.curve_data_names.len();
         let n_pd = header.point_data_names.len();
-        let side = if self.side_len == 0 && self.side.is_empty() {
+        let side = if self.side_len == 0 && self.side().is_empty() {
             // No side data: no ids, and no per-curve or per-point values.
             if n_cd > 0 || n_pd > 0 {
                 return Err(err(
@@ -1948,7 +1963,7 @@ impl RawBlock {
             }
             vec![0u8; n]
         } else {
-            inflate(&self.side, self.side_len as usize)
+            inflate(self.side(), self.side_len as usize)
                 .map_err(|e| err(self.first, format!("side data: {e}")))?
         };
         let mut c = Cursor { b: &side, pos: 0 };
