@@ -8,10 +8,12 @@
 //! input makes the test stricter than the global one, never looser.
 //!
 //! Both polylines run along the same curve, so the nearest segment of a
-//! point moves forward with it: the search starts at the previous point's
-//! nearest segment and looks a few segments either way. A distance found
-//! that way is an upper bound of the true one, so a pass is always a true
-//! pass; only when the local search fails is the whole window scanned.
+//! point moves forward with it: the search starts at the segment that
+//! answered for the previous point (enough where it is within the
+//! tolerance) and looks a few segments either way. A distance found that
+//! way is an upper bound of the true one, so a pass is always a true pass;
+//! only when the local search fails is the whole window scanned. The
+//! answer is therefore the exact one, whatever path the search took.
 
 use glam::DVec3;
 
@@ -41,9 +43,15 @@ pub fn all_within(points: &[DVec3], poly: &[DVec3], tol2: f64) -> bool {
     let seg = |k: usize, p: DVec3| dist2_to_segment(p, poly[k], poly[k + 1]);
     let mut near = 0usize;
     for &p in points {
+        // Any segment within the tolerance answers for `p` (the answer is
+        // whether one exists, not which is nearest): the last point's
+        // segment is tried first, and the walk is taken only past it.
+        let mut best = seg(near, p);
+        if best <= tol2 {
+            continue;
+        }
         // Walk forward while the next segment is nearer, then look one
         // back: along a curve the nearest segment moves forward.
-        let mut best = seg(near, p);
         while near + 1 < segs {
             let d = seg(near + 1, p);
             if d > best {
