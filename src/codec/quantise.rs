@@ -151,11 +151,9 @@ pub fn bcc_nearest(p: glam::DVec3, half: f64) -> Option<[i64; 3]> {
 #[inline]
 fn floor_small(y: f64) -> f64 {
     let t = y as i64 as f64;
-    if t > y {
-        t - 1.0
-    } else {
-        t
-    }
+    // Without a branch (which a lattice point's coordinates would make
+    // unpredictable): the comparison as a number.
+    t - (t > y) as u8 as f64
 }
 
 /// `y.round()` (half away from zero) for `|y| < 2^52`, as [`floor_small`].
@@ -164,13 +162,9 @@ fn round_small(y: f64) -> f64 {
     let t = y as i64 as f64;
     // Exact: the fraction of a double is a double.
     let frac = y - t;
-    if frac >= 0.5 {
-        t + 1.0
-    } else if frac <= -0.5 {
-        t - 1.0
-    } else {
-        t
-    }
+    // Without branches, as `floor_small` (a zero may change sign, which no
+    // caller sees: the result goes to an integer).
+    t + (frac >= 0.5) as u8 as f64 - (frac <= -0.5) as u8 as f64
 }
 
 /// The lattice point of half-step coordinates `k`.
@@ -511,14 +505,26 @@ pub fn cheapest_points(
                     }
                     cost.sum(t)
                 };
-                consider(centre, at([0; 3]), &mut top, &mut kept);
-                for d in BCC_NEIGHBOURS {
-                    consider(
-                        [0, 1, 2].map(|a| centre[a] + d[a]),
-                        at(d),
-                        &mut top,
-                        &mut kept,
-                    );
+                // Along the step a candidate's cost needs its coded value (a
+                // square root): first its bound with the least there, which
+                // a candidate must beat the bar by anyway (sums of larger
+                // terms are never smaller, in floating point too).
+                let within_bar = |d: [i64; 3], top: &[(f64, [i64; 3]); 16], kept: usize| {
+                    step.is_none_or(|st| {
+                        let mut t = [0, 1, 2].map(|a| terms[a][(d[a] + 2) as usize]);
+                        t[st.axis()] = least[st.axis()];
+                        cost.sum(t) < bar(top, kept)
+                    })
+                };
+                for d in std::iter::once([0; 3]).chain(BCC_NEIGHBOURS) {
+                    if within_bar(d, &top, kept) {
+                        consider(
+                            [0, 1, 2].map(|a| centre[a] + d[a]),
+                            at(d),
+                            &mut top,
+                            &mut kept,
+                        );
+                    }
                 }
             }
             for &(c, q) in &top[..kept] {
