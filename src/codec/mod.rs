@@ -680,24 +680,16 @@ fn put_residuals(
     enc: &mut Encoder,
     models: &mut ResidualModels,
     along: Option<bool>,
-    grid: &[[i64; 3]],
-    predict: impl Fn(usize) -> [i64; 3],
+    plan: &[Residual],
 ) {
     let mut ctx = RESIDUAL_CONTEXTS - 1;
-    let mut window = 0;
     let mut before = [0i64; 3];
-    for k in 1..grid.len() {
-        let pred = predict(k);
-        let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
-        if along == Some(true) {
-            window = predict::step_window(grid, k, window);
-        }
-        match along.filter(|_| k >= 2) {
-            Some(flag) => {
+    for (i, r) in plan.iter().enumerate() {
+        let (d, m) = (r.d, r.axis);
+        match along.filter(|_| i + 1 >= 2) {
+            Some(_) => {
                 let b = d[0] & 1;
                 enc.bit(&mut models.parity[ctx], b != 0);
-                let step = flag.then(|| AlongStep::at(grid, k, pred, window));
-                let m = step.map_or_else(|| along_axis(grid, k, pred), |s| s.axis());
                 for a in OTHER_AXES[m] {
                     let v = (d[a] - b) / 2;
                     if models.sign_after {
@@ -707,8 +699,7 @@ fn put_residuals(
                         models.axes[ctx][a].put(enc, v);
                     }
                 }
-                let h = step.map_or(0, |s| s.half_prediction(d, b));
-                models.along[ctx].put_after(enc, (d[m] - b) / 2 - h, before[m]);
+                models.along[ctx].put_after(enc, (d[m] - b) / 2 - r.half, before[m]);
             }
             None => put_lattice(enc, &mut models.parity[ctx], &mut models.axes[ctx], d),
         }
@@ -717,6 +708,45 @@ fn put_residuals(
             before = halves(d);
         }
     }
+}
+
+/// One residual of a points curve as [`put_residuals`] codes it: the
+/// lattice difference from the prediction, the axis coded last and, with
+/// the along-step prediction, its predicted half (what the streams of a
+/// block share: [`plan_residuals`]).
+struct Residual {
+    d: [i64; 3],
+    axis: usize,
+    half: i64,
+}
+
+/// The residuals of points `1..` of `grid` against `predict`, with what
+/// coding them needs besides the models.
+fn plan_residuals(
+    along: Option<bool>,
+    grid: &[[i64; 3]],
+    predict: impl Fn(usize) -> [i64; 3],
+) -> Vec<Residual> {
+    let mut window = 0;
+    let mut out = Vec::with_capacity(grid.len().saturating_sub(1));
+    for k in 1..grid.len() {
+        let pred = predict(k);
+        let d = [0, 1, 2].map(|a| grid[k][a] - pred[a]);
+        if along == Some(true) {
+            window = predict::step_window(grid, k, window);
+        }
+        let (axis, half) = match along.filter(|_| k >= 2) {
+            Some(flag) => {
+                let b = d[0] & 1;
+                let step = flag.then(|| AlongStep::at(grid, k, pred, window));
+                let m = step.map_or_else(|| along_axis(grid, k, pred), |s| s.axis());
+                (m, step.map_or(0, |s| s.half_prediction(d, b)))
+            }
+            None => (0, 0),
+        };
+        out.push(Residual { d, axis, half });
+    }
+    out
 }
 
 /// The decoder's [`put_residuals`]: points `g.len()..n` of a points curve
@@ -1538,6 +1568,133 @@ fn chunk_options<C: AsRef<[DVec3]> + Sync>(
 
 /// One coding of a block's curves: the stream, its models and the curve
 /// before's starts.
+/// What coding an arcs curve's start needs of the curves before it (its
+/// anchor, the predictions of its first end and bulge): the same for every
+/// stream of a block ([`BlockStream::put_curve`]), so found once per curve
+/// (the anchor search and the neighbour's walk were coded twice, a tenth of
+/// compress at 0.5 mm).
+struct ArcsPlan {
+    /// Whether the anchor flag is coded (there is a curve before).
+    anchor_flag: bool,
+    /// The anchor: curves back, at its end, its lattice point.
+    anchor: Option<(usize, bool, [i64; 3])>,
+    first_end: [i64; 3],
+    first_bulge: [i64; 2],
+}
+
+/// What coding a curve needs of the curves before it, the same for every
+/// stream of a block (the streams differ in their models only).
+enum CurvePlan {
+    Arcs(ArcsPlan),
+    /// A points curve's start, less its prediction, and its residuals.
+    Points {
+        start: [i64; 3],
+        residuals: Vec<Residual>,
+    },
+    /// Empty and raw curves need nothing.
+    Nothing,
+}
+
+impl CurvePlan {
+    /// The plan of curve `code`, with `neighbours` holding it last and
+    /// `prev` the streams' (equal) cross-curve predictions.
+    fn of(
+        code: &CurveCode,
+        neighbours: &mut Neighbours,
+        prev: &Previous,
+        q: &Quantiser,
+        params: &CodecParams,
+    ) -> Self {
+        match code {
+            CurveCode::Arcs {
+                start, first_end, ..
+            } => CurvePlan::Arcs(ArcsPlan::of(*start, *first_end, neighbours, prev, q)),
+            CurveCode::Points {
+                grid,
+                reference,
+                helix,
+                along: along_flag,
+            } => {
+                let along = along(params.model).then_some(*along_flag);
+                match reference {
+                    Some(rf) => {
+                        // `neighbours` holds this curve last: its reference
+                        // is `back` before that.
+                        let grids = neighbours.window();
+                        let at_back = |b: usize| &grids[grids.len() - 1 - b][..];
+                        let res = reference::Resolved {
+                            first: (at_back(rf.back), rf.reversed),
+                            second: rf.second.map(|(b, rev)| (at_back(b), rev)),
+                            trend: offset_trend(params.model),
+                        };
+                        let start = res.start();
+                        let n = grid.len();
+                        CurvePlan::Points {
+                            start: [0, 1, 2].map(|a| grid[0][a] - start[a]),
+                            residuals: plan_residuals(along, grid, |k| res.predict_in(grid, k, n)),
+                        }
+                    }
+                    None => CurvePlan::Points {
+                        start: [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]),
+                        residuals: plan_residuals(along, grid, |k| {
+                            own_prediction(grid, k, *helix, screw(params.model))
+                        }),
+                    },
+                }
+            }
+            CurveCode::Empty | CurveCode::Raw(_) => CurvePlan::Nothing,
+        }
+    }
+}
+
+impl ArcsPlan {
+    /// The plan of an arcs curve starting at `start` (its first end
+    /// `first_end`).
+    fn of(
+        start: [i64; 3],
+        first_end: [i64; 3],
+        neighbours: &Neighbours,
+        prev: &Previous,
+        q: &Quantiser,
+    ) -> Self {
+        let (start, first_end) = (&start, &first_end);
+        // `neighbours` holds this curve last; its anchors are the curves
+        // before it.
+        let before = neighbours.len() - 1;
+        let own = lattice_bits([0, 1, 2].map(|a| start[a] - prev.arc_start[a]));
+        let anchor = if before > 0 {
+            neighbours
+                .best_anchor(*start, before)
+                .filter(|&(_, _, bits)| bits < own)
+        } else {
+            None
+        };
+        let (fe_pred, walk) = first_end_prediction(
+            neighbours,
+            before,
+            anchor.map(|a| (a.0, a.1)),
+            prev,
+            q.first,
+        );
+        let q0 = DVec3::new(start[0] as f64, start[1] as f64, start[2] as f64) * q.start;
+        let fb_pred = first_bulge_prediction(
+            walk,
+            q0,
+            encoder::first_end(q0, *first_end, q.first),
+            q.offset,
+        );
+        ArcsPlan {
+            anchor_flag: before > 0,
+            anchor: anchor.map(|(back, at_end, _)| {
+                let r = neighbours.anchor(before - back, at_end).unwrap_or([0; 3]);
+                (back, at_end, r)
+            }),
+            first_end: fe_pred,
+            first_bulge: fb_pred,
+        }
+    }
+}
+
 struct BlockStream {
     enc: Encoder,
     m: Models,
@@ -1571,9 +1728,14 @@ impl BlockStream {
     }
 
     /// Codes the curve chosen last (`neighbours` holds it last).
-    fn put_curve(&mut self, code: &CurveCode, neighbours: &mut Neighbours, params: &CodecParams) {
+    fn put_curve(
+        &mut self,
+        code: &CurveCode,
+        neighbours: &mut Neighbours,
+        params: &CodecParams,
+        plan: &CurvePlan,
+    ) {
         let (enc, m, prev) = (&mut self.enc, &mut self.m, &mut self.prev);
-        let (q_start, q_first, q_offset) = (self.q.start, self.q.first, self.q.offset);
         let kind = kind_of(code);
         enc.set_tag(0);
         put_kind(enc, m, kind);
@@ -1611,32 +1773,21 @@ impl BlockStream {
                             m.back.put_unsigned(enc, back as u64 - 1);
                             enc.bit(&mut m.reversed, reversed);
                         }
-                        // `neighbours` holds this curve last: its reference
-                        // is `back` before that.
-                        let grids = neighbours.window();
-                        let at_back = |b: usize| &grids[grids.len() - 1 - b][..];
-                        let res = reference::Resolved {
-                            first: (at_back(rf.back), rf.reversed),
-                            second: rf.second.map(|(b, rev)| (at_back(b), rev)),
-                            trend: offset_trend(params.model),
+                        let CurvePlan::Points { start, residuals } = plan else {
+                            unreachable!("a points curve is put with its plan")
                         };
-                        let start = res.start();
-                        let d = [0, 1, 2].map(|a| grid[0][a] - start[a]);
-                        put_lattice(enc, &mut m.parity[0], &mut m.ref_start, d);
-                        let n = grid.len();
+                        put_lattice(enc, &mut m.parity[0], &mut m.ref_start, *start);
                         enc.set_tag(11);
-                        put_residuals(enc, &mut m.ref_residual, along, grid, |k| {
-                            res.predict_in(grid, k, n)
-                        });
+                        put_residuals(enc, &mut m.ref_residual, along, residuals);
                     }
                     None => {
+                        let CurvePlan::Points { start, residuals } = plan else {
+                            unreachable!("a points curve is put with its plan")
+                        };
                         enc.bit(&mut m.helix, *helix);
-                        let d = [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]);
-                        put_lattice(enc, &mut m.parity[1], &mut m.point_start, d);
+                        put_lattice(enc, &mut m.parity[1], &mut m.point_start, *start);
                         enc.set_tag(11);
-                        put_residuals(enc, &mut m.residual, along, grid, |k| {
-                            own_prediction(grid, k, *helix, screw(params.model))
-                        });
+                        put_residuals(enc, &mut m.residual, along, residuals);
                     }
                 }
                 prev.point_start = grid[0];
@@ -1650,23 +1801,16 @@ impl BlockStream {
                 enc.set_tag(1);
                 m.count.put_unsigned(enc, elements.len() as u64);
                 enc.set_tag(2);
-                // `neighbours` holds this curve last; its anchors are the
-                // curves before it.
-                let before = neighbours.len() - 1;
-                let own = lattice_bits([0, 1, 2].map(|a| start[a] - prev.arc_start[a]));
-                let anchor = if before > 0 {
-                    let best = neighbours.best_anchor(*start, before);
-                    let pick = best.filter(|&(_, _, bits)| bits < own);
-                    enc.bit(&mut m.has_anchor, pick.is_some());
-                    pick
-                } else {
-                    None
+                let CurvePlan::Arcs(plan) = plan else {
+                    unreachable!("an arcs curve is put with its plan")
                 };
-                match anchor {
-                    Some((back, at_end, _)) => {
+                if plan.anchor_flag {
+                    enc.bit(&mut m.has_anchor, plan.anchor.is_some());
+                }
+                match plan.anchor {
+                    Some((back, at_end, r)) => {
                         m.back_anchor.put_unsigned(enc, back as u64 - 1);
                         enc.bit(&mut m.anchor_end, at_end);
-                        let r = neighbours.anchor(before - back, at_end).unwrap_or([0; 3]);
                         let d = [0, 1, 2].map(|a| start[a] - r[a]);
                         put_lattice(enc, &mut m.start_parity[0], &mut m.anchor_start, d);
                     }
@@ -1675,29 +1819,15 @@ impl BlockStream {
                         put_lattice(enc, &mut m.start_parity[1], &mut m.start, d);
                     }
                 }
-                let (fe_pred, walk) = first_end_prediction(
-                    neighbours,
-                    before,
-                    anchor.map(|a| (a.0, a.1)),
-                    prev,
-                    q_first,
-                );
                 enc.set_tag(3);
                 for a in 0..3 {
-                    m.first_end[a].put(enc, first_end[a] - fe_pred[a]);
+                    m.first_end[a].put(enc, first_end[a] - plan.first_end[a]);
                 }
                 enc.set_tag(4);
                 prev.arc_start = *start;
                 prev.first_end = *first_end;
-                let q0 = DVec3::new(start[0] as f64, start[1] as f64, start[2] as f64) * q_start;
-                let fb_pred = first_bulge_prediction(
-                    walk,
-                    q0,
-                    encoder::first_end(q0, *first_end, q_first),
-                    q_offset,
-                );
                 for a in 0..2 {
-                    m.first_bulge[a].put(enc, first_bulge[a] - fb_pred[a]);
+                    m.first_bulge[a].put(enc, first_bulge[a] - plan.first_bulge[a]);
                 }
                 let mut prev_kind = ElementKind::Corner;
                 let mut last = [0i64; 3];
@@ -1819,8 +1949,15 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
             output_points += n;
             let kind = kind_of(code);
             kinds.push(kind);
+            let plan = CurvePlan::of(
+                code,
+                &mut neighbours,
+                &streams[0].prev,
+                &streams[0].q,
+                params,
+            );
             for s in streams.iter_mut() {
-                s.put_curve(code, &mut neighbours, params);
+                s.put_curve(code, &mut neighbours, params, &plan);
             }
             if let CurveCode::Arcs { elements, .. } = code {
                 n_elements += 1 + elements.len();
