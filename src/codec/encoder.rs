@@ -18,7 +18,7 @@
 use glam::DVec3;
 
 use super::check::all_within;
-use super::predict::{corner_tangent, perpendicular_part, Arc, ChainState};
+use super::predict::{corner_tangent, perpendicular_part, Arc, ArcError, ChainState, Circle};
 use super::quantise::Quantiser;
 use super::{CurveCode, ElementCode, ElementKind};
 
@@ -148,6 +148,36 @@ impl<'a> CurveEncoder<'a> {
     /// passes; returns its decoder samples. With a mailbox the test is
     /// asked there first: a sure verdict is the reference's
     /// ([`crate::twin::arc_check`]), an unsure one is decided here.
+    /// The arc from `start` along `tangent` to `end` as a candidate for
+    /// input vertices `from + 1..=to` ([`Arc::new`]'s error where there is
+    /// none), or `None` where (on the CPU) one of them is certainly beyond
+    /// the tolerance of what it decodes to ([`surely_fails`]: asked before
+    /// the arc's angle is found and its samples drawn, where the chord
+    /// turns less than 2.6 rad from the tangent, so that the angle could
+    /// not have refused the arc: the same answers as drawing them).
+    fn candidate_arc(
+        &self,
+        start: DVec3,
+        tangent: DVec3,
+        end: DVec3,
+        from: usize,
+        to: usize,
+    ) -> Result<Option<Arc>, ArcError> {
+        let circle = Circle::new(start, tangent, end)?;
+        if self.mailbox.is_none()
+            && circle.cos_a > -0.85
+            && surely_fails(
+                &circle,
+                &self.points[from + 1..=to],
+                self.tol2,
+                self.q.sagitta,
+            )
+        {
+            return Ok(None);
+        }
+        circle.arc().map(Some)
+    }
+
     async fn accept(&self, arc: &Arc, from: usize, to: usize) -> Option<Vec<DVec3>> {
         if let Some(mailbox) = self.mailbox {
             // Boxed: the question's future is large, and every search
@@ -177,9 +207,6 @@ impl<'a> CurveEncoder<'a> {
     /// The reference acceptance test ([`accept`](Self::accept)), here and
     /// now.
     pub fn accept_now(&self, arc: &Arc, from: usize, to: usize) -> Option<Vec<DVec3>> {
-        if surely_fails(arc, &self.points[from + 1..=to], self.tol2, self.q.sagitta) {
-            return None;
-        }
         let mut samples = Vec::with_capacity(8);
         samples.push(arc.start);
         arc.sample_into(self.q.sagitta, &mut samples);
@@ -267,7 +294,11 @@ impl<'a> CurveEncoder<'a> {
             // The estimated bulge, then a straight segment.
             for b in tries.into_iter().take(count) {
                 let t = corner_from_code(state.point, end, state.normal, b, self.q.offset)?;
-                let arc = Arc::new(state.point, t, end).ok()?;
+                let arc = match self.candidate_arc(state.point, t, end, from, j) {
+                    Err(_) => return None,
+                    Ok(None) => continue,
+                    Ok(Some(arc)) => arc,
+                };
                 if let Some(samples) = self.accept(&arc, from, j).await {
                     code.bulge = b;
                     return Some(Candidate {
@@ -284,7 +315,9 @@ impl<'a> CurveEncoder<'a> {
             ElementKind::Straight => (end - state.point).normalize(),
             _ => state.tangent,
         };
-        let arc = Arc::new(state.point, tangent, end).ok()?;
+        let arc = self
+            .candidate_arc(state.point, tangent, end, from, j)
+            .ok()??;
         let samples = self.accept(&arc, from, j).await?;
         Some(Candidate {
             code,
@@ -543,7 +576,12 @@ impl<'a> CurveEncoder<'a> {
             ];
             for bulge in [b, [0, 0]] {
                 let t = corner_from_code(q0, end, DVec3::ZERO, bulge, self.q.offset)?;
-                let arc = Arc::new(q0, t, end).ok()?;
+                let arc = match self.candidate_arc(q0, t, end, 0, j) {
+                    Err(_) => return None,
+                    Ok(None) if b == [0, 0] => break,
+                    Ok(None) => continue,
+                    Ok(Some(arc)) => arc,
+                };
                 if let Some(samples) = self.accept(&arc, 0, j).await {
                     return Some(Candidate {
                         code: ElementCode {
@@ -767,7 +805,7 @@ fn observed_twist(arc: &Arc, before: &ChainState, length_step: f64) -> f64 {
 /// a thousandth of the tolerance covers the rounding. Never true where the
 /// check would pass: the same elements, fewer samples drawn (compress at
 /// 0.5 mm 3 % less CPU time on 100,000 fornix replicas).
-fn surely_fails(arc: &Arc, points: &[DVec3], tol2: f64, sagitta: f64) -> bool {
+fn surely_fails(arc: &Circle, points: &[DVec3], tol2: f64, sagitta: f64) -> bool {
     let tol = tol2.sqrt();
     let reach = tol * 1.001 + sagitta;
     let reach2 = reach * reach;
@@ -789,8 +827,14 @@ fn surely_fails(arc: &Arc, points: &[DVec3], tol2: f64, sagitta: f64) -> bool {
             d2 > if rho >= radius { outside2 } else { reach2 }
         })
     } else {
-        // The arc is within κL²/8 of its chord.
-        let bow = arc.curvature * arc.length * arc.length / 8.0;
+        // A nearly straight arc: within κL²/8 of its chord, its length L
+        // below 1.000001 times the chord where sin α ≤ 10⁻³ (α/sin α);
+        // beyond that (a chord of thousands of tolerances) no bound.
+        if !(arc.cos_a > 0.0 && arc.sin_a <= 1e-3) {
+            return false;
+        }
+        let length = 1.000001 * arc.chord;
+        let bow = arc.curvature * length * length / 8.0;
         let reach = reach + bow;
         let chord = arc.end - arc.start;
         let c2 = chord.length_squared();
@@ -843,7 +887,10 @@ mod tests {
             let side = tangent.any_orthonormal_vector();
             let dir = tangent * (turn / 2.0).cos() + side * (turn / 2.0).sin();
             let end = start + dir * tol * rng.gen_range(1.0..40.0);
-            let Ok(arc) = Arc::new(start, tangent, end) else {
+            let Ok(circle) = Circle::new(start, tangent, end) else {
+                continue;
+            };
+            let Ok(arc) = circle.arc() else {
                 continue;
             };
             let mut poly = vec![arc.start];
@@ -860,7 +907,7 @@ mod tests {
                 })
                 .collect();
             let passes = all_within(&points, &poly, tol * tol);
-            let refuses = surely_fails(&arc, &points, tol * tol, sagitta);
+            let refuses = surely_fails(&circle, &points, tol * tol, sagitta);
             assert!(
                 !(refuses && passes),
                 "case {case}: refused a passing candidate"

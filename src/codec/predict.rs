@@ -136,9 +136,28 @@ pub enum ArcError {
 /// of a full turn.
 pub const MAX_HALF_TURN: f64 = 0.95 * std::f64::consts::PI;
 
-impl Arc {
-    /// The arc from `start` along the unit `tangent` to `end`.
-    pub fn new(start: DVec3, tangent: DVec3, end: DVec3) -> Result<Arc, ArcError> {
+/// The circle of an arc from `start` along the unit `tangent` to `end`,
+/// before the arc's angle is found ([`Circle::arc`]): what a test of
+/// distances from it needs, without the arc tangent that the angle costs.
+#[derive(Clone, Copy, Debug)]
+pub struct Circle {
+    pub start: DVec3,
+    pub tangent: DVec3,
+    pub end: DVec3,
+    /// The chord's length.
+    pub chord: f64,
+    /// `cos α` and `sin α`, α the angle between the tangent and the chord.
+    pub cos_a: f64,
+    pub sin_a: f64,
+    /// Unit in-plane normal at the start, towards the centre (any
+    /// perpendicular for a straight arc).
+    pub normal: DVec3,
+    pub curvature: f64,
+}
+
+impl Circle {
+    /// The circle from `start` along the unit `tangent` through `end`.
+    pub fn new(start: DVec3, tangent: DVec3, end: DVec3) -> Result<Circle, ArcError> {
         let d = end - start;
         let c = d.length();
         if !c.is_finite() || !tangent.is_finite() {
@@ -148,35 +167,55 @@ impl Arc {
             return Err(ArcError::ZeroChord);
         }
         let u = d / c;
-        // α from atan2 of the perpendicular and parallel parts: accurate
-        // for small and large angles alike.
         let along = tangent.dot(u);
         let perp = u - tangent * along;
         let sin_a = perp.length();
-        let half_turn = sin_a.atan2(along);
-        if half_turn > MAX_HALF_TURN {
-            return Err(ArcError::Backwards);
-        }
         let normal = if sin_a > 1e-300 {
             perp / sin_a
         } else {
             any_perpendicular(tangent)
         };
-        let curvature = 2.0 * sin_a / c;
-        let length = if half_turn < 1e-8 {
-            c
-        } else {
-            c * half_turn / sin_a
-        };
-        Ok(Arc {
+        Ok(Circle {
             start,
             tangent,
             end,
+            chord: c,
+            cos_a: along,
+            sin_a,
             normal,
+            curvature: 2.0 * sin_a / c,
+        })
+    }
+
+    /// The arc along this circle from its start to its end.
+    pub fn arc(&self) -> Result<Arc, ArcError> {
+        // α from atan2 of the perpendicular and parallel parts: accurate
+        // for small and large angles alike.
+        let half_turn = self.sin_a.atan2(self.cos_a);
+        if half_turn > MAX_HALF_TURN {
+            return Err(ArcError::Backwards);
+        }
+        let length = if half_turn < 1e-8 {
+            self.chord
+        } else {
+            self.chord * half_turn / self.sin_a
+        };
+        Ok(Arc {
+            start: self.start,
+            tangent: self.tangent,
+            end: self.end,
+            normal: self.normal,
             half_turn,
-            curvature,
+            curvature: self.curvature,
             length,
         })
+    }
+}
+
+impl Arc {
+    /// The arc from `start` along the unit `tangent` to `end`.
+    pub fn new(start: DVec3, tangent: DVec3, end: DVec3) -> Result<Arc, ArcError> {
+        Circle::new(start, tangent, end)?.arc()
     }
 
     /// Tangent at the end: the start tangent reflected in the chord.
