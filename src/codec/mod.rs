@@ -1892,14 +1892,14 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     // magnitudes in models per axis and in one shared by the axes (a flag
     // says which): sharing learns three times as fast, which a small
     // block needs, and a large one codes its axes' statistics apart. The
-    // smaller is kept (the choices are the same; the coding is a small
-    // part of the time).
-    // The shared stream is begun at the block's first points curve: until
-    // then both code the same (but for the flag), so the curves before are
-    // put into it then, from their codes and plans kept meanwhile, and a
-    // block without points curves is coded once (a twentieth of compress
-    // at 0.5 mm; such a block keeps the per-axis stream, which the shared
-    // one could beat by a byte at most, in its last bytes' carries).
+    // smaller is kept (the choices are the same). The shared stream is
+    // begun at the block's first points curve: until then both code the
+    // same but for the flag, so the curves before are put into it then,
+    // from their codes and plans kept meanwhile, and a block without
+    // points curves is coded once (a thirtieth of compress at 0.5 mm; such
+    // a block keeps the per-axis stream, which the shared one could beat
+    // by a byte at most, in its last bytes' carries; no file measured
+    // changed).
     let mut streams = vec![BlockStream::new(params, scale_exp, tally, false)];
     let mut shared_pending = sign_after(params.model);
     let mut held: Vec<(CurveCode, CurvePlan)> = Vec::new();
