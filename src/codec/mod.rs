@@ -463,12 +463,8 @@ fn finish_options(enc: &CurveEncoder, arcs: Option<(CurveCode, Vec<DVec3>)>) -> 
 /// Bits of an Exp-Golomb code of `v` with a sign: a static stand-in for the
 /// adaptive coder's cost when choosing between representations.
 fn eg_bits(v: i64) -> u64 {
-    if v == 0 {
-        1
-    } else {
-        let n = 64 - v.unsigned_abs().leading_zeros() as u64;
-        1 + 2 * n
-    }
+    // 1 at 0 too (64 leading zeros), without a branch.
+    1 + 2 * (64 - v.unsigned_abs().leading_zeros() as u64)
 }
 
 /// [`estimated_bits`] of an arcs curve's header and first element.

@@ -442,11 +442,8 @@ pub fn predict(prev: [i64; 3], i: usize, n: usize, r: &[[i64; 3]], reversed: boo
 
 /// Bits of a signed Exp-Golomb code of `v` (the encoder's static cost).
 fn eg(v: i64) -> u64 {
-    if v == 0 {
-        1
-    } else {
-        1 + 2 * (64 - v.unsigned_abs().leading_zeros() as u64)
-    }
+    // 1 at 0 too (64 leading zeros), without a branch.
+    1 + 2 * (64 - v.unsigned_abs().leading_zeros() as u64)
 }
 
 fn l1(a: [i64; 3], b: [i64; 3]) -> i64 {
