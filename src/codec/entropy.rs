@@ -258,12 +258,10 @@ impl Encoder {
             t[self.tag] += ctx.cost(bit) as f64 / 256.0;
         }
         let bound = (self.range >> ctx.prob_bits()) * ctx.p as u32;
-        if bit {
-            self.low += bound as u64;
-            self.range -= bound;
-        } else {
-            self.range = bound;
-        }
+        // Without a branch on the bit (as the decoder's `decide`).
+        let mask = (bit as u32).wrapping_neg();
+        self.low += (bound & mask) as u64;
+        self.range = (self.range.wrapping_sub(bound) & mask) | (bound & !mask);
         ctx.update(bit);
         while self.range < TOP {
             self.range <<= 8;
