@@ -698,7 +698,9 @@ impl AlongStep {
         if !(r > 0.0) {
             return 0;
         }
-        let h = ((r.sqrt().copysign(sm) - sm - b as f64) / 2.0).round();
+        // |·| < 2^31 (r < LIMIT²): rounded by `round_small` (equal to
+        // `round` there, without the libm call or a branch).
+        let h = super::quantise::round_small((r.sqrt().copysign(sm) - sm - b as f64) / 2.0);
         if h.abs() < Self::LIMIT {
             h as i64
         } else {

@@ -158,7 +158,7 @@ fn floor_small(y: f64) -> f64 {
 
 /// `y.round()` (half away from zero) for `|y| < 2^52`, as [`floor_small`].
 #[inline]
-fn round_small(y: f64) -> f64 {
+pub(crate) fn round_small(y: f64) -> f64 {
     let t = y as i64 as f64;
     // Exact: the fraction of a double is a double.
     let frac = y - t;
