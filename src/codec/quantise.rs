@@ -141,8 +141,10 @@ pub fn bcc_nearest(p: glam::DVec3, half: f64) -> Option<[i64; 3]> {
     let even = x.map(|v| 2.0 * round_small(v / 2.0));
     let odd = x.map(|v| 2.0 * floor_small(v / 2.0) + 1.0);
     let d2 = |c: [f64; 3]| (0..3).map(|k| (c[k] - x[k]) * (c[k] - x[k])).sum::<f64>();
-    let best = if d2(even) <= d2(odd) { even } else { odd };
-    Some(best.map(|v| v as i64))
+    // Either lattice is as likely: picked without a branch.
+    let keep_even = (d2(even) <= d2(odd)) as i64;
+    let (e, o) = (even.map(|v| v as i64), odd.map(|v| v as i64));
+    Some([0, 1, 2].map(|k| (e[k] & -keep_even) | (o[k] & (keep_even - 1))))
 }
 
 /// `y.floor()` for `|y| < 2^52`, through an integer: the x86-64 baseline
