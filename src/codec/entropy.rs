@@ -487,7 +487,7 @@ fn bit_len(m: u64) -> usize {
 ///     (0.0..0.09).contains(&e) && linear_log2(y + 1.0) > linear_log2(y)
 /// }));
 /// ```
-pub fn linear_log2(y: f64) -> f64 {
+pub const fn linear_log2(y: f64) -> f64 {
     let bits = y.to_bits();
     let exponent = (bits >> 52) as i64 - 1023;
     let mantissa = f64::from_bits((bits & ((1u64 << 52) - 1)) | (1023u64 << 52));

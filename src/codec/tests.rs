@@ -917,3 +917,17 @@ fn the_step_window_is_the_direct_sum_of_the_last_steps() {
         }
     }
 }
+
+#[test]
+fn the_slides_cost_table_is_its_function() {
+    // Made at compile time; asked at run time, bit for bit the same, and
+    // the values outside it computed.
+    for v in -200i64..=200 {
+        let at_run_time = smooth_axis_bits_of(std::hint::black_box(v));
+        assert_eq!(smooth_axis_bits(v).to_bits(), at_run_time.to_bits(), "{v}");
+    }
+    assert_eq!(smooth_axis_bits(0), 1.0);
+    assert_eq!(smooth_axis_bits(1), 1.0);
+    assert_eq!(smooth_axis_bits(5), 4.0); // (5 - 1) / 2 = 2: 1 + 2·(log₂ 3 taken linearly: 1.5)
+    assert!(smooth_axis_bits(i64::MAX).is_finite() && smooth_axis_bits(i64::MIN + 1).is_finite());
+}
