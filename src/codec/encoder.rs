@@ -238,11 +238,12 @@ impl<'a> CurveEncoder<'a> {
         kind: ElementKind,
     ) -> Option<Candidate> {
         let d = self.points[j] - state.point;
-        let (u, _, _) = state.predicted_frame(state.frame_chord(self.q.length));
-        let x = d.dot(u) / self.q.length;
+        // The chord's frame once per candidate (it was found three times).
+        let frame = state.predicted_frame(state.frame_chord(self.q.length));
+        let x = d.dot(frame.0) / self.q.length;
         let near = x.round();
         let other = if x >= near { near + 1.0 } else { near - 1.0 };
-        let [x1, x2] = self.offsets_to(state, j);
+        let [x1, x2] = self.offsets_to(state, &frame, j);
         let a1 = Quantiser::index(x1, self.q.offset)?;
         let a2 = Quantiser::index(x2, self.q.offset)?;
         for steps in [near, other] {
@@ -250,7 +251,7 @@ impl<'a> CurveEncoder<'a> {
                 continue;
             }
             if let Some(c) = self
-                .candidate_with_code(state, from, j, kind, steps as i64, [a1, a2])
+                .candidate_with_code(state, &frame, from, j, kind, steps as i64, [a1, a2])
                 .await
             {
                 return Some(c);
@@ -260,19 +261,21 @@ impl<'a> CurveEncoder<'a> {
     }
 
     /// Input vertex `j`'s offsets from `state` across its predicted chord
-    /// (before quantisation).
-    fn offsets_to(&self, state: &ChainState, j: usize) -> [f64; 2] {
+    /// (before quantisation), `frame` the chord's
+    /// ([`ChainState::predicted_frame`]).
+    fn offsets_to(&self, state: &ChainState, frame: &Frame, j: usize) -> [f64; 2] {
         let d = self.points[j] - state.point;
-        let (_, e1, e2) = state.predicted_frame(state.frame_chord(self.q.length));
-        [d.dot(e1), d.dot(e2)]
+        [d.dot(frame.1), d.dot(frame.2)]
     }
 
     /// A G1 or straight element ending a chord of `steps` and offsets
     /// `offset` (a corner: also its bulge) from `state`, as
     /// [`candidate`](Self::candidate) checks it for reach `j`.
+    #[allow(clippy::too_many_arguments)]
     async fn candidate_with_code(
         &self,
         state: &ChainState,
+        frame: &Frame,
         from: usize,
         j: usize,
         kind: ElementKind,
@@ -280,7 +283,7 @@ impl<'a> CurveEncoder<'a> {
         offset: [i64; 2],
     ) -> Option<Candidate> {
         let [a1, a2] = offset;
-        let end = element_end(state, steps, a1, a2, &self.q);
+        let end = element_end_in(state.point, frame, steps, a1, a2, &self.q);
         let mut code = ElementCode {
             kind,
             length: steps - state.chord_steps,
@@ -340,8 +343,9 @@ impl<'a> CurveEncoder<'a> {
             return c;
         }
         let j = c.reach;
+        let frame = state.predicted_frame(state.frame_chord(self.q.length));
         let t = self
-            .offsets_to(state, j)
+            .offsets_to(state, &frame, j)
             .map(|x| Quantiser::index_toward_zero(x, self.q.offset));
         let [Some(t1), Some(t2)] = t else {
             return c;
@@ -360,7 +364,7 @@ impl<'a> CurveEncoder<'a> {
         }
         for o in tries {
             if let Some(better) = self
-                .candidate_with_code(state, from, j, c.code.kind, steps, o)
+                .candidate_with_code(state, &frame, from, j, c.code.kind, steps, o)
                 .await
             {
                 return better;
@@ -647,8 +651,24 @@ impl<'a> CurveEncoder<'a> {
 /// the predicted chord direction (the previous arc continued for the
 /// previous chord's length) and the perpendicular offsets.
 pub fn element_end(state: &ChainState, steps: i64, a1: i64, a2: i64, q: &Quantiser) -> DVec3 {
-    let (u, e1, e2) = state.predicted_frame(state.frame_chord(q.length));
-    state.point + u * (steps as f64 * q.length) + (e1 * a1 as f64 + e2 * a2 as f64) * q.offset
+    let frame = state.predicted_frame(state.frame_chord(q.length));
+    element_end_in(state.point, &frame, steps, a1, a2, q)
+}
+
+/// A predicted chord's frame `(u, e1, e2)` ([`ChainState::predicted_frame`]).
+type Frame = (DVec3, DVec3, DVec3);
+
+/// [`element_end`] from `point` with the chord's `frame` already found.
+fn element_end_in(
+    point: DVec3,
+    frame: &Frame,
+    steps: i64,
+    a1: i64,
+    a2: i64,
+    q: &Quantiser,
+) -> DVec3 {
+    let (u, e1, e2) = *frame;
+    point + u * (steps as f64 * q.length) + (e1 * a1 as f64 + e2 * a2 as f64) * q.offset
 }
 
 /// From a passing candidate `good` (and a failing vertex `bad`, if one is
