@@ -233,17 +233,16 @@ impl<'a> CurveEncoder<'a> {
     async fn candidate(
         &self,
         state: &ChainState,
+        frame: &Frame,
         from: usize,
         j: usize,
         kind: ElementKind,
     ) -> Option<Candidate> {
         let d = self.points[j] - state.point;
-        // The chord's frame once per candidate (it was found three times).
-        let frame = state.predicted_frame(state.frame_chord(self.q.length));
         let x = d.dot(frame.0) / self.q.length;
         let near = x.round();
         let other = if x >= near { near + 1.0 } else { near - 1.0 };
-        let [x1, x2] = self.offsets_to(state, &frame, j);
+        let [x1, x2] = self.offsets_to(state, frame, j);
         let a1 = Quantiser::index(x1, self.q.offset)?;
         let a2 = Quantiser::index(x2, self.q.offset)?;
         for steps in [near, other] {
@@ -251,7 +250,7 @@ impl<'a> CurveEncoder<'a> {
                 continue;
             }
             if let Some(c) = self
-                .candidate_with_code(state, &frame, from, j, kind, steps as i64, [a1, a2])
+                .candidate_with_code(state, frame, from, j, kind, steps as i64, [a1, a2])
                 .await
             {
                 return Some(c);
@@ -409,10 +408,12 @@ impl<'a> CurveEncoder<'a> {
         guess: usize,
     ) -> Option<Candidate> {
         let last = self.points.len() - 1;
+        // The predicted chord's frame, the same for every candidate here.
+        let frame = &state.predicted_frame(state.frame_chord(self.q.length));
         let mut good = None;
         let mut bad = None;
         if guess > 4 && from + guess < last {
-            match self.candidate(state, from, from + guess, kind).await {
+            match self.candidate(state, frame, from, from + guess, kind).await {
                 Some(c) => good = Some(c),
                 None => bad = Some(from + guess),
             }
@@ -421,7 +422,7 @@ impl<'a> CurveEncoder<'a> {
             // The nearest vertex may be too close for the length step: take
             // the first of the next few that passes.
             for j in from + 1..=(from + 4).min(last) {
-                good = self.candidate(state, from, j, kind).await;
+                good = self.candidate(state, frame, from, j, kind).await;
                 if good.is_some() {
                     break;
                 }
@@ -429,7 +430,7 @@ impl<'a> CurveEncoder<'a> {
         }
         Some(
             gallop(good?, bad, (guess / 2).max(1), last, async |j| {
-                self.candidate(state, from, j, kind).await
+                self.candidate(state, frame, from, j, kind).await
             })
             .await,
         )
