@@ -382,7 +382,7 @@ pub fn cheapest_points(
             };
             let coded = |d: [i64; 3]| step.map_or(d, |st| st.coded(d));
             let parent = pi as u32;
-            let mut push = |q: [i64; 3], c: f64| {
+            let push = |next: &mut Vec<Node>, q: [i64; 3], c: f64| {
                 let cost = node.cost + c;
                 if let Some(o) = next.iter_mut().find(|o| o.q == q) {
                     if cost < o.cost {
@@ -407,7 +407,30 @@ pub fn cheapest_points(
             // The nearest point is always feasible: it is within the
             // tolerance of the vertex, which ends both segments.
             let c_near = cost.of(coded(diff(nearest)));
-            push(nearest, c_near);
+            push(&mut next, nearest, c_near);
+            // What a child's whole cost must not exceed to be kept: the
+            // `beam`-th least of the children so far (they only fall, and
+            // one above it ends after `beam` no dearer children, pushed
+            // before it, in the stable sort below). Equal is searched: a
+            // child may replace a dearer one of the same point where that
+            // stands before an equal one.
+            let beat = if next.len() >= beam {
+                let mut c: [f64; 16] = [f64::INFINITY; 16];
+                for o in next.iter() {
+                    let mut i = beam - 1;
+                    if o.cost < c[i] {
+                        while i > 0 && c[i - 1] > o.cost {
+                            c[i] = c[i - 1];
+                            i -= 1;
+                        }
+                        c[i] = o.cost;
+                    }
+                }
+                c[beam - 1]
+            } else {
+                f64::INFINITY
+            };
+            let over = |c: f64| node.cost + c > beat;
             // Candidates: the prediction, and lattice points around the
             // places on the input nearest it and on the way from there
             // back to the vertex. The `beam` cheapest feasible ones are
@@ -431,7 +454,11 @@ pub fn cheapest_points(
                             c: f64,
                             top: &mut [(f64, [i64; 3]); 16],
                             kept: &mut usize| {
-                if !(c < bar(top, *kept)) || q == nearest || top[..*kept].iter().any(|t| t.1 == q) {
+                if !(c < bar(top, *kept))
+                    || over(c)
+                    || q == nearest
+                    || top[..*kept].iter().any(|t| t.1 == q)
+                {
                     return;
                 }
                 if !feasible(q) {
@@ -495,7 +522,7 @@ pub fn cheapest_points(
                 if let Some(st) = step {
                     least[st.axis()] = (cost.axis)(0);
                 }
-                if !(cost.sum(least) < bar(&top, kept)) {
+                if !(cost.sum(least) < bar(&top, kept)) || over(cost.sum(least)) {
                     continue;
                 }
                 let at = |d: [i64; 3]| {
@@ -515,7 +542,8 @@ pub fn cheapest_points(
                     step.is_none_or(|st| {
                         let mut t = [0, 1, 2].map(|a| terms[a][(d[a] + 2) as usize]);
                         t[st.axis()] = least[st.axis()];
-                        cost.sum(t) < bar(top, kept)
+                        let bound = cost.sum(t);
+                        bound < bar(top, kept) && !over(bound)
                     })
                 };
                 for d in std::iter::once([0; 3]).chain(BCC_NEIGHBOURS) {
@@ -530,7 +558,7 @@ pub fn cheapest_points(
                 }
             }
             for &(c, q) in &top[..kept] {
-                push(q, c);
+                push(&mut next, q, c);
             }
         }
         next.sort_by(|a, b| a.cost.total_cmp(&b.cost));
