@@ -147,10 +147,6 @@ mod batch;
 mod check;
 mod container;
 mod encoder;
-// The helical element of a coming codec model: built and tested here, not
-// yet coded in the container (issue 19's hair at 0.5 mm).
-#[allow(dead_code)]
-mod helical;
 // Kept public (hidden) for its doctests, which exercise the range coder by
 // its own names (`Encoder`, `Decoder`: too generic to sit flat in `codec`).
 #[doc(hidden)]
