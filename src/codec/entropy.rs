@@ -134,13 +134,11 @@ impl Bit {
 
     #[inline]
     fn update(&mut self, bit: bool) {
-        let shift = if self.n == LEGACY {
-            LEGACY_SHIFT
-        } else {
-            let s = (1 + (self.n as u32 + 1).ilog2()).min(ADAPT_SHIFT_MAX);
-            self.n = self.n.saturating_add(1).min(LEGACY - 1);
-            s
-        };
+        // The shift and the next count from tables indexed by the count
+        // (the same values as `(1 + ilog2(n + 1)).min(ADAPT_SHIFT_MAX)` and
+        // `(n + 1).min(LEGACY − 1)`; `LEGACY` maps to itself and its shift).
+        let shift = UPDATE_SHIFT[self.n as usize] as u32;
+        self.n = NEXT_COUNT[self.n as usize];
         let one = 1u16 << self.prob_bits();
         // Both moves, one selected by a mask: a branch on the bit would be
         // mispredicted about as often as the bit is hard to predict.
@@ -152,6 +150,43 @@ impl Bit {
 }
 
 /// The encoding half of the range coder.
+/// [`Bit::update`]'s shift for each count.
+const UPDATE_SHIFT: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut n = 0;
+    while n < 256 {
+        t[n] = if n == LEGACY as usize {
+            LEGACY_SHIFT as u8
+        } else {
+            let s = 1 + (n as u32 + 1).ilog2();
+            (if s < ADAPT_SHIFT_MAX {
+                s
+            } else {
+                ADAPT_SHIFT_MAX
+            }) as u8
+        };
+        n += 1;
+    }
+    t
+};
+
+/// [`Bit::update`]'s next count for each count.
+const NEXT_COUNT: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut n = 0;
+    while n < 256 {
+        t[n] = if n == LEGACY as usize {
+            LEGACY
+        } else if n + 1 < LEGACY as usize - 1 {
+            (n + 1) as u8
+        } else {
+            LEGACY - 1
+        };
+        n += 1;
+    }
+    t
+};
+
 pub struct Encoder {
     low: u64,
     range: u32,
@@ -693,6 +728,26 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// The update tables are the formulas they replace.
+    #[test]
+    fn the_update_tables_are_their_formulas() {
+        for n in 0..=255u8 {
+            let (shift, next) = if n == LEGACY {
+                (LEGACY_SHIFT, LEGACY)
+            } else {
+                (
+                    (1 + (n as u32 + 1).ilog2()).min(ADAPT_SHIFT_MAX),
+                    n.saturating_add(1).min(LEGACY - 1),
+                )
+            };
+            assert_eq!(
+                (UPDATE_SHIFT[n as usize] as u32, NEXT_COUNT[n as usize]),
+                (shift, next),
+                "count {n}"
+            );
+        }
+    }
 
     /// `position_bits` tracks the stream: never decreasing, within a few
     /// bytes of the finished length, and each stretch within a bit of the

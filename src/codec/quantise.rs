@@ -450,30 +450,28 @@ pub fn cheapest_points(
                     f64::INFINITY
                 }
             };
-            let consider = |q: [i64; 3],
-                            c: f64,
-                            top: &mut [(f64, [i64; 3]); 16],
-                            kept: &mut usize| {
-                if !(c < bar(top, *kept))
-                    || over(c)
-                    || q == nearest
-                    || top[..*kept].iter().any(|t| t.1 == q)
-                {
-                    return;
-                }
-                if !feasible(q) {
-                    return;
-                }
-                let mut i = (*kept).min(beam - 1);
-                if *kept < beam {
-                    *kept += 1;
-                }
-                while i > 0 && top[i - 1].0 > c {
-                    top[i] = top[i - 1];
-                    i -= 1;
-                }
-                top[i] = (c, q);
-            };
+            let consider =
+                |q: [i64; 3], c: f64, top: &mut [(f64, [i64; 3]); 16], kept: &mut usize| {
+                    if !(c < bar(top, *kept))
+                        || over(c)
+                        || q == nearest
+                        || top[..*kept].iter().any(|t| t.1 == q)
+                    {
+                        return;
+                    }
+                    if !feasible(q) {
+                        return;
+                    }
+                    let mut i = (*kept).min(beam - 1);
+                    if *kept < beam {
+                        *kept += 1;
+                    }
+                    while i > 0 && top[i - 1].0 > c {
+                        top[i] = top[i - 1];
+                        i -= 1;
+                    }
+                    top[i] = (c, q);
+                };
             consider(pred, cost.of(coded([0; 3])), &mut top, &mut kept);
             let p = bcc_point(pred, half);
             let foot = |a: glam::DVec3, b: glam::DVec3| {
