@@ -337,14 +337,19 @@ impl<'a> CurveEncoder<'a> {
     /// predicts the next element worse); fornix −0.05 / +0.5 %, hair
     /// −0.03 / −0.17 % at 0.1 / 0.5 mm; 0.15 % fewer bytes over the
     /// shared data in all; no slower within the noise.
-    async fn cheapen(&self, state: &ChainState, from: usize, c: Candidate) -> Candidate {
+    async fn cheapen(
+        &self,
+        state: &ChainState,
+        frame: &Frame,
+        from: usize,
+        c: Candidate,
+    ) -> Candidate {
         if !matches!(c.code.kind, ElementKind::G1 | ElementKind::Straight) {
             return c;
         }
         let j = c.reach;
-        let frame = state.predicted_frame(state.frame_chord(self.q.length));
         let t = self
-            .offsets_to(state, &frame, j)
+            .offsets_to(state, frame, j)
             .map(|x| Quantiser::index_toward_zero(x, self.q.offset));
         let [Some(t1), Some(t2)] = t else {
             return c;
@@ -363,7 +368,7 @@ impl<'a> CurveEncoder<'a> {
         }
         for o in tries {
             if let Some(better) = self
-                .candidate_with_code(state, &frame, from, j, c.code.kind, steps, o)
+                .candidate_with_code(state, frame, from, j, c.code.kind, steps, o)
                 .await
             {
                 return better;
@@ -403,13 +408,12 @@ impl<'a> CurveEncoder<'a> {
     async fn furthest(
         &self,
         state: &ChainState,
+        frame: &Frame,
         from: usize,
         kind: ElementKind,
         guess: usize,
     ) -> Option<Candidate> {
         let last = self.points.len() - 1;
-        // The predicted chord's frame, the same for every candidate here.
-        let frame = &state.predicted_frame(state.frame_chord(self.q.length));
         let mut good = None;
         let mut bad = None;
         if guess > 4 && from + guess < last {
@@ -468,10 +472,15 @@ impl<'a> CurveEncoder<'a> {
             // Cheapest kind first; a costlier one only where it reaches
             // further (a straight segment costs a kind flag, a corner also
             // a bulge).
-            let mut chosen = self.furthest(&state, from, ElementKind::G1, span).await;
+            // The predicted chord's frame, the same for every candidate of
+            // every kind here.
+            let frame = &state.predicted_frame(state.frame_chord(self.q.length));
+            let mut chosen = self
+                .furthest(&state, frame, from, ElementKind::G1, span)
+                .await;
             if chosen.as_ref().is_none_or(|g| g.reach - from <= 2) {
                 for (kind, margin) in [(ElementKind::Straight, 0), (ElementKind::Corner, 1)] {
-                    if let Some(c) = self.furthest(&state, from, kind, span).await {
+                    if let Some(c) = self.furthest(&state, frame, from, kind, span).await {
                         if chosen.as_ref().is_none_or(|g| c.reach > g.reach + margin) {
                             chosen = Some(c);
                         }
@@ -491,7 +500,7 @@ impl<'a> CurveEncoder<'a> {
                     Jump::Impossible => return None,
                 },
             };
-            let chosen = self.cheapen(&state, from, chosen).await;
+            let chosen = self.cheapen(&state, frame, from, chosen).await;
             decoded.extend_from_slice(&chosen.samples);
             state = next_state(&chosen.arc, &state, chosen.code.kind, self.q.length);
             span = chosen.reach - from;

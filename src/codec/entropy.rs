@@ -149,7 +149,6 @@ impl Bit {
     }
 }
 
-/// The encoding half of the range coder.
 /// [`Bit::update`]'s shift for each count.
 const UPDATE_SHIFT: [u8; 256] = {
     let mut t = [0u8; 256];
@@ -187,6 +186,7 @@ const NEXT_COUNT: [u8; 256] = {
     t
 };
 
+/// The encoding half of the range coder.
 pub struct Encoder {
     low: u64,
     range: u32,

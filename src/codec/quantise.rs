@@ -194,6 +194,23 @@ const BCC_NEIGHBOURS: [[i64; 3]; 14] = [
     [0, 0, -2],
 ];
 
+/// The `k`-th least of `values` (`1 ≤ k ≤ 16`), or infinity when there
+/// are fewer.
+fn kth_least(values: impl Iterator<Item = f64>, k: usize) -> f64 {
+    let mut least = [f64::INFINITY; 16];
+    for v in values {
+        let mut i = k - 1;
+        if v < least[i] {
+            while i > 0 && least[i - 1] > v {
+                least[i] = least[i - 1];
+                i -= 1;
+            }
+            least[i] = v;
+        }
+    }
+    least[k - 1]
+}
+
 /// A residual's estimated bits, separable by axis: `base + Σₐ axis(dₐ)`
 /// (summed in axis order), so that the fifteen candidates around a centre
 /// share fifteen per-axis terms ([`cheapest_points`]).
@@ -409,27 +426,12 @@ pub fn cheapest_points(
             let c_near = cost.of(coded(diff(nearest)));
             push(&mut next, nearest, c_near);
             // What a child's whole cost must not exceed to be kept: the
-            // `beam`-th least of the children so far (they only fall, and
-            // one above it ends after `beam` no dearer children, pushed
-            // before it, in the stable sort below). Equal is searched: a
-            // child may replace a dearer one of the same point where that
-            // stands before an equal one.
-            let beat = if next.len() >= beam {
-                let mut c: [f64; 16] = [f64::INFINITY; 16];
-                for o in next.iter() {
-                    let mut i = beam - 1;
-                    if o.cost < c[i] {
-                        while i > 0 && c[i - 1] > o.cost {
-                            c[i] = c[i - 1];
-                            i -= 1;
-                        }
-                        c[i] = o.cost;
-                    }
-                }
-                c[beam - 1]
-            } else {
-                f64::INFINITY
-            };
+            // `beam`-th least of the children so far. Their costs only
+            // fall, and one dearer than that ends behind `beam` cheaper
+            // ones in the stable sort below. (An equal one is searched: it
+            // may replace a dearer child of the same point that stands
+            // before an equal one.)
+            let beat = kth_least(next.iter().map(|o| o.cost), beam);
             let over = |c: f64| node.cost + c > beat;
             // Candidates: the prediction, and lattice points around the
             // places on the input nearest it and on the way from there
@@ -581,6 +583,22 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn kth_least_is_the_sorted_kth() {
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        for _ in 0..500 {
+            let v: Vec<f64> = (0..rng.gen_range(0..12))
+                .map(|_| rng.gen_range(0..6) as f64)
+                .collect();
+            for k in 1..=4 {
+                let mut s = v.clone();
+                s.sort_by(f64::total_cmp);
+                let want = s.get(k - 1).copied().unwrap_or(f64::INFINITY);
+                assert_eq!(kth_least(v.iter().copied(), k), want, "{v:?} k {k}");
+            }
+        }
+    }
 
     #[test]
     fn small_floor_and_round_are_libms() {
