@@ -78,7 +78,14 @@ fn main() {
         let exact = lift_sketch(d, &SketchOptions::default()).expect("exact drawing");
         let exact_depth = depth(&exact);
         for &noise in noises {
+            // One seed only: SKETCH_SEED=7.
+            let only_seed: Option<u64> = std::env::var("SKETCH_SEED")
+                .ok()
+                .map(|v| v.parse().expect("seed"));
             for seed in 0..seeds {
+                if only_seed.is_some_and(|o| o != seed) {
+                    continue;
+                }
                 let input = noisy(d, noise * l, seed);
                 let t = Instant::now();
                 let r = lift_sketch(&input, &SketchOptions::default()).expect("noisy drawing");

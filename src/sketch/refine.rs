@@ -136,6 +136,39 @@ impl Piece {
             .fold(0.0, f64::max)
     }
 
+    /// The root mean square of the vertices' distances from the curve (at
+    /// their parameters). Where [`max_distance`](Self::max_distance) is set
+    /// by the piece's worst vertex (on a grown piece, the last one its walk
+    /// took, by construction near `E_max`), this weighs all of them: a helix
+    /// that follows the drawing leaves the noise, one that merely stays
+    /// within `E_max` leaves a systematic error over long runs.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use strandfit::sketch::{Piece, PlacedHelix};
+    /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+    /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+    /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+    /// # let piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+    /// // `piece` fits 20 `points` of its own helix exactly, at parameters `ts`.
+    /// // Every other vertex moved 0.03 off the curve: √(0.03²/2) in all.
+    /// let off: Vec<DVec2> = piece.feet(&points).iter().zip(&points).enumerate()
+    ///     .map(|(k, (f, p))| if k % 2 == 0 { *p + 0.03 * f.normal } else { *p })
+    ///     .collect();
+    /// assert!((piece.rms_distance(&off) - 0.03 / 2f64.sqrt()).abs() < 1e-12);
+    /// assert!((piece.max_distance(&off) - 0.03).abs() < 1e-12);
+    /// ```
+    pub fn rms_distance(&self, points: &[DVec2]) -> f64 {
+        let e = self.helix.evaluator();
+        let sum: f64 = self
+            .ts
+            .iter()
+            .enumerate()
+            .map(|(k, &t)| (points[self.first + k] - e.jet(t).0).length_squared())
+            .sum();
+        (sum / self.ts.len().max(1) as f64).sqrt()
+    }
+
     /// How steeply the lift leaves the sketch plane: the range of `z` over
     /// the piece's vertices' parameters, over the length of the projected
     /// curve between them (0 for fewer than two vertices). Beyond the
