@@ -4,7 +4,7 @@
 use glam::{DVec2, DVec3};
 
 use super::cover::{
-    cover, merge_noisy, plausible, CoverOptions, Drawn, COVER_GAIN, NOISY_COVER_GAIN,
+    cover_probed, merge_noisy, plausible, CoverOptions, Drawn, Probes, COVER_GAIN, NOISY_COVER_GAIN,
 };
 use super::estimate::{
     denoise, densify, estimate_noise, resample, residual_agreement, smoothed,
@@ -741,7 +741,9 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
             COVER_GAIN
         },
     };
-    let mut pieces = cover(&unit, &geometry, &cover_opts);
+    // The covering's merge probes, reused by the noisy merges.
+    let probes = Probes::default();
+    let mut pieces = cover_probed(&unit, &geometry, &cover_opts, &probes);
     let at = counterparts(&source, &work);
     if denoised {
         if let Some(at) = &at {
@@ -754,7 +756,7 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
                 vertices: &vertices,
                 sigma: noise / length,
             };
-            merge_noisy(&unit, &geometry, &mut pieces, &cover_opts, &drawn);
+            merge_noisy(&unit, &geometry, &mut pieces, &cover_opts, &drawn, &probes);
         }
     }
     choose_mirrors(&mut pieces);
