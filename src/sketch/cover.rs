@@ -1632,6 +1632,40 @@ mod tests {
 
     use crate::sketch::testing::with_noise;
 
+    /// [`merge_noisy`] on `pieces` of `points`, every vertex drawn with
+    /// noise `sigma`; the drawn vertices' residuals, for checks.
+    fn merged_noisy(
+        points: &[DVec2],
+        pieces: &mut Vec<Piece>,
+        opts: &CoverOptions,
+        sigma: f64,
+    ) -> NoisyResidual {
+        let vertices: Vec<(usize, DVec2)> = points.iter().copied().enumerate().collect();
+        let drawn = Drawn {
+            vertices: &vertices,
+            sigma,
+        };
+        let geometry = crate::sketch::tangents_and_curvatures(points, 3);
+        merge_noisy(points, &geometry, pieces, opts, &drawn, &Probes::default());
+        NoisyResidual { vertices, sigma }
+    }
+
+    /// The drawn vertices of [`merged_noisy`], owned.
+    struct NoisyResidual {
+        vertices: Vec<(usize, DVec2)>,
+        sigma: f64,
+    }
+
+    impl NoisyResidual {
+        fn residual(&self, piece: &Piece) -> f64 {
+            Drawn {
+                vertices: &self.vertices,
+                sigma: self.sigma,
+            }
+            .residual(piece)
+        }
+    }
+
     #[test]
     fn noisy_halves_of_one_helix_are_merged_and_two_helices_are_not() {
         // E_max at 2σ: about one vertex in seven is farther from the true
@@ -1664,20 +1698,7 @@ mod tests {
             let mut strict = pieces.clone();
             merge(&points, &mut strict, &opts, &Probes::default());
             assert_eq!(strict.len(), 2, "seed {seed}: within E_max");
-            let vertices: Vec<(usize, DVec2)> = points.iter().copied().enumerate().collect();
-            let drawn = Drawn {
-                vertices: &vertices,
-                sigma,
-            };
-            let geometry = crate::sketch::tangents_and_curvatures(&points, 3);
-            merge_noisy(
-                &points,
-                &geometry,
-                &mut pieces,
-                &opts,
-                &drawn,
-                &Probes::default(),
-            );
+            let drawn = merged_noisy(&points, &mut pieces, &opts, sigma);
             assert_eq!(pieces.len(), 1, "seed {seed}");
             assert_eq!((pieces[0].first, pieces[0].last), (0, 79));
             // The merged helix fits the drawing to its noise.
@@ -1696,20 +1717,7 @@ mod tests {
             for p in &mut pieces {
                 refine(&points, p, &obj, opts.gain, GROW_ITERATIONS);
             }
-            let vertices: Vec<(usize, DVec2)> = points.iter().copied().enumerate().collect();
-            let drawn = Drawn {
-                vertices: &vertices,
-                sigma,
-            };
-            let geometry = crate::sketch::tangents_and_curvatures(&points, 3);
-            merge_noisy(
-                &points,
-                &geometry,
-                &mut pieces,
-                &opts,
-                &drawn,
-                &Probes::default(),
-            );
+            merged_noisy(&points, &mut pieces, &opts, sigma);
             assert_eq!(pieces.len(), 2, "seed {seed}");
             assert_eq!(pieces[0].last, 39, "seed {seed}");
         }
