@@ -427,27 +427,33 @@ fn fit_one(
             (i.saturating_sub(guard)..=(i + guard).min(n - 1)).all(|j| curvature(j) <= curvature(i))
         })
         .max_by(|&a, &b| curvature(a).total_cmp(&curvature(b)));
-    let confident = |p: &Piece| p.rms_distance(points) <= CONFIDENT_RMS * opts.emax;
-    let rank = |p: &Piece| (plausible(p), confident(p), p.last - p.first);
-    let settled = |p: &Piece| plausible(p) && confident(p);
+    // (plausible, confident, vertices covered), measured once a piece.
+    let rank = |p: &Piece| {
+        let confident = p.rms_distance(points) <= CONFIDENT_RMS * opts.emax;
+        (plausible(p), confident, p.last - p.first)
+    };
+    let settled = |r: &(bool, bool, usize)| r.0 && r.1;
     let grid = (hi - lo > 4 * MIN_VERTICES)
         .then(|| (1..=SEED_GRID).map(move |k| lo + (hi - lo) * k / (SEED_GRID + 1)))
         .into_iter()
         .flatten();
     let mut best = fit_at(points, geometry, (lo, hi), opts, s, fits);
-    if let (Some(second), false) = (second, settled(&best)) {
+    let mut best_rank = rank(&best);
+    if let (Some(second), false) = (second, settled(&best_rank)) {
         let other = fit_at(points, geometry, (lo, hi), opts, second, fits);
-        if rank(&other) > rank(&best) {
-            best = other;
+        let other_rank = rank(&other);
+        if other_rank > best_rank {
+            (best, best_rank) = (other, other_rank);
         }
     }
     for seed in grid {
-        if settled(&best) {
+        if settled(&best_rank) {
             break;
         }
         let other = fit_at(points, geometry, (lo, hi), opts, seed, fits);
-        if settled(&other) {
-            best = other;
+        let other_rank = rank(&other);
+        if settled(&other_rank) {
+            (best, best_rank) = (other, other_rank);
         }
     }
     best
@@ -1046,60 +1052,55 @@ fn absorb_fit(
     opts: &CoverOptions,
     obj: &Objective,
 ) -> Option<(Piece, Piece)> {
-    {
-        let (left, mid, right) = (&trio[0], &trio[1], &trio[2]);
-        let mut best: Option<(f64, Piece, Piece)> = None;
-        let meetings = meeting_candidates(mid.first, mid.last);
-        // Neighbours that are other helices than the piece between them,
-        // extended over it as they are, leave it far off; a sliver's
-        // neighbours, extended over its few vertices, nearly fit them.
-        // Only where one meeting vertex keeps both extensions within
-        // `ABSORB_REACH · E_max` are the (costly) refitted probes run.
-        let reach = |&j: &usize| {
-            let mut l = left.clone();
-            set_range(&mut l, points, left.first, j);
-            let mut r = right.clone();
-            set_range(&mut r, points, j, right.last);
-            l.max_distance(points).max(r.max_distance(points))
-        };
-        let joined = left.last == mid.first && mid.last == right.first;
-        if joined
-            && meetings
-                .iter()
-                .any(|j| reach(j) <= ABSORB_REACH * opts.emax)
-        {
-            // A short probe at every meeting vertex, the full fit at the
-            // best one only.
-            best = meetings
-                .into_par_iter()
-                // `left` ends and `right` starts inside `mid`: both grow.
-                .map(|j| {
-                    meet_at(
-                        points,
-                        left,
-                        right,
-                        j,
-                        obj,
-                        opts.gain,
-                        MERGE_PROBE_ITERATIONS,
-                    )
-                })
-                .collect::<Vec<_>>()
-                .into_iter()
-                .min_by(|x, y| x.0.total_cmp(&y.0));
-            best = best.and_then(|(score, mut l, mut r)| {
-                // Neighbours that are other helices stay far off.
-                let probe = l.max_distance(points).max(r.max_distance(points));
-                if probe > MERGE_PROBE_LIMIT * opts.emax {
-                    return None;
-                }
-                refine(points, &mut l, obj, opts.gain, GROW_ITERATIONS);
-                refine(points, &mut r, obj, opts.gain, GROW_ITERATIONS);
-                Some((score, l, r))
-            });
-        }
-        best.map(|(_, l, r)| (l, r))
+    let (left, mid, right) = (&trio[0], &trio[1], &trio[2]);
+    if left.last != mid.first || mid.last != right.first {
+        return None;
     }
+    let meetings = meeting_candidates(mid.first, mid.last);
+    // Neighbours that are other helices than the piece between them,
+    // extended over it as they are, leave it far off; a sliver's
+    // neighbours, extended over its few vertices, nearly fit them. Only
+    // where one meeting vertex keeps both extensions within
+    // `ABSORB_REACH · E_max` are the (costly) refitted probes run.
+    let reach = |&j: &usize| {
+        let mut l = left.clone();
+        set_range(&mut l, points, left.first, j);
+        let mut r = right.clone();
+        set_range(&mut r, points, j, right.last);
+        l.max_distance(points).max(r.max_distance(points))
+    };
+    if !meetings
+        .iter()
+        .any(|j| reach(j) <= ABSORB_REACH * opts.emax)
+    {
+        return None;
+    }
+    // A short probe at every meeting vertex, the full fit at the best one
+    // only.
+    let (_, mut l, mut r) = meetings
+        .into_par_iter()
+        // `left` ends and `right` starts inside `mid`: both grow.
+        .map(|j| {
+            meet_at(
+                points,
+                left,
+                right,
+                j,
+                obj,
+                opts.gain,
+                MERGE_PROBE_ITERATIONS,
+            )
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .min_by(|x, y| x.0.total_cmp(&y.0))?;
+    // Neighbours that are other helices stay far off.
+    if l.max_distance(points).max(r.max_distance(points)) > MERGE_PROBE_LIMIT * opts.emax {
+        return None;
+    }
+    refine(points, &mut l, obj, opts.gain, GROW_ITERATIONS);
+    refine(points, &mut r, obj, opts.gain, GROW_ITERATIONS);
+    Some((l, r))
 }
 
 /// See [`absorb`]: twice [`MERGE_PROBE_LIMIT`], as the extensions are not
@@ -1165,33 +1166,31 @@ fn merge_fits(
     opts: &CoverOptions,
     obj: &Objective,
 ) -> Vec<Piece> {
-    {
-        let (first, last) = (pair[0].first, pair[1].last);
-        [&pair[0], &pair[1]]
-            .into_par_iter()
-            .filter_map(|start| {
-                let mut trial = start.clone();
-                // Grown into the neighbour in steps, each refitted by a
-                // short probe (a helix extrapolated over the whole
-                // neighbour at once can start the fit in a wrong basin).
-                // Neighbours that are different helices (most pairs) stay
-                // far off, and the full fit with its restarts would be
-                // wasted on them.
-                for k in 1..=MERGE_STEPS {
-                    let f = trial.first - (trial.first - first) * k / MERGE_STEPS;
-                    let l = trial.last + (last - trial.last) * k / MERGE_STEPS;
-                    stretch(&mut trial, points, f, l);
-                    refine(points, &mut trial, obj, opts.gain, MERGE_PROBE_ITERATIONS);
-                    if trial.max_distance(points) > MERGE_PROBE_LIMIT * opts.emax {
-                        return None;
-                    }
+    let (first, last) = (pair[0].first, pair[1].last);
+    [&pair[0], &pair[1]]
+        .into_par_iter()
+        .filter_map(|start| {
+            let mut trial = start.clone();
+            // Grown into the neighbour in steps, each refitted by a
+            // short probe (a helix extrapolated over the whole
+            // neighbour at once can start the fit in a wrong basin).
+            // Neighbours that are different helices (most pairs) stay
+            // far off, and the full fit with its restarts would be
+            // wasted on them.
+            for k in 1..=MERGE_STEPS {
+                let f = trial.first - (trial.first - first) * k / MERGE_STEPS;
+                let l = trial.last + (last - trial.last) * k / MERGE_STEPS;
+                stretch(&mut trial, points, f, l);
+                refine(points, &mut trial, obj, opts.gain, MERGE_PROBE_ITERATIONS);
+                if trial.max_distance(points) > MERGE_PROBE_LIMIT * opts.emax {
+                    return None;
                 }
-                refine(points, &mut trial, obj, opts.gain, GROW_ITERATIONS);
-                hop(points, &mut trial, obj, opts.gain);
-                plausible(&trial).then_some(trial)
-            })
-            .collect()
-    }
+            }
+            refine(points, &mut trial, obj, opts.gain, GROW_ITERATIONS);
+            hop(points, &mut trial, obj, opts.gain);
+            plausible(&trial).then_some(trial)
+        })
+        .collect()
 }
 
 /// The probes of [`merge_while`] and [`absorb_while`], and the seeds'
