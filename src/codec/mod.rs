@@ -1101,15 +1101,17 @@ fn choose(
         };
         // The screw prediction (a rotation fitted per point) is summed only
         // while it can still decide something: it is kept only under the
-        // second-order one, and nothing more is looked at once both pass
-        // twice the arcs' estimate. Stopped early, it is not kept, and
-        // where that leaves the second-order one as the estimate the arcs
-        // are far cheaper either way: the choice is the one the whole sums
-        // make.
+        // second-order one and under the arcs' estimate (above that the
+        // arcs win, unless a neighbour does, which is searched under the
+        // arcs' estimate whatever the screw costs). Stopped early, it is
+        // not kept, and the second-order estimate stands: the choice is the
+        // one the whole sums make, but that the neighbours are not searched
+        // where the second-order estimate alone is over twice the arcs'.
+        // (Bounded at twice the arcs' estimate instead: the same bytes on
+        // every shared file and 10,000 fornix replicas with and without
+        // jitter, 6 % more CPU on the unjittered ones at 0.1 mm.)
         let linear = own_with(false, u64::MAX);
-        let bound = linear
-            .saturating_sub(1)
-            .min(arc_bits.map_or(u64::MAX, |a| a.saturating_mul(2)));
+        let bound = linear.saturating_sub(1).min(arc_bits.unwrap_or(u64::MAX));
         let screw = own_with(true, bound);
         let (helix, own) = if screw > bound {
             (false, linear)
@@ -1122,8 +1124,15 @@ fn choose(
         if arcs_far_cheaper {
             return (g, None, helix, own, own_start);
         }
-        match reference::best_reference(&g, neighbours.window(), trend, lattice_bits) {
-            Some((rf, bits)) if bits < own => (g, Some(rf), false, bits, 0),
+        // A reference is used only under the own prediction and the arcs,
+        // and costed only that far ([`reference::best_reference`]):
+        // measured on 100,000 unjittered fornix replicas at 0.1 mm, 8 % less
+        // CPU, the same bytes; 260 bytes fewer over the shared data and
+        // 10,000 jittered replicas (a bundle's file ±3 bytes: the pairs are
+        // tried among singles ranked by partial sums past the limit).
+        let limit = arc_bits.map_or(own, |a| a.min(own));
+        match reference::best_reference(&g, neighbours.window(), trend, lattice_bits, limit) {
+            Some((rf, bits)) if bits < limit => (g, Some(rf), false, bits, 0),
             _ => (g, None, helix, own, own_start),
         }
     });

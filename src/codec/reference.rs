@@ -455,6 +455,17 @@ fn l1(a: [i64; 3], b: [i64; 3]) -> i64 {
 /// Estimated bits of the grid points `g` predicted from `res` (`cost` of
 /// one residual vector).
 pub fn reference_bits(g: &[[i64; 3]], res: &Resolved, cost: impl Fn([i64; 3]) -> u64) -> u64 {
+    reference_bits_under(g, res, cost, u64::MAX)
+}
+
+/// [`reference_bits`] summed only while under `limit`: at or above it the
+/// sum so far (itself at or above `limit`) is returned.
+fn reference_bits_under(
+    g: &[[i64; 3]],
+    res: &Resolved,
+    cost: impl Fn([i64; 3]) -> u64,
+    limit: u64,
+) -> u64 {
     let n = g.len();
     let start = res.start();
     let mut bits = 8 + cost([0, 1, 2].map(|a| g[0][a].wrapping_sub(start[a])));
@@ -462,6 +473,9 @@ pub fn reference_bits(g: &[[i64; 3]], res: &Resolved, cost: impl Fn([i64; 3]) ->
         bits += 6;
     }
     for i in 1..n {
+        if bits >= limit {
+            break;
+        }
         let p = res.predict_in(g, i, n);
         bits += cost([0, 1, 2].map(|a| g[i][a].wrapping_sub(p[a])));
     }
@@ -472,11 +486,18 @@ pub fn reference_bits(g: &[[i64; 3]], res: &Resolved, cost: impl Fn([i64; 3]) ->
 /// `grids[r]` the regridded decoded curves before it), with its estimated
 /// cost in bits (`cost` of one residual vector): one of the curves whose
 /// ends are nearest, or the mean of two of the best three.
+///
+/// Only a reference estimated under `limit` can be used (the caller's
+/// cheapest alternative): one is costed only until it reaches `limit`,
+/// and a result at or above `limit` stands for "none under it". (The
+/// pairs are tried among the three best singles as far as they are known:
+/// the singles over `limit` in the order their partial sums give.)
 pub fn best_reference(
     g: &[[i64; 3]],
     grids: &[Vec<[i64; 3]>],
     trend: bool,
     cost: impl Fn([i64; 3]) -> u64,
+    limit: u64,
 ) -> Option<(Reference, u64)> {
     let k = grids.len();
     let n = g.len();
@@ -515,9 +536,11 @@ pub fn best_reference(
         second: rf.second.map(|(b, rev)| (&grids[k - b][..], rev)),
         trend,
     };
-    let bits_of = |rf: &Reference| reference_bits(g, &resolve(rf), &cost);
-    let mut singles: Vec<(Reference, u64)> =
-        short.iter().map(|&(_, rf)| (rf, bits_of(&rf))).collect();
+    let bits_of = |rf: &Reference, limit: u64| reference_bits_under(g, &resolve(rf), &cost, limit);
+    let mut singles: Vec<(Reference, u64)> = short
+        .iter()
+        .map(|&(_, rf)| (rf, bits_of(&rf, limit)))
+        .collect();
     singles.sort_by_key(|x| (x.1, x.0.back, x.0.reversed));
     let mut best = singles.first().copied()?;
     let top = &singles[..singles.len().min(PAIRED)];
@@ -530,7 +553,8 @@ pub fn best_reference(
                 second: Some((b.0.back, b.0.reversed)),
                 ..a.0
             };
-            let bits = bits_of(&rf);
+            // A pair is kept only under the best so far.
+            let bits = bits_of(&rf, best.1.min(limit));
             if bits < best.1 {
                 best = (rf, bits);
             }
@@ -696,8 +720,14 @@ mod tests {
             assert_eq!(predict(g[i - 1], i, 10, &rev, true), g[i]);
         }
         let grids = vec![vec![[100, 100, 100], [200, 0, 0]], rev, vec![[0, 0, 0]]];
-        let (rf, _) =
-            best_reference(&g, &grids, false, |v| if v == [0, 0, 0] { 1 } else { 9 }).unwrap();
+        let (rf, _) = best_reference(
+            &g,
+            &grids,
+            false,
+            |v| if v == [0, 0, 0] { 1 } else { 9 },
+            u64::MAX,
+        )
+        .unwrap();
         assert_eq!(
             rf,
             Reference {
@@ -718,7 +748,7 @@ mod tests {
         let down: Vec<[i64; 3]> = (0..12).map(|i| [4 * i, -2 * (i % 2) - 10, 0]).collect();
         let grids = vec![up.clone(), down.clone(), vec![[0, 0, 0]]];
         let cost = |v: [i64; 3]| v.iter().map(|x| x.unsigned_abs()).sum::<u64>() * 4 + 1;
-        let (rf, bits) = best_reference(&line, &grids, false, cost).unwrap();
+        let (rf, bits) = best_reference(&line, &grids, false, cost, u64::MAX).unwrap();
         assert!(rf.second.is_some(), "{rf:?}");
         let res = Resolved {
             first: (&grids[3 - rf.back][..], rf.reversed),
@@ -765,6 +795,68 @@ mod tests {
                 res(false).predict_in(&parallel, i, 10)
             );
         }
+    }
+
+    #[test]
+    fn a_limited_search_is_exact_under_its_limit() {
+        // Random wiggly neighbours of a random curve: under the limit the
+        // reported cost is the reference's own, a single found without a
+        // limit is still found (or a cheaper one), and at or above the
+        // limit the search says so.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17);
+        let cost = |v: [i64; 3]| v.iter().map(|x| 2 * x.unsigned_abs()).sum::<u64>() + 1;
+        let walk = |rng: &mut rand_chacha::ChaCha8Rng, n: usize, o: [i64; 3]| {
+            let mut p = o;
+            (0..n)
+                .map(|_| {
+                    let s = rng.gen_range(0..2) * 2 - 1;
+                    p = [p[0] + 8, p[1] + s * rng.gen_range(0..3), p[2] + s];
+                    p
+                })
+                .collect::<Vec<[i64; 3]>>()
+        };
+        let (mut under, mut over) = (0, 0);
+        for _ in 0..400 {
+            let n = rng.gen_range(2..30);
+            let g = walk(&mut rng, n, [0, 0, 0]);
+            let grids: Vec<Vec<[i64; 3]>> = (0..rng.gen_range(1..12))
+                .map(|_| {
+                    let m = rng.gen_range(1..40);
+                    let o = [0, rng.gen_range(-9..9), rng.gen_range(-9..9)];
+                    walk(&mut rng, m, o)
+                })
+                .collect();
+            let Some((free, free_bits)) = best_reference(&g, &grids, true, cost, u64::MAX) else {
+                continue;
+            };
+            let limit = rng.gen_range(free_bits / 2..free_bits * 2 + 2);
+            let (rf, bits) = best_reference(&g, &grids, true, cost, limit).unwrap();
+            let k = grids.len();
+            let exact = reference_bits(
+                &g,
+                &Resolved {
+                    first: (&grids[k - rf.back][..], rf.reversed),
+                    second: rf.second.map(|(b, rev)| (&grids[k - b][..], rev)),
+                    trend: true,
+                },
+                cost,
+            );
+            if bits < limit {
+                assert_eq!(bits, exact, "{rf:?}");
+                under += 1;
+            } else {
+                assert!(
+                    free_bits >= limit || free.second.is_some(),
+                    "{free:?} {free_bits} {limit}"
+                );
+                over += 1;
+            }
+            if free.second.is_none() && free_bits < limit {
+                assert!(bits <= free_bits, "{bits} {free_bits} {limit}");
+            }
+        }
+        assert!(under > 50 && over > 50, "{under} {over}");
     }
 
     #[test]
