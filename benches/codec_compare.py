@@ -31,13 +31,16 @@ that with nibabel. Each (file, T) block ends with the best baseline (the
 smallest baseline within T on every curve) and strandfit / best baseline.
 
 --replicas N: the same table (strandfit, dipy, q+zstd; T = 0.5 unless
---tolerances) on N jittered fornix replicas from benches/make_replicas.py,
+--tolerances) on N jittered fornix replicas from benches/make_replicas.py
+(--replicas-sigma: their per-point jitter, 0.05 mm by default; at 0.1 mm
+that noise sends every curve to points, 0.01 mm leaves them smooth arcs),
 errors on a fixed random subset of 10,000 curves, plus the peak RSS of the
 strandfit compress process.
 
 Usage: python benches/codec_compare.py [--strandfit target/release/strandfit]
        [--data ../shared/data] [--quick] [--files F ...] [--tolerances T ...]
-       [--replicas N [--replicas-path /tmp/replicas.tck]] [--json OUT.json]
+       [--replicas N [--replicas-path /tmp/replicas.tck] [--replicas-sigma MM]]
+       [--json OUT.json]
 Needs numpy, nibabel, dipy and zstandard.
 """
 import argparse
@@ -303,6 +306,8 @@ def main():
     ap.add_argument("--quick", action="store_true", help="fornix and AF_L only")
     ap.add_argument("--replicas", type=int, metavar="N", help="N jittered fornix replicas")
     ap.add_argument("--replicas-path", help="where to keep them (reused if it exists)")
+    ap.add_argument("--replicas-sigma", type=float, default=0.05,
+                    help="their per-point Gaussian jitter (mm; make_replicas.py --sigma)")
     ap.add_argument("--compress-args", default="", help="extra `strandfit compress` options")
     ap.add_argument("--json", help="write all rows here")
     args = ap.parse_args()
@@ -314,11 +319,13 @@ def main():
     t_start, rows = time.perf_counter(), []
     with tempfile.TemporaryDirectory(prefix="codec_compare.") as tmp:
         if args.replicas:
-            path = args.replicas_path or os.path.join(tmp, f"replicas_{args.replicas}.tck")
+            path = args.replicas_path or os.path.join(
+                tmp, f"replicas_{args.replicas}_{args.replicas_sigma}.tck")
             if not os.path.exists(path):
                 t0 = time.perf_counter()
                 subprocess.run([sys.executable, os.path.join(HERE, "make_replicas.py"),
-                                "--count", str(args.replicas), "-o", path], check=True)
+                                "--count", str(args.replicas), "--sigma", str(args.replicas_sigma),
+                                "-o", path], check=True)
                 print(f"generated in {time.perf_counter() - t0:.1f} s")
             jobs = [(path, args.tolerances or [0.5], ("strandfit", "dipy", "q"))]
         else:
