@@ -1041,13 +1041,7 @@ fn slid_points(
             (slide(&own, flag, bits - own_start_bits), flag)
         }
         Some(rf) => {
-            let grids = neighbours.window();
-            let at_back = |b: usize| &grids[grids.len() - b][..];
-            let res = reference::Resolved {
-                first: (at_back(rf.back), rf.reversed),
-                second: rf.second.map(|(b, rev)| (at_back(b), rev)),
-                trend,
-            };
+            let res = rf.resolve(neighbours.window(), trend);
             let n = g.len();
             // The estimate's part before the residuals (a one-point curve's).
             let start_bits = reference::reference_bits(&g[..1], &res, lattice_bits);
@@ -1651,12 +1645,7 @@ impl CurvePlan {
                         // `neighbours` holds this curve last: its reference
                         // is `back` before that.
                         let grids = neighbours.window();
-                        let at_back = |b: usize| &grids[grids.len() - 1 - b][..];
-                        let res = reference::Resolved {
-                            first: (at_back(rf.back), rf.reversed),
-                            second: rf.second.map(|(b, rev)| (at_back(b), rev)),
-                            trend: offset_trend(params.model),
-                        };
+                        let res = rf.resolve(&grids[..grids.len() - 1], offset_trend(params.model));
                         let start = res.start();
                         let n = grid.len();
                         CurvePlan::Points {
@@ -2139,11 +2128,12 @@ pub fn decode_block(
                     {
                         return Err(bad("a reference of fewer than two points".into()));
                     }
-                    let res = reference::Resolved {
-                        first: (at_back(first.0), first.1),
-                        second: second.map(|(b, rev)| (at_back(b), rev)),
-                        trend: offset_trend(params.model),
+                    let rf = reference::Reference {
+                        back: first.0,
+                        reversed: first.1,
+                        second,
                     };
+                    let res = rf.resolve(grids, offset_trend(params.model));
                     let start = res.start();
                     let d = get_lattice(&mut dec, &mut m.parity[0], &mut m.ref_start);
                     g.push([0, 1, 2].map(|a| start[a].wrapping_add(d[a])));

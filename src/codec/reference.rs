@@ -47,6 +47,20 @@ pub struct Reference {
     pub second: Option<(usize, bool)>,
 }
 
+impl Reference {
+    /// The curves this names among `earlier` (the regridded curves before
+    /// the one it predicts, the last of them one back), for predictions
+    /// with or without the offset's `trend`.
+    pub fn resolve<'a>(&self, earlier: &'a [Vec<[i64; 3]>], trend: bool) -> Resolved<'a> {
+        let at_back = |b: usize| &earlier[earlier.len() - b][..];
+        Resolved {
+            first: (at_back(self.back), self.reversed),
+            second: self.second.map(|(b, rev)| (at_back(b), rev)),
+            trend,
+        }
+    }
+}
+
 /// The curves a [`Reference`] names, resolved: each with its direction.
 #[derive(Clone, Copy)]
 pub struct Resolved<'a> {
@@ -531,12 +545,9 @@ pub fn best_reference(
         short.truncate(SHORTLIST);
     }
     short.sort_by_key(|s| (s.0, s.1.back, s.1.reversed));
-    let resolve = |rf: &Reference| Resolved {
-        first: (&grids[k - rf.back][..], rf.reversed),
-        second: rf.second.map(|(b, rev)| (&grids[k - b][..], rev)),
-        trend,
+    let bits_of = |rf: &Reference, limit: u64| {
+        reference_bits_under(g, &rf.resolve(grids, trend), &cost, limit)
     };
-    let bits_of = |rf: &Reference, limit: u64| reference_bits_under(g, &resolve(rf), &cost, limit);
     let mut singles: Vec<(Reference, u64)> = short
         .iter()
         .map(|&(_, rf)| (rf, bits_of(&rf, limit)))
@@ -832,16 +843,7 @@ mod tests {
             };
             let limit = rng.gen_range(free_bits / 2..free_bits * 2 + 2);
             let (rf, bits) = best_reference(&g, &grids, true, cost, limit).unwrap();
-            let k = grids.len();
-            let exact = reference_bits(
-                &g,
-                &Resolved {
-                    first: (&grids[k - rf.back][..], rf.reversed),
-                    second: rf.second.map(|(b, rev)| (&grids[k - b][..], rev)),
-                    trend: true,
-                },
-                cost,
-            );
+            let exact = reference_bits(&g, &rf.resolve(&grids, true), cost);
             if bits < limit {
                 assert_eq!(bits, exact, "{rf:?}");
                 under += 1;
