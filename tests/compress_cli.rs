@@ -385,9 +385,16 @@ fn codec_model_6_containers_still_decode() {
 /// (`hair24_model{model}_decoded.tck`), and today's model codes the same
 /// 24 hairs at 0.1 mm in fewer bytes.
 fn old_model_decodes_as_it_did_and_today_codes_smaller(model: u64) {
-    let name = format!("hair24_model{model}.sfh");
+    old_fixture_decodes_as_it_did_and_today_codes_smaller("hair24", model);
+}
+
+/// `tests/data/sfh/STEM.tck` written at 0.1 by the last build of codec
+/// `model` (`STEM_modelM.sfh`) decodes to what that build decoded
+/// (`STEM_modelM_decoded.tck`), and today's build codes it smaller.
+fn old_fixture_decodes_as_it_did_and_today_codes_smaller(stem: &str, model: u64) {
+    let name = format!("{stem}_model{model}.sfh");
     let (dir, tmp, back) = decode_old_fixture(&name, model);
-    let then = std::fs::read(dir.join(format!("hair24_model{model}_decoded.tck"))).unwrap();
+    let then = std::fs::read(dir.join(format!("{stem}_model{model}_decoded.tck"))).unwrap();
     assert!(
         std::fs::read(&back).unwrap() == then,
         "model-{model} decoding changed"
@@ -395,7 +402,7 @@ fn old_model_decodes_as_it_did_and_today_codes_smaller(model: u64) {
     let new = tmp.path().join("new.sfh");
     ok(&[
         "compress",
-        dir.join("hair24.tck").to_str().unwrap(),
+        dir.join(format!("{stem}.tck")).to_str().unwrap(),
         "--tolerance",
         "0.1",
         "-o",
@@ -436,6 +443,16 @@ fn codec_model_10_containers_decode_to_the_points_they_did() {
     // Written by the last build of codec model 10 (model 11 codes each
     // points-residual sign in a context of the sign before on its axis).
     old_model_decodes_as_it_did_and_today_codes_smaller(10);
+}
+
+#[test]
+fn codec_model_11_containers_decode_to_the_points_they_did() {
+    // Written by the last build of codec model 11 (model 12 may walk a
+    // points curve's reference from the point nearest the curve instead
+    // of matching indices): 30 fibres of a bundle, each from and to its
+    // own depth along it, resampled to 20 points (742 bytes; model 12:
+    // 689).
+    old_fixture_decodes_as_it_did_and_today_codes_smaller("bundle30", 11);
 }
 
 #[test]

@@ -190,7 +190,7 @@ use encoder::{
 use entropy::{Adaptation, Bit, Decoder, Encoder, IntModel};
 use predict::Arc;
 use quantise::Quantiser;
-use reference::Neighbours;
+use reference::{Neighbours, Rule};
 
 /// How a block is coded: the tolerance and the steps (both stored in the
 /// container's header).
@@ -867,12 +867,6 @@ fn residual_context(d: [i64; 3]) -> usize {
 /// change pitch and radius along a strand, so longer is not better).
 const HELIX_PAIRS: usize = 5;
 
-/// Whether a reference's prediction follows the offset's trend
-/// ([`reference::Resolved::predict_in`]): codec model 8 on.
-fn offset_trend(model: u8) -> bool {
-    model >= 8
-}
-
 /// How [`helix_prediction`] runs under a codec model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Screw {
@@ -993,7 +987,7 @@ fn slid_points(
     tolerance: f64,
     half: f64,
     screw: Screw,
-    trend: bool,
+    rule: Rule,
     along: bool,
     neighbours: &mut Neighbours,
 ) -> (Vec<[i64; 3]>, bool) {
@@ -1041,12 +1035,13 @@ fn slid_points(
             (slide(&own, flag, bits - own_start_bits), flag)
         }
         Some(rf) => {
-            let res = rf.resolve(neighbours.window(), trend);
+            let res = rf.resolve(neighbours.window(), rule);
             let n = g.len();
             // The estimate's part before the residuals (a one-point curve's).
             let start_bits = reference::reference_bits(&g[..1], &res, lattice_bits);
-            let (flag, bits) = flag(&|k| res.predict_in(&g, k, n), bits);
-            let predict = |g: &[[i64; 3]], k| res.predict_in(g, k, n);
+            let foot = reference::FootCache::new(None);
+            let (flag, bits) = flag(&|k| res.predict_next(&g, k, n, &foot), bits);
+            let predict = |g: &[[i64; 3]], k| res.predict_next(g, k, n, &foot);
             (slide(&predict, flag, bits - start_bits), flag)
         }
     };
@@ -1064,7 +1059,7 @@ fn choose(
     tolerance: f64,
     half: f64,
     screw: Screw,
-    trend: bool,
+    rule: Rule,
     along: bool,
     neighbours: &mut Neighbours,
     prev: &Previous,
@@ -1125,7 +1120,7 @@ fn choose(
         // 10,000 jittered replicas (a bundle's file ±3 bytes: the pairs are
         // tried among singles ranked by partial sums past the limit).
         let limit = arc_bits.map_or(own, |a| a.min(own));
-        match reference::best_reference(&g, neighbours.window(), trend, lattice_bits, limit) {
+        match reference::best_reference(&g, neighbours.window(), rule, lattice_bits, limit) {
             Some((rf, bits)) if bits < limit => (g, Some(rf), false, bits, 0),
             _ => (g, None, helix, own, own_start),
         }
@@ -1143,8 +1138,8 @@ fn choose(
             // static cost; weighed by it, the fornix at 0.1 mm went from 2
             // to 19 points curves and grew 0.7 %).
             let (g, along) = slid_points(
-                points, g, reference, helix, bits, start_bits, tolerance, half, screw, trend,
-                along, neighbours,
+                points, g, reference, helix, bits, start_bits, tolerance, half, screw, rule, along,
+                neighbours,
             );
             let n = g.len();
             neighbours.push_lattice(g.clone());
@@ -1304,6 +1299,8 @@ struct Models {
     parity: [Bit; 2],
     back: IntModel,
     reversed: Bit,
+    /// From model 12: whether a reference's steps are walked.
+    walk: Bit,
     ref_start: [IntModel; 3],
     has_anchor: Bit,
     /// Parity of start differences: from an anchor, from the previous start.
@@ -1645,12 +1642,16 @@ impl CurvePlan {
                         // `neighbours` holds this curve last: its reference
                         // is `back` before that.
                         let grids = neighbours.window();
-                        let res = rf.resolve(&grids[..grids.len() - 1], offset_trend(params.model));
+                        let res =
+                            rf.resolve(&grids[..grids.len() - 1], Rule::of_model(params.model));
                         let start = res.start();
                         let n = grid.len();
+                        let foot = reference::FootCache::new(None);
                         CurvePlan::Points {
                             start: [0, 1, 2].map(|a| grid[0][a] - start[a]),
-                            residuals: plan_residuals(along, grid, |k| res.predict_in(grid, k, n)),
+                            residuals: plan_residuals(along, grid, |k| {
+                                res.predict_next(grid, k, n, &foot)
+                            }),
                         }
                     }
                     None => CurvePlan::Points {
@@ -1791,6 +1792,9 @@ impl BlockStream {
                         if let Some((back, reversed)) = rf.second {
                             m.back.put_unsigned(enc, back as u64 - 1);
                             enc.bit(&mut m.reversed, reversed);
+                        }
+                        if Rule::of_model(params.model).walk {
+                            enc.bit(&mut m.walk, rf.walk);
                         }
                         let CurvePlan::Points { start, residuals } = plan else {
                             unreachable!("a points curve is put with its plan")
@@ -1957,7 +1961,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 params.tolerance,
                 half,
                 screw(params.model),
-                offset_trend(params.model),
+                Rule::of_model(params.model),
                 along(params.model),
                 &mut neighbours,
                 &streams[0].prev,
@@ -2121,6 +2125,7 @@ pub fn decode_block(
                     } else {
                         None
                     };
+                    let walk = Rule::of_model(params.model).walk && dec.bit(&mut m.walk);
                     let grids = neighbours.window();
                     let at_back = |b: usize| &grids[grids.len() - b][..];
                     if at_back(first.0).len() < 2
@@ -2132,13 +2137,15 @@ pub fn decode_block(
                         back: first.0,
                         reversed: first.1,
                         second,
+                        walk,
                     };
-                    let res = rf.resolve(grids, offset_trend(params.model));
+                    let res = rf.resolve(grids, Rule::of_model(params.model));
                     let start = res.start();
                     let d = get_lattice(&mut dec, &mut m.parity[0], &mut m.ref_start);
                     g.push([0, 1, 2].map(|a| start[a].wrapping_add(d[a])));
+                    let foot = reference::FootCache::new(None);
                     get_residuals(&mut dec, &mut m.ref_residual, along, &mut g, n, |g, k| {
-                        res.predict_in(g, k, n)
+                        res.predict_next(g, k, n, &foot)
                     });
                 } else {
                     let helix = dec.bit(&mut m.helix);
