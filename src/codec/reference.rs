@@ -127,6 +127,13 @@ impl Resolved<'_> {
                 return p;
             }
         }
+        self.matched(g, i, n)
+    }
+
+    /// [`predict_in`](Self::predict_in) by matching point indices (what a
+    /// walk falls back to).
+    #[inline]
+    fn matched(&self, g: &[[i64; 3]], i: usize, n: usize) -> [i64; 3] {
         // Each reference point looked up once: the lookups' divisions were a
         // tenth of decoding.
         let (r, rev) = self.first;
@@ -220,7 +227,7 @@ impl Resolved<'_> {
                 return p;
             }
         }
-        self.predict_in(g, i, n)
+        self.matched(g, i, n)
     }
 }
 
@@ -266,11 +273,11 @@ fn walk_step(
         (a, d, t, (a + d * tc).distance_squared(p))
     };
     let mut k = hint.min(segs - 1);
-    let mut best = foot_on(k).3;
+    let mut best = foot_on(k);
     let mut moved = 0;
     while k + 1 < segs && moved < WALK_SEARCH {
-        let e = foot_on(k + 1).3;
-        if !(e < best) {
+        let e = foot_on(k + 1);
+        if !(e.3 < best.3) {
             break;
         }
         best = e;
@@ -279,8 +286,8 @@ fn walk_step(
     }
     if moved == 0 {
         while k > 0 && moved < WALK_SEARCH {
-            let e = foot_on(k - 1).3;
-            if !(e < best) {
+            let e = foot_on(k - 1);
+            if !(e.3 < best.3) {
                 break;
             }
             best = e;
@@ -288,7 +295,7 @@ fn walk_step(
             moved += 1;
         }
     }
-    let (a, d, t, _) = foot_on(k);
+    let (a, d, t, _) = best;
     // Beyond the ends the lines of the end segments continue the polyline.
     let lo = if k == 0 { f64::NEG_INFINITY } else { 0.0 };
     let hi = if k + 1 == segs { f64::INFINITY } else { 1.0 };
