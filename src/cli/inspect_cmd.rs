@@ -220,7 +220,7 @@ fn inspect_container(args: &InspectArgs) -> Result<()> {
     }
 }
 
-/// Summary of a version-2 container: its header, and counts from decoding
+/// Summary of a version-3 container: its header, and counts from decoding
 /// every block (which also verifies every checksum).
 fn inspect_codec_container(args: &InspectArgs) -> Result<()> {
     use crate::codec::CodecReader;

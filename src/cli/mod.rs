@@ -355,7 +355,7 @@ pub struct CompressArgs {
     #[arg(long, value_enum, default_value_t = StorageArg::Compact)]
     pub storage: StorageArg,
     /// The distance --tolerance is measured in. `hausdorff` writes a
-    /// version-2 container (the arc codec); `ordered` and `frechet`, and
+    /// version-3 container (the arc codec); `ordered` and `frechet`, and
     /// --elements, --element-length and --storage f32|f64, write version 1
     /// (helix chains).
     #[arg(long, value_enum, default_value_t = DistanceArg::Hausdorff)]
@@ -407,7 +407,7 @@ pub struct DecompressArgs {
     #[arg(short, long)]
     pub output: std::path::PathBuf,
     /// Sample each curve every S (input units) along its arc length. For a
-    /// version-2 container this gives up the tolerance guarantee (which is
+    /// version-3 container this gives up the tolerance guarantee (which is
     /// about the default points), and says so.
     #[arg(long, conflicts_with = "points")]
     pub step: Option<f64>,

@@ -1,0 +1,131 @@
+#!/usr/bin/env python3
+"""Curve sets of kinds that ../shared/data does not hold, for checking the
+codec on data it was never tuned on (issue 19: "other organs and other field
+models").
+
+heart.tck       3,000 fibres of a left ventricle, tracked as tractography does:
+                a prolate ellipsoidal wall 10 mm thick, the fibres' helix angle
+                turning from +60 deg at the endocardium to -60 deg at the
+                epicardium (the classic transmural rotation), each fibre traced
+                at a 0.5 mm step with a small random walk in its angle and
+                0.05 mm of position noise, from a random seed in the wall until
+                it leaves the wall or reaches its random length (20-150 mm).
+                Units mm: compress at T = 0.1 and 0.5.
+dipole.tck      2,000 field lines of a potential field that is not PFSS: a
+                tilted dipole plus a quadrupole above the unit sphere (units:
+                the sphere's radius, like R_sun), traced by RK4 from footpoints
+                on the sphere at a step of 0.02 r until the line returns to
+                r = 1 or leaves r = 2.5. Compress at T = 1e-3 and 1e-2.
+
+Both are float32 .tck (nibabel). numpy + nibabel only; deterministic (--seed).
+
+    python benches/make_unseen.py -o /tmp/unseen
+    python benches/codec_compare.py --data /tmp/unseen --files heart.tck
+    python benches/codec_compare.py --data /tmp/unseen --files dipole.tck \
+        --tolerances 1e-3 1e-2
+"""
+import argparse
+import os
+
+import numpy as np
+import nibabel as nib
+
+
+def heart(rng, count):
+    a_in, c_in, wall = 25.0, 55.0, 10.0      # endocardium semi-axes, wall (mm)
+    step = 0.5
+    fibres = []
+    while len(fibres) < count:
+        e = rng.uniform(0.02, 0.98)          # transmural depth
+        theta = rng.uniform(np.pi / 2 + 0.05, np.pi - 0.25)
+        phi = rng.uniform(0, 2 * np.pi)
+        length = rng.uniform(20, 150)
+        wobble = 0.0
+        pts = []
+        s = 0.0
+        while s < length:
+            a, c = a_in + e * wall, c_in + e * wall
+            st, ct = np.sin(theta), np.cos(theta)
+            p = np.array([a * st * np.cos(phi), a * st * np.sin(phi), c * ct])
+            pts.append(p)
+            # |dp/dphi| and |dp/dtheta| on the ellipsoid of depth e.
+            d_phi = a * st
+            d_theta = np.hypot(a * ct, c * st)
+            alpha = np.radians(60.0 - 120.0 * e) + wobble
+            phi += step * np.cos(alpha) / max(d_phi, 1e-6)
+            theta += step * np.sin(alpha) / d_theta
+            e = np.clip(e + rng.normal(0, 0.002), 0.0, 1.0)
+            wobble = 0.98 * wobble + rng.normal(0, 0.01)
+            s += step
+            if not (np.pi / 2 <= theta <= np.pi - 0.2):
+                break
+        if len(pts) >= 10:
+            pts = np.array(pts) + rng.normal(0, 0.05, (len(pts), 3))
+            fibres.append(pts.astype(np.float32))
+    return fibres
+
+
+def dipole(rng, count):
+    # Tilted dipole m at the centre plus an axial quadrupole: B = -grad V.
+    tilt = np.radians(25)
+    m = np.array([np.sin(tilt), 0.0, np.cos(tilt)])
+    q = 0.6
+
+    def field(x):
+        r = np.linalg.norm(x)
+        rh = x / r
+        b_dip = (3 * rh * (m @ rh) - m) / r ** 3
+        # Axial quadrupole V = q P2(cos t) / r^3, B = -grad V.
+        ct = rh[2]
+        grad_r = -3 * q * 0.5 * (3 * ct ** 2 - 1) / r ** 4
+        grad_t = q * 3 * ct / r ** 4                 # d/dcos(t) of V, / r
+        ez = np.array([0.0, 0.0, 1.0])
+        b_quad = -(grad_r * rh + grad_t * (ez - ct * rh))
+        return b_dip + b_quad
+
+    lines = []
+    while len(lines) < count:
+        u = rng.normal(size=3)
+        x = 1.001 * u / np.linalg.norm(u)
+        b = field(x)
+        sign = 1.0 if b @ x > 0 else -1.0           # start outwards
+        pts = [x.copy()]
+        for _ in range(2000):
+            h = 0.02 * np.linalg.norm(x)
+            f = lambda y: sign * field(y) / np.linalg.norm(field(y))
+            k1 = f(x)
+            k2 = f(x + 0.5 * h * k1)
+            k3 = f(x + 0.5 * h * k2)
+            k4 = f(x + h * k3)
+            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            pts.append(x.copy())
+            r = np.linalg.norm(x)
+            if r < 1.0 or r > 2.5:
+                break
+        if len(pts) >= 3:
+            lines.append(np.array(pts, dtype=np.float32))
+    return lines
+
+
+def save(path, curves):
+    t = nib.streamlines.Tractogram(curves, affine_to_rasmm=np.eye(4))
+    nib.streamlines.save(t, path)
+    n = sum(len(c) for c in curves)
+    print(f"{path}: {len(curves)} curves, {n} points")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("-o", "--output", required=True, help="folder to write into")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--heart", type=int, default=3000, help="fibres")
+    ap.add_argument("--dipole", type=int, default=2000, help="field lines")
+    args = ap.parse_args()
+    os.makedirs(args.output, exist_ok=True)
+    rng = np.random.default_rng(args.seed)
+    save(os.path.join(args.output, "heart.tck"), heart(rng, args.heart))
+    save(os.path.join(args.output, "dipole.tck"), dipole(rng, args.dipole))
+
+
+if __name__ == "__main__":
+    main()
