@@ -31,9 +31,8 @@ import numpy as np
 import nibabel as nib
 
 
-def heart(rng, count):
+def heart(rng, count, step=0.5, noise=0.05):
     a_in, c_in, wall = 25.0, 55.0, 10.0      # endocardium semi-axes, wall (mm)
-    step = 0.5
     fibres = []
     while len(fibres) < count:
         e = rng.uniform(0.02, 0.98)          # transmural depth
@@ -60,12 +59,12 @@ def heart(rng, count):
             if not (np.pi / 2 <= theta <= np.pi - 0.2):
                 break
         if len(pts) >= 10:
-            pts = np.array(pts) + rng.normal(0, 0.05, (len(pts), 3))
+            pts = np.array(pts) + rng.normal(0, noise, (len(pts), 3))
             fibres.append(pts.astype(np.float32))
     return fibres
 
 
-def dipole(rng, count):
+def dipole(rng, count, step=0.02):
     # Tilted dipole m at the centre plus an axial quadrupole: B = -grad V.
     tilt = np.radians(25)
     m = np.array([np.sin(tilt), 0.0, np.cos(tilt)])
@@ -91,7 +90,7 @@ def dipole(rng, count):
         sign = 1.0 if b @ x > 0 else -1.0           # start outwards
         pts = [x.copy()]
         for _ in range(2000):
-            h = 0.02 * np.linalg.norm(x)
+            h = step * np.linalg.norm(x)
             f = lambda y: sign * field(y) / np.linalg.norm(field(y))
             k1 = f(x)
             k2 = f(x + 0.5 * h * k1)
@@ -120,11 +119,14 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--heart", type=int, default=3000, help="fibres")
     ap.add_argument("--dipole", type=int, default=2000, help="field lines")
+    ap.add_argument("--heart-step", type=float, default=0.5, help="mm")
+    ap.add_argument("--heart-noise", type=float, default=0.05, help="mm per coordinate")
+    ap.add_argument("--dipole-step", type=float, default=0.02, help="of the radius")
     args = ap.parse_args()
     os.makedirs(args.output, exist_ok=True)
     rng = np.random.default_rng(args.seed)
-    save(os.path.join(args.output, "heart.tck"), heart(rng, args.heart))
-    save(os.path.join(args.output, "dipole.tck"), dipole(rng, args.dipole))
+    save(os.path.join(args.output, "heart.tck"), heart(rng, args.heart, args.heart_step, args.heart_noise))
+    save(os.path.join(args.output, "dipole.tck"), dipole(rng, args.dipole, args.dipole_step))
 
 
 if __name__ == "__main__":

@@ -651,7 +651,7 @@ impl<'a> CurveEncoder<'a> {
         Some(CurveCode::Points {
             grid: idx,
             reference: None,
-            helix: false,
+            own: super::OwnPrediction::SecondOrder,
             along: false,
         })
     }

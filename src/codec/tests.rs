@@ -264,8 +264,8 @@ fn helix_prediction_continues_a_helix_where_second_order_misses() {
     // by the curvature, r·(2 − 2 cos δ) ≈ 500 units.
     let g = helix_lattice(40, 5_000.0, 1_500.0, 0.45);
     for k in 4..g.len() {
-        let turned = own_prediction(&g, k, true, screw(MODEL));
-        let linear = own_prediction(&g, k, false, screw(MODEL));
+        let turned = own_prediction(&g, k, OwnPrediction::Screw, screw(MODEL));
+        let linear = own_prediction(&g, k, OwnPrediction::SecondOrder, screw(MODEL));
         let miss = |p: [i64; 3]| (0..3).map(|a| (g[k][a] - p[a]).abs()).max().unwrap();
         assert!(
             miss(turned) <= 6,
@@ -281,7 +281,10 @@ fn helix_prediction_continues_a_helix_where_second_order_misses() {
     // Collinear steps have no rotation: second order stands in.
     let line: Vec<[i64; 3]> = (0..8).map(|k| [2 * k, 4 * k, 6 * k]).collect();
     for model in [8, 9] {
-        assert_eq!(own_prediction(&line, 5, true, screw(model)), [10, 20, 30]);
+        assert_eq!(
+            own_prediction(&line, 5, OwnPrediction::Screw, screw(model)),
+            [10, 20, 30]
+        );
     }
 }
 
@@ -420,13 +423,13 @@ fn coarse_curls_are_coded_by_screw_prediction_and_smaller() {
     let linear = estimated_bits(&CurveCode::Points {
         grid: grid.clone(),
         reference: None,
-        helix: false,
+        own: OwnPrediction::SecondOrder,
         along: false,
     });
     let screw = estimated_bits(&CurveCode::Points {
         grid,
         reference: None,
-        helix: true,
+        own: OwnPrediction::Screw,
         along: false,
     });
     // (Measured: 1118 bits against 1920; the lattice's rounding, ±T on a
@@ -1024,4 +1027,67 @@ fn a_large_block_learns_what_points_cost_where_arcs_win_the_close_calls() {
     assert!(points > 680, "{points} of 1100 as points");
     assert!(!Calibration::for_block(60).explores_points());
     assert!(Calibration::for_block(1100).explores_points());
+}
+
+#[test]
+fn model_13_predicts_noisy_fibres_by_their_mean_step_and_model_12_streams_still_decode() {
+    // Fibres as noisy as the tolerance (0.1 mm per coordinate at 0.1 mm,
+    // 1 mm steps): second order carries the noise of two points twice
+    // over; the mean of the last four steps carries about two points'.
+    // Model 13 codes them smaller, every curve within the tolerance both
+    // ways, and a model-12 stream still decodes as model 12.
+    let tol = 0.1;
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let curves: Vec<Vec<DVec3>> = wall_fibres(60, 30, 7)
+        .into_iter()
+        .map(|c| {
+            // Steps of 1 mm instead of 0.5 (every other point), more noise.
+            c.iter()
+                .step_by(2)
+                .map(|&p| {
+                    p + DVec3::new(
+                        rng.gen_range(-0.12..0.12),
+                        rng.gen_range(-0.12..0.12),
+                        rng.gen_range(-0.12..0.12),
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    let (b13, b12) = coded_by_both(&curves, tol, 13, 12);
+    assert_under(&b13, &b12, 0.97, (13, 12));
+}
+
+#[test]
+fn the_mean_step_continues_a_line_exactly_and_smooths_noise() {
+    // Points at equal steps along a line (on the lattice): the mean step
+    // predicts the next exactly.
+    let line: Vec<[i64; 3]> = (0..8).map(|i| [4 * i, 2 * i, -6 * i]).collect();
+    for k in 3..8 {
+        assert_eq!(mean_step_prediction(&line, k), Some(line[k]), "k {k}");
+    }
+    // On a jittered line its residuals are smaller than second order's.
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let jittered: Vec<[i64; 3]> = (0..400)
+        .map(|i| {
+            let b = rng.gen_range(0..2i64);
+            [0, 1, 2].map(|a| 2 * (5 * i * (a as i64 + 1) + rng.gen_range(-2..=2)) + b)
+        })
+        .collect();
+    let bits = |own| {
+        (2..jittered.len())
+            .map(|k| {
+                let p = own_prediction(&jittered, k, own, screw(MODEL));
+                lattice_bits([0, 1, 2].map(|a| jittered[k][a] - p[a]))
+            })
+            .sum::<u64>()
+    };
+    let (mean, second) = (
+        bits(OwnPrediction::MeanStep),
+        bits(OwnPrediction::SecondOrder),
+    );
+    assert!(
+        mean * 10 < second * 9,
+        "mean step {mean} bits, second order {second}"
+    );
 }
