@@ -1091,3 +1091,44 @@ fn the_mean_step_continues_a_line_exactly_and_smooths_noise() {
         "mean step {mean} bits, second order {second}"
     );
 }
+
+#[test]
+fn a_block_slides_only_the_kind_that_keeps_winning_and_keeps_checking() {
+    use super::{OwnPrediction, SlideVote};
+    let both = [OwnPrediction::SecondOrder, OwnPrediction::MeanStep];
+    // The first trials slide both kinds.
+    let mut vote = SlideVote::default();
+    for _ in 0..SlideVote::TRIALS {
+        assert_eq!(vote.kinds(), both);
+        vote.count(OwnPrediction::MeanStep);
+    }
+    // Then only the winner, but every EVERY-th curve both again.
+    for seen in SlideVote::TRIALS..200 {
+        let kinds = vote.kinds();
+        if seen % SlideVote::EVERY == 0 {
+            assert_eq!(kinds, both, "curve {seen}");
+            vote.count(OwnPrediction::MeanStep);
+        } else {
+            assert_eq!(kinds, [OwnPrediction::MeanStep], "curve {seen}");
+        }
+    }
+    // Second order winning as clearly: it alone.
+    let mut vote = SlideVote::default();
+    for _ in 0..SlideVote::TRIALS {
+        vote.kinds();
+        vote.count(OwnPrediction::SecondOrder);
+    }
+    // (Curve TRIALS is an EVERY-th: both.)
+    assert_eq!(vote.kinds(), both);
+    vote.count(OwnPrediction::SecondOrder);
+    assert_eq!(vote.kinds(), [OwnPrediction::SecondOrder]);
+    // A split vote: both, every curve.
+    let mut vote = SlideVote::default();
+    for i in 0..SlideVote::TRIALS {
+        vote.kinds();
+        vote.count(both[i % 2]);
+    }
+    for _ in 0..40 {
+        assert_eq!(vote.kinds(), both);
+    }
+}
