@@ -1132,3 +1132,43 @@ fn a_block_slides_only_the_kind_that_keeps_winning_and_keeps_checking() {
         assert_eq!(vote.kinds(), both);
     }
 }
+
+#[test]
+fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() {
+    use super::ScrewVote;
+    // Never winning: estimated for the first trials, then every EVERY-th.
+    let mut vote = ScrewVote::default();
+    let mut tried = Vec::new();
+    for seen in 0..300 {
+        if vote.tries() {
+            tried.push(seen);
+            vote.count(false);
+        }
+    }
+    let want: Vec<usize> = (0..300)
+        .filter(|&s| s < ScrewVote::TRIALS || s % ScrewVote::EVERY == 0)
+        .collect();
+    assert_eq!(tried, want);
+    // Winning a fifth of its trials: estimated for every curve.
+    let mut vote = ScrewVote::default();
+    for seen in 0..300 {
+        assert!(vote.tries(), "curve {seen}");
+        vote.count(seen % 5 == 0);
+    }
+    // A block whose curves turn to curls after 100 curves: the checks
+    // find it, and it is estimated for every curve again once its wins
+    // are a tenth of its trials: 66 lost trials by curve 100 (the first
+    // 64 and curves 80 and 96), then the checks at 112, 128, …, 224 win,
+    // and the eighth (8 of 74) passes the share: curve 223 is the last
+    // skipped.
+    let mut vote = ScrewVote::default();
+    let mut last_skipped = 0;
+    for seen in 0..400 {
+        if vote.tries() {
+            vote.count(seen >= 100);
+        } else {
+            last_skipped = seen;
+        }
+    }
+    assert_eq!(last_skipped, 223);
+}
