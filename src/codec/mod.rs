@@ -1013,42 +1013,63 @@ type LatticePredict<'a> = dyn Fn(&[[i64; 3]], usize) -> [i64; 3] + 'a;
 /// / 930 kB in 3.7 s; 8: 143,042 B in 1.8 s.
 const SLIDE_BEAM: usize = 2;
 
+/// What a block has counted of an option its curves may try (a second
+/// slide, an estimate): curves seen, curves that tried it, and how often it
+/// won. Both votes below ask every curve to try it for a first stretch and
+/// every [`Tally::EVERY`]th curve after, so that a block whose curves
+/// change kind midway finds it again.
+#[derive(Default)]
+struct Tally {
+    seen: usize,
+    tried: usize,
+    won: usize,
+}
+
+impl Tally {
+    const EVERY: usize = 16;
+
+    /// Whether the next curve (counted as seen) must try the option: one of
+    /// the first `trials`, or an [`Tally::EVERY`]th.
+    fn must_try(&mut self, trials: usize) -> bool {
+        let seen = self.seen;
+        self.seen += 1;
+        seen < trials || seen.is_multiple_of(Self::EVERY)
+    }
+
+    /// A curve tried it, and it won or not.
+    fn count(&mut self, won: bool) {
+        self.tried += 1;
+        self.won += won as usize;
+    }
+}
+
 /// Which own prediction a block's mean-step curves are slid for
 /// ([`slid_points`]): where the mean step is a points curve's cheapest own
 /// prediction by the rounded points, the slide ran for it and for second
 /// order and kept the cheaper, which is right most of the time for one of
 /// them in a given block (noisy fibres: the mean step; smoother ones:
 /// second order). The block slides both for its first
-/// [`TRIALS`](Self::TRIALS) such curves and every [`EVERY`](Self::EVERY)th
-/// after, counting which won; the others are slid only for a kind that won
-/// at least [`SHARE`](Self::SHARE) of the counted ones (both while neither
-/// has). Measured: 2,000 fornix replicas at 0.1 mm 11 % fewer
-/// instructions for 0.1 % more bytes; 3,000 noisy heart fibres
-/// (`benches/make_unseen.py`) 35 % fewer, 42 B fewer.
+/// [`TRIALS`](Self::TRIALS) such curves and every [`Tally::EVERY`]th
+/// after, counting which won (the mean step's wins in its [`Tally`]); the
+/// others are slid only for a kind that won at least
+/// [`SHARE`](Self::SHARE) of the counted ones (both while neither has).
+/// Measured: 2,000 fornix replicas at 0.1 mm 11 % fewer instructions for
+/// 0.1 % more bytes; 3,000 noisy heart fibres (`benches/make_unseen.py`)
+/// 35 % fewer, 42 B fewer.
 #[derive(Default)]
-struct SlideVote {
-    /// Curves for which both kinds were slid, and of them those the mean
-    /// step won.
-    trials: usize,
-    mean_wins: usize,
-    /// Mean-step curves so far.
-    seen: usize,
-}
+struct SlideVote(Tally);
 
 impl SlideVote {
     const TRIALS: usize = 32;
-    const EVERY: usize = 16;
     const SHARE: f64 = 0.9;
 
     /// The kinds to slide for the block's next mean-step curve.
     fn kinds(&mut self) -> &'static [OwnPrediction] {
         const BOTH: &[OwnPrediction] = &[OwnPrediction::SecondOrder, OwnPrediction::MeanStep];
-        let seen = self.seen;
-        self.seen += 1;
-        if seen < Self::TRIALS || seen.is_multiple_of(Self::EVERY) {
+        if self.0.must_try(Self::TRIALS) {
             return BOTH;
         }
-        let share = self.mean_wins as f64 / self.trials.max(1) as f64;
+        let share = self.0.won as f64 / self.0.tried.max(1) as f64;
         if share >= Self::SHARE {
             &[OwnPrediction::MeanStep]
         } else if 1.0 - share >= Self::SHARE {
@@ -1060,52 +1081,36 @@ impl SlideVote {
 
     /// Both kinds were slid and `kind` won.
     fn count(&mut self, kind: OwnPrediction) {
-        self.trials += 1;
-        if kind == OwnPrediction::MeanStep {
-            self.mean_wins += 1;
-        }
+        self.0.count(kind == OwnPrediction::MeanStep);
     }
 }
 
 /// Whether a block still estimates its points curves' screw prediction
 /// (a rotation fitted at every point, [`helix_prediction`]): where it is
 /// rarely the cheapest own prediction, it is estimated only for every
-/// [`EVERY`](Self::EVERY)th curve, so that a block whose curves turn to
+/// [`Tally::EVERY`]th curve, so that a block whose curves turn to
 /// curls finds it again. It wins most curves of curly hair (1,360 of the
 /// 2,000 strands at 0.1 mm; without it the hair is 25 % larger) and few
 /// fibres (7 of 2,000 fornix replicas, 190 of 3,000 noisy heart fibres at
 /// 0.1 mm), where its estimate was 5 % of the instructions and what it
 /// won cost more coded than second order or the mean step would have.
 #[derive(Default)]
-struct ScrewVote {
-    /// Curves whose screw prediction was estimated, and of them those it
-    /// won.
-    tried: usize,
-    won: usize,
-    /// Curves that asked.
-    seen: usize,
-}
+struct ScrewVote(Tally);
 
 impl ScrewVote {
     /// The first curves always estimate it.
     const TRIALS: usize = 64;
-    const EVERY: usize = 16;
     /// The share of wins under which the block stops estimating it.
     const SHARE: f64 = 0.1;
 
     /// Whether the block's next points curve estimates its screw prediction.
     fn tries(&mut self) -> bool {
-        let seen = self.seen;
-        self.seen += 1;
-        seen < Self::TRIALS
-            || seen.is_multiple_of(Self::EVERY)
-            || self.won as f64 >= Self::SHARE * self.tried as f64
+        self.0.must_try(Self::TRIALS) || self.0.won as f64 >= Self::SHARE * self.0.tried as f64
     }
 
     /// An estimate was made, and won or not.
     fn count(&mut self, won: bool) {
-        self.tried += 1;
-        self.won += won as usize;
+        self.0.count(won);
     }
 }
 

@@ -1105,7 +1105,7 @@ fn a_block_slides_only_the_kind_that_keeps_winning_and_keeps_checking() {
     // Then only the winner, but every EVERY-th curve both again.
     for seen in SlideVote::TRIALS..200 {
         let kinds = vote.kinds();
-        if seen % SlideVote::EVERY == 0 {
+        if seen % super::Tally::EVERY == 0 {
             assert_eq!(kinds, both, "curve {seen}");
             vote.count(OwnPrediction::MeanStep);
         } else {
@@ -1146,7 +1146,7 @@ fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() 
         }
     }
     let want: Vec<usize> = (0..300)
-        .filter(|&s| s < ScrewVote::TRIALS || s % ScrewVote::EVERY == 0)
+        .filter(|&s| s < ScrewVote::TRIALS || s % super::Tally::EVERY == 0)
         .collect();
     assert_eq!(tried, want);
     // Winning a fifth of its trials: estimated for every curve.
