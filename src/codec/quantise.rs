@@ -174,26 +174,6 @@ pub fn bcc_point(k: [i64; 3], half: f64) -> glam::DVec3 {
     glam::DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * half
 }
 
-/// The 14 nearest neighbours of a BCC lattice point, in half-step units:
-/// the 8 of the other parity at `half·√3` and the 6 of the same at
-/// `2·half`.
-const BCC_NEIGHBOURS: [[i64; 3]; 14] = [
-    [1, 1, 1],
-    [1, 1, -1],
-    [1, -1, 1],
-    [1, -1, -1],
-    [-1, 1, 1],
-    [-1, 1, -1],
-    [-1, -1, 1],
-    [-1, -1, -1],
-    [2, 0, 0],
-    [-2, 0, 0],
-    [0, 2, 0],
-    [0, -2, 0],
-    [0, 0, 2],
-    [0, 0, -2],
-];
-
 /// The `k`-th least of `values` (`1 ≤ k ≤ 16`), or infinity when there
 /// are fewer.
 fn kth_least(values: impl Iterator<Item = f64>, k: usize) -> f64 {
@@ -262,12 +242,110 @@ impl Segment {
     }
 }
 
-/// Where along the way from the input's place nearest the prediction back
-/// to the vertex the slide searches around (fractions of the way).
-/// Measured against five places (0, ¼, ½, ¾, 1): the same bytes within
-/// 0.1 % on the shared data and the fornix replicas at 0.1 mm, 8 % less
-/// time there (with two, 0.1 % larger and 5 % less time again).
-const SLIDE_CENTRES: [f64; 3] = [0.0, 0.5, 1.0];
+/// How far on along the input segment after a vertex the slide may move
+/// it (a fraction of the segment). Measured with 0.5, 0.6, 0.75 and 1 (and
+/// with the half segment before as well; and with a reach of the
+/// prediction's distance from the vertex plus one to three tolerances):
+/// the bytes within ±0.5 % of each other on the shared data, 10,000 fornix
+/// replicas and the heart fibres of `benches/make_unseen.py` at 0.1 mm, but
+/// each step further costs the slide a tenth more time.
+const SLIDE_REACH: f64 = 0.5;
+
+/// Calls `f(k, x)` once for each lattice point `x = k·half` within `√r2`
+/// of the segment `a`–`b` (a point on the boundary may be missed or not
+/// by rounding).
+///
+/// Plane by plane across the segment's longest axis (the lattice's points
+/// of one parity lie in every other plane): in a plane, such a point is in
+/// the section of the cylinder around the segment's line, an ellipse about
+/// the line's point whose extent on axis `j` is `√r2·√(1 + (dⱼ/d₀)²)`
+/// (`d` the segment's direction, `d₀` on the longest axis), or in the
+/// section of the ball at an end. Each candidate in that window is tested.
+fn lattice_near_segment(
+    a: glam::DVec3,
+    b: glam::DVec3,
+    half: f64,
+    r2: f64,
+    mut f: impl FnMut([i64; 3], glam::DVec3),
+) {
+    let d = b - a;
+    let dd = d.length_squared();
+    let inv = if dd > 0.0 { 1.0 / dd } else { 0.0 };
+    let r = r2.sqrt();
+    let long = d.abs().max_position();
+    let (o1, o2) = ((long + 1) % 3, (long + 2) % 3);
+    // The segment with its longest axis first.
+    let (a0, a1, a2) = (a[long], a[o1], a[o2]);
+    let (d0, d1, d2) = (d[long], d[o1], d[o2]);
+    let inv_half = 1.0 / half;
+    // (Integer floors and ceilings: the libm calls were a tenth of the
+    // slide.)
+    let floor = |y: f64| floor_small(y) as i64;
+    let ceil = |y: f64| -floor_small(-y) as i64;
+    let lo = floor((a0.min(a0 + d0) - r) * inv_half);
+    let hi = ceil((a0.max(a0 + d0) + r) * inv_half);
+    // The window on the other two axes: the section of the cylinder
+    // around the segment's line (an ellipse about the line's point, whose
+    // extent on axis `j` is `r·√(1 + (dⱼ/d₀)²)`), and of the balls at its
+    // ends where the plane cuts them.
+    let slope = |dj: f64| if d0 != 0.0 { dj / d0 } else { 0.0 };
+    let (s1, s2) = (slope(d1), slope(d2));
+    let (h1, h2) = (r * (1.0 + s1 * s1).sqrt(), r * (1.0 + s2 * s2).sqrt());
+    let ends = [(a0, a1, a2), (a0 + d0, a1 + d1, a2 + d2)];
+    let mut k = [0i64; 3];
+    for kl in lo..=hi {
+        let parity = kl & 1;
+        let c = kl as f64 * half;
+        let w0 = c - a0;
+        let (mut lo1, mut hi1, mut lo2, mut hi2) = if d0 != 0.0 {
+            let (l1, l2) = (a1 + s1 * w0, a2 + s2 * w0);
+            (l1 - h1, l1 + h1, l2 - h2, l2 + h2)
+        } else {
+            (
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            )
+        };
+        for (e0, e1, e2) in ends {
+            let dl = c - e0;
+            if dl * dl <= r2 {
+                let rr = (r2 - dl * dl).sqrt();
+                (lo1, hi1) = (lo1.min(e1 - rr), hi1.max(e1 + rr));
+                (lo2, hi2) = (lo2.min(e2 - rr), hi2.max(e2 + rr));
+            }
+        }
+        if !(lo1 <= hi1 && lo2 <= hi2) {
+            continue;
+        }
+        // The first of `kl`'s parity from `y` up.
+        let from = |y: f64| {
+            let k = ceil(y * inv_half);
+            k + ((k - parity) & 1)
+        };
+        let (to1, to2) = (floor(hi1 * inv_half), floor(hi2 * inv_half));
+        let from2 = from(lo2);
+        let mut k1 = from(lo1);
+        while k1 <= to1 {
+            let w1 = k1 as f64 * half - a1;
+            let mut k2 = from2;
+            while k2 <= to2 {
+                let w2 = k2 as f64 * half - a2;
+                let t = ((w0 * d0 + w1 * d1 + w2 * d2) * inv).clamp(0.0, 1.0);
+                let (e0, e1, e2) = (w0 - d0 * t, w1 - d1 * t, w2 - d2 * t);
+                if e0 * e0 + e1 * e1 + e2 * e2 <= r2 {
+                    k[long] = kl;
+                    k[o1] = k1;
+                    k[o2] = k2;
+                    f(k, bcc_point(k, half));
+                }
+                k2 += 2;
+            }
+            k1 += 2;
+        }
+    }
+}
 
 /// How far back a prediction given to [`cheapest_points`] may look: it
 /// reads only `g[k − PREDICT_LOOKBACK..k]` (the screw prediction reads
@@ -287,8 +365,10 @@ const _: () = assert!(super::predict::AlongStep::STEPS < PREDICT_LOOKBACK);
 /// The promise is about vertex-to-segment distances, so an output vertex
 /// may slide forward along the curve by up to about `T / θ` (θ the turn at
 /// the vertex): the prediction's error along the curve costs less. The
-/// nearest lattice point is always a candidate, so no point costs more
-/// than rounding. The search keeps the `beam` cheapest partial choices
+/// candidates for a vertex are the prediction, the nearest lattice point
+/// (always feasible, so no point costs more than rounding) and the lattice
+/// points within `√tol2` of the input from the vertex to half-way on to the
+/// next ([`SLIDE_REACH`]), found once per vertex ([`lattice_near_segment`]). The search keeps the `beam` cheapest partial choices
 /// (ending at different points) from vertex to vertex, so a point a little
 /// dearer now may buy cheaper ones after it; `beam = 1` is greedy. Linear
 /// in the curve's length: `predict` sees the chosen points only through
@@ -323,6 +403,17 @@ pub fn cheapest_points(
         /// (`predict::step_window`; 0 without `along`).
         window: u64,
     }
+    /// A candidate for the next point: its cost, or a bound under it
+    /// (`exact` false).
+    #[derive(Clone, Copy)]
+    struct Candidate {
+        key: f64,
+        q: [i64; 3],
+        exact: bool,
+        /// Its place in the tube, or `NOT_IN_TUBE` (the prediction).
+        tube: u32,
+    }
+    const NOT_IN_TUBE: u32 = u32::MAX;
     let n = points.len();
     if n == 0 {
         return Some((Vec::new(), 0));
@@ -343,6 +434,10 @@ pub fn cheapest_points(
     level.push(1);
     let mut scratch = vec![[0i64; 3]; n];
     let mut next: Vec<Node> = Vec::new();
+    // The lattice points the slide may move vertex k to (see below), and
+    // one partial choice's candidates among them.
+    let mut tube: Vec<([i64; 3], glam::DVec3)> = Vec::new();
+    let mut cands: Vec<Candidate> = Vec::new();
     for k in 1..n {
         let v = points[k];
         let before = points[k - 1];
@@ -354,6 +449,24 @@ pub fn cheapest_points(
         // The input segments beside the vertex, for every partial choice.
         let seg_before = Segment::new(before, v);
         let seg_after = after.map(|a| Segment::new(v, a));
+        // Where vertex k may go: the lattice points within the tolerance
+        // of the input from the vertex to half-way on to the one after
+        // ([`SLIDE_REACH`]), each tested as `feasible` tests the
+        // prediction. (Behind the vertex, a point beyond the tolerance of
+        // it is feasible only where the vertex before slid past it: with
+        // those the bytes were the same within 0.03 %.) Nearest the vertex
+        // first: of candidates that cost the same, the one that slides
+        // less is kept (measured against the order found: the hair at
+        // 0.1 mm 1.3 % smaller, 10,000 fornix replicas and the noisy heart
+        // fibres of `benches/make_unseen.py` 0.2 % and 0.4 % larger).
+        tube.clear();
+        let ahead = after.map_or(v, |a| v + (a - v) * SLIDE_REACH);
+        lattice_near_segment(v, ahead, half, tol2, |q, x| {
+            if seg_before.dist2(x) <= tol2 || seg_after.is_some_and(|s| s.dist2(x) <= tol2) {
+                tube.push((q, x));
+            }
+        });
+        tube.sort_by(|a, b| a.1.distance_squared(v).total_cmp(&b.1.distance_squared(v)));
         next.clear();
         for pi in level[k - 1]..level[k] {
             let node = &flat[pi];
@@ -433,129 +546,80 @@ pub fn cheapest_points(
             // before an equal one.)
             let beat = kth_least(next.iter().map(|o| o.cost), beam);
             let over = |c: f64| node.cost + c > beat;
-            // Candidates: the prediction, and lattice points around the
-            // places on the input nearest it and on the way from there
-            // back to the vertex. The `beam` cheapest feasible ones are
-            // kept; feasibility, the dear test, is asked only of a
-            // candidate cheaper than the dearest kept (with `beam = 1`,
-            // than the nearest point too).
+            // What a candidate must cost less than to be kept before
+            // `beam` are: with `beam = 1`, than the nearest point (pushed
+            // already); else anything.
+            let bar = if beam == 1 { c_near } else { f64::INFINITY };
+            // Candidates: the prediction and the vertex's tube, each with a
+            // key that is its cost, or, along the step (whose coded value
+            // needs a square root), a bound under it (the least there, at
+            // 0: sums of larger terms are never smaller, in floating point
+            // too). They are taken cheapest first by (key, order made), a
+            // bound replaced by its cost when it comes first, and the
+            // first `beam` feasible ones kept: feasibility is asked of as
+            // few as can be, and the kept ones are the cheapest `beam`
+            // feasible candidates (ties to the earlier made).
+            cands.clear();
+            let mut add = |q: [i64; 3], key: f64, exact: bool, tube: u32| {
+                if key < bar && !over(key) && q != nearest {
+                    cands.push(Candidate {
+                        key,
+                        q,
+                        exact,
+                        tube,
+                    });
+                }
+            };
+            add(pred, cost.of(coded([0; 3])), true, NOT_IN_TUBE);
+            let zero = (cost.axis)(0);
+            for (i, &(q, _)) in tube.iter().enumerate() {
+                let d = diff(q);
+                let mut t = d.map(&cost.axis);
+                if let Some(st) = step {
+                    t[st.axis()] = zero;
+                }
+                add(q, cost.sum(t), step.is_none(), i as u32);
+            }
             let mut top: [(f64, [i64; 3]); 16] = [(f64::INFINITY, [0; 3]); 16];
             let mut kept = 0;
-            // What a candidate must cost less than to be kept (it only
-            // falls as candidates are kept).
-            let bar = |top: &[(f64, [i64; 3]); 16], kept: usize| {
-                if kept == beam {
-                    top[beam - 1].0
-                } else if beam == 1 {
-                    c_near
-                } else {
-                    f64::INFINITY
+            let live = &mut cands[..];
+            while kept < beam {
+                // The least (key, order made) not yet taken.
+                let mut at = usize::MAX;
+                let mut least = f64::INFINITY;
+                for (i, cd) in live.iter().enumerate() {
+                    if cd.key < least {
+                        least = cd.key;
+                        at = i;
+                    }
                 }
-            };
-            let consider =
-                |q: [i64; 3], c: f64, top: &mut [(f64, [i64; 3]); 16], kept: &mut usize| {
-                    if !(c < bar(top, *kept))
-                        || over(c)
-                        || q == nearest
-                        || top[..*kept].iter().any(|t| t.1 == q)
-                    {
-                        return;
-                    }
-                    if !feasible(q) {
-                        return;
-                    }
-                    let mut i = (*kept).min(beam - 1);
-                    if *kept < beam {
-                        *kept += 1;
-                    }
-                    while i > 0 && top[i - 1].0 > c {
-                        top[i] = top[i - 1];
-                        i -= 1;
-                    }
-                    top[i] = (c, q);
-                };
-            consider(pred, cost.of(coded([0; 3])), &mut top, &mut kept);
-            let p = bcc_point(pred, half);
-            let foot = |a: glam::DVec3, b: glam::DVec3| {
-                let d = b - a;
-                let t = if d.length_squared() > 0.0 {
-                    ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                a + d * t
-            };
-            let mut c = foot(before, v);
-            if let Some(a) = after {
-                let c2 = foot(v, a);
-                if c2.distance_squared(p) < c.distance_squared(p) {
-                    c = c2;
+                if at == usize::MAX {
+                    break;
                 }
-            }
-            // (Where the prediction lands near the vertex the centres
-            // coincide: each distinct one is searched once.)
-            let mut last_centre = None;
-            for t in SLIDE_CENTRES {
-                let Some(centre) = bcc_nearest(c + (v - c) * t, half) else {
-                    continue;
-                };
-                if last_centre == Some(centre) {
+                let cd = live[at];
+                if !cd.exact {
+                    live[at] = Candidate {
+                        key: cost.of(coded(diff(cd.q))),
+                        exact: true,
+                        ..cd
+                    };
+                    if !(live[at].key < bar) || over(live[at].key) {
+                        live[at].key = f64::INFINITY;
+                    }
                     continue;
                 }
-                last_centre = Some(centre);
-                // The neighbourhood's costs from per-axis terms (five
-                // offsets per axis instead of fifteen candidates' three),
-                // and a bound under all of them: a neighbourhood that
-                // cannot beat the bar is skipped whole (the same choice,
-                // as the bar only falls).
-                let e = diff(centre);
-                let mut terms = [[0.0; 5]; 3];
-                let mut least = [f64::INFINITY; 3];
-                for a in 0..3 {
-                    for (o, t) in terms[a].iter_mut().enumerate() {
-                        *t = (cost.axis)(e[a] + o as i64 - 2);
-                        least[a] = least[a].min(*t);
-                    }
-                }
-                // Along the step the coded value is any: its cost is at
-                // least the axis cost's least, at 0.
-                if let Some(st) = step {
-                    least[st.axis()] = (cost.axis)(0);
-                }
-                if !(cost.sum(least) < bar(&top, kept)) || over(cost.sum(least)) {
+                live[at].key = f64::INFINITY;
+                // A point of the tube is within the tolerance of the input
+                // already: only the output segment into it is asked.
+                let feasible = match tube.get(cd.tube as usize) {
+                    Some(&(_, x)) => dist2_to_segment(v, o_prev, x) <= tol2,
+                    None => feasible(cd.q),
+                };
+                if !feasible || top[..kept].iter().any(|t| t.1 == cd.q) {
                     continue;
                 }
-                let at = |d: [i64; 3]| {
-                    let mut t = [0, 1, 2].map(|a| terms[a][(d[a] + 2) as usize]);
-                    if let Some(st) = step {
-                        // Along the step: the coded value's cost.
-                        let m = st.axis();
-                        t[m] = (cost.axis)(coded([0, 1, 2].map(|a| e[a] + d[a]))[m]);
-                    }
-                    cost.sum(t)
-                };
-                // Along the step a candidate's cost needs its coded value (a
-                // square root): first its bound with the least there, which
-                // a candidate must beat the bar by anyway (sums of larger
-                // terms are never smaller, in floating point too).
-                let within_bar = |d: [i64; 3], top: &[(f64, [i64; 3]); 16], kept: usize| {
-                    step.is_none_or(|st| {
-                        let mut t = [0, 1, 2].map(|a| terms[a][(d[a] + 2) as usize]);
-                        t[st.axis()] = least[st.axis()];
-                        let bound = cost.sum(t);
-                        bound < bar(top, kept) && !over(bound)
-                    })
-                };
-                for d in std::iter::once([0; 3]).chain(BCC_NEIGHBOURS) {
-                    if within_bar(d, &top, kept) {
-                        consider(
-                            [0, 1, 2].map(|a| centre[a] + d[a]),
-                            at(d),
-                            &mut top,
-                            &mut kept,
-                        );
-                    }
-                }
+                top[kept] = (cd.key, cd.q);
+                kept += 1;
             }
             for &(c, q) in &top[..kept] {
                 push(&mut next, q, c);
@@ -637,6 +701,79 @@ mod tests {
                 assert_eq!(round_small(y), y.round(), "round {y}");
             }
         }
+    }
+
+    #[test]
+    fn lattice_near_segment_finds_each_point_within_the_radius_once() {
+        // Against every lattice point of the segment's bounding box: all
+        // within the radius found (but for those on its boundary, within
+        // rounding), none twice, none beyond it, all on the lattice. Any
+        // direction, lengths from zero (a ball) to many radii, segments
+        // along an axis and on a diagonal.
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let half = 0.37;
+        let mut found_total = 0;
+        for case in 0..3_000 {
+            let r: f64 = rng.gen_range(0.2..1.5);
+            let a = glam::DVec3::new(
+                rng.gen_range(-5.0..5.0),
+                rng.gen_range(-5.0..5.0),
+                rng.gen_range(-5.0..5.0),
+            );
+            let len = [0.0, 0.01, rng.gen_range(0.0..8.0)][case % 3];
+            let dir = match case % 7 {
+                0 => glam::DVec3::X,
+                1 => glam::DVec3::new(0.0, -1.0, 0.0),
+                2 => glam::DVec3::ONE.normalize(),
+                _ => glam::DVec3::new(
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                )
+                .normalize_or_zero(),
+            };
+            let b = a + dir * len;
+            let seg = Segment::new(a, b);
+            let mut found = Vec::new();
+            lattice_near_segment(a, b, half, r * r, |k, x| {
+                assert_eq!(x, bcc_point(k, half));
+                assert!(
+                    k[0].rem_euclid(2) == k[1].rem_euclid(2)
+                        && k[1].rem_euclid(2) == k[2].rem_euclid(2)
+                );
+                assert!(
+                    seg.dist2(x) <= r * r * (1.0 + 1e-9),
+                    "case {case}: {k:?} beyond"
+                );
+                found.push(k);
+            });
+            let n = found.len();
+            found.sort();
+            found.dedup();
+            assert_eq!(found.len(), n, "case {case}: a point found twice");
+            let lo = ((a.min(b) - glam::DVec3::splat(r)) / half).floor();
+            let hi = ((a.max(b) + glam::DVec3::splat(r)) / half).ceil();
+            let mut inside = 0;
+            for i in lo.x as i64..=hi.x as i64 {
+                for j in lo.y as i64..=hi.y as i64 {
+                    for l in lo.z as i64..=hi.z as i64 {
+                        if (i - j) % 2 != 0 || (j - l) % 2 != 0 {
+                            continue;
+                        }
+                        let k = [i, j, l];
+                        if seg.dist2(bcc_point(k, half)) <= r * r * (1.0 - 1e-9) {
+                            inside += 1;
+                            assert!(found.binary_search(&k).is_ok(), "case {case}: {k:?} missed");
+                        }
+                    }
+                }
+            }
+            assert!(n >= inside);
+            found_total += n;
+        }
+        // The cases are not empty: a ball of radius 0.2..1.5 holds a few
+        // points of this lattice on average.
+        assert!(found_total > 3_000 * 5, "{found_total}");
     }
 
     #[test]
