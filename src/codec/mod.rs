@@ -1085,30 +1085,38 @@ impl SlideVote {
     }
 }
 
-/// Whether a block still estimates its points curves' screw prediction
-/// (a rotation fitted at every point, [`helix_prediction`]): where it is
-/// rarely the cheapest own prediction, it is estimated only for every
-/// [`Tally::EVERY`]th curve, so that a block whose curves turn to
-/// curls finds it again. It wins most curves of curly hair (1,360 of the
-/// 2,000 strands at 0.1 mm; without it the hair is 25 % larger) and few
-/// fibres (7 of 2,000 fornix replicas, 190 of 3,000 noisy heart fibres at
-/// 0.1 mm), where its estimate was 5 % of the instructions and what it
-/// won cost more coded than second order or the mean step would have.
+/// Whether a block still tries, for its next points curve, an option that
+/// costs time and rarely wins on some data: where it has won under
+/// [`SHARE`](Self::SHARE) of its trials, only every [`Tally::EVERY`]th
+/// curve tries it, so that a block whose curves change kind midway finds
+/// it again. Two options are so voted on:
+///
+/// - The screw prediction (a rotation fitted at every point,
+///   [`helix_prediction`]). It wins most curves of curly hair (1,360 of the
+///   2,000 strands at 0.1 mm; without it the hair is 25 % larger) and few
+///   fibres (7 of 2,000 fornix replicas, 190 of 3,000 noisy heart fibres
+///   at 0.1 mm), where its estimate was 5 % of the instructions and what it
+///   won cost more coded than second order or the mean step would have.
+/// - The search for a reference among the curves before
+///   ([`reference::best_reference`]). It wins two thirds of the fornix
+///   replicas and nearly all of a resampled bundle's curves at 0.1 mm, but
+///   62 of 3,000 noisy heart fibres, 11 of the hair's 2,000 strands and 1
+///   of 5,800 field lines (where it was a tenth of the instructions).
 #[derive(Default)]
-struct ScrewVote(Tally);
+struct RareVote(Tally);
 
-impl ScrewVote {
-    /// The first curves always estimate it.
+impl RareVote {
+    /// The first curves always try it.
     const TRIALS: usize = 64;
-    /// The share of wins under which the block stops estimating it.
+    /// The share of wins under which the block stops trying it.
     const SHARE: f64 = 0.1;
 
-    /// Whether the block's next points curve estimates its screw prediction.
+    /// Whether the block's next points curve tries it.
     fn tries(&mut self) -> bool {
         self.0.must_try(Self::TRIALS) || self.0.won as f64 >= Self::SHARE * self.0.tried as f64
     }
 
-    /// An estimate was made, and won or not.
+    /// It was tried, and won or not.
     fn count(&mut self, won: bool) {
         self.0.count(won);
     }
@@ -1247,7 +1255,8 @@ fn choose(
     explore_points: bool,
     mean_step: bool,
     vote: &mut SlideVote,
-    screw_vote: &mut ScrewVote,
+    screw_vote: &mut RareVote,
+    reference_vote: &mut RareVote,
 ) -> (CurveCode, usize, u64, u64) {
     if points.is_empty() {
         neighbours.push_empty();
@@ -1322,8 +1331,14 @@ fn choose(
         // 10,000 jittered replicas (a bundle's file ±3 bytes: the pairs are
         // tried among singles ranked by partial sums past the limit).
         let limit = arc_bits.map_or(own, |a| a.min(own));
-        match reference::best_reference(&g, neighbours.window(), rule, lattice_bits, limit) {
-            Some((rf, bits)) if bits < limit => (g, Some(rf), OwnPrediction::SecondOrder, bits, 0),
+        if !reference_vote.tries() {
+            return (g, None, own_kind, own, own_start);
+        }
+        let found = reference::best_reference(&g, neighbours.window(), rule, lattice_bits, limit);
+        let won = found.is_some_and(|(_, bits)| bits < limit);
+        reference_vote.count(won);
+        match found {
+            Some((rf, bits)) if won => (g, Some(rf), OwnPrediction::SecondOrder, bits, 0),
             _ => (g, None, own_kind, own, own_start),
         }
     });
@@ -2182,7 +2197,8 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     let mut neighbours = Neighbours::new(grid_step, q_start, curves.len());
     let mut worth = ArcsWorth::default();
     let mut vote = SlideVote::default();
-    let mut screw_vote = ScrewVote::default();
+    let mut screw_vote = RareVote::default();
+    let mut reference_vote = RareVote::default();
     for chunk in curves.chunks(CALIBRATION_CHUNK) {
         // Each chunk's searches with what the curves before it taught
         // ([`encoder::GiveUp`], [`ArcsWorth`]).
@@ -2217,6 +2233,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 params.model >= 13,
                 &mut vote,
                 &mut screw_vote,
+                &mut reference_vote,
             );
             if arcs_searched {
                 worth.add(estimate, saving);

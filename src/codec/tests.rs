@@ -1135,9 +1135,9 @@ fn a_block_slides_only_the_kind_that_keeps_winning_and_keeps_checking() {
 
 #[test]
 fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() {
-    use super::ScrewVote;
+    use super::RareVote;
     // Never winning: estimated for the first trials, then every EVERY-th.
-    let mut vote = ScrewVote::default();
+    let mut vote = RareVote::default();
     let mut tried = Vec::new();
     for seen in 0..300 {
         if vote.tries() {
@@ -1146,11 +1146,11 @@ fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() 
         }
     }
     let want: Vec<usize> = (0..300)
-        .filter(|&s| s < ScrewVote::TRIALS || s % super::Tally::EVERY == 0)
+        .filter(|&s| s < RareVote::TRIALS || s % super::Tally::EVERY == 0)
         .collect();
     assert_eq!(tried, want);
     // Winning a fifth of its trials: estimated for every curve.
-    let mut vote = ScrewVote::default();
+    let mut vote = RareVote::default();
     for seen in 0..300 {
         assert!(vote.tries(), "curve {seen}");
         vote.count(seen % 5 == 0);
@@ -1161,7 +1161,7 @@ fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() 
     // 64 and curves 80 and 96), then the checks at 112, 128, …, 224 win,
     // and the eighth (8 of 74) passes the share: curve 223 is the last
     // skipped.
-    let mut vote = ScrewVote::default();
+    let mut vote = RareVote::default();
     let mut last_skipped = 0;
     for seen in 0..400 {
         if vote.tries() {
