@@ -608,8 +608,9 @@ fn smooth_lattice_bits() -> quantise::AxisCost<impl Fn(i64) -> f64 + Copy> {
 /// One axis's part of [`smooth_lattice_bits`]: the zero flag, and the
 /// magnitude of the half residual as a log.
 fn smooth_axis_bits(v: i64) -> f64 {
-    // The slide asks ~100 of these per vertex, nearly all of small
-    // residuals: those from a table (the same values, made by the same
+    // The slide asks three of these per candidate point of a vertex for
+    // every partial choice, nearly all of small residuals: those from a
+    // table (the same values, made by the same
     // function at compile time).
     let i = v.wrapping_add(SMOOTH_AXIS_SMALL) as u64;
     if i < SMOOTH_AXIS_TABLE.len() as u64 {
@@ -1330,10 +1331,12 @@ fn choose(
         // CPU, the same bytes; 260 bytes fewer over the shared data and
         // 10,000 jittered replicas (a bundle's file ±3 bytes: the pairs are
         // tried among singles ranked by partial sums past the limit).
-        let limit = arc_bits.map_or(own, |a| a.min(own));
-        if !reference_vote.tries() {
+        // (Voted on only where a reference can be found: a curve of two
+        // points or more after another in the block.)
+        if g.len() < 2 || neighbours.is_empty() || !reference_vote.tries() {
             return (g, None, own_kind, own, own_start);
         }
+        let limit = arc_bits.map_or(own, |a| a.min(own));
         let found = reference::best_reference(&g, neighbours.window(), rule, lattice_bits, limit);
         let won = found.is_some_and(|(_, bits)| bits < limit);
         reference_vote.count(won);

@@ -192,8 +192,9 @@ fn kth_least(values: impl Iterator<Item = f64>, k: usize) -> f64 {
 }
 
 /// A residual's estimated bits, separable by axis: `base + Σₐ axis(dₐ)`
-/// (summed in axis order), so that the fifteen candidates around a centre
-/// share fifteen per-axis terms ([`cheapest_points`]).
+/// (summed in axis order). [`cheapest_points`] bounds a candidate's cost
+/// from below with `axis(0)` on the axis along the step, so `axis` must be
+/// least at 0.
 #[derive(Clone, Copy)]
 pub struct AxisCost<F> {
     /// The part that does not depend on the residual.
@@ -250,6 +251,13 @@ impl Segment {
 /// replicas and the heart fibres of `benches/make_unseen.py` at 0.1 mm, but
 /// each step further costs the slide a tenth more time.
 const SLIDE_REACH: f64 = 0.5;
+
+/// The most, in tolerances, that the slide may move a vertex on: where the
+/// input's segments are long against the tolerance (a curve already
+/// simplified, the resampled bundles at 0.1 mm), the tube and the
+/// choice among its points grow with them, and a slide that far is rare
+/// (the prediction's error along the curve is what it buys back).
+const SLIDE_REACH_TOLERANCES: f64 = 16.0;
 
 /// Calls `f(k, x)` once for each lattice point `x = k·half` within `√r2`
 /// of the segment `a`–`b` (a point on the boundary may be missed or not
@@ -368,11 +376,14 @@ const _: () = assert!(super::predict::AlongStep::STEPS < PREDICT_LOOKBACK);
 /// candidates for a vertex are the prediction, the nearest lattice point
 /// (always feasible, so no point costs more than rounding) and the lattice
 /// points within `√tol2` of the input from the vertex to half-way on to the
-/// next ([`SLIDE_REACH`]), found once per vertex ([`lattice_near_segment`]). The search keeps the `beam` cheapest partial choices
-/// (ending at different points) from vertex to vertex, so a point a little
-/// dearer now may buy cheaper ones after it; `beam = 1` is greedy. Linear
-/// in the curve's length: `predict` sees the chosen points only through
-/// `g[k − PREDICT_LOOKBACK..k]` (the rest of the slice is scratch).
+/// next ([`SLIDE_REACH`], at most [`SLIDE_REACH_TOLERANCES`]), found once
+/// per vertex ([`lattice_near_segment`]). The search keeps the `beam`
+/// cheapest partial choices (ending at different points) from vertex to
+/// vertex, so a point a little dearer now may buy cheaper ones after it;
+/// `beam = 1` is greedy. Linear in the curve's length (each vertex's
+/// candidates bounded by the reach in tolerances): `predict` sees the
+/// chosen points only through `g[k − PREDICT_LOOKBACK..k]` (the rest of
+/// the slice is scratch).
 /// Returns the points and the sum of `rate` over their residuals (the
 /// prediction's own, so a caller need not predict again); `None` if a
 /// vertex has no lattice point within `√tol2`.
@@ -436,22 +447,32 @@ pub fn cheapest_points(
     let mut next: Vec<Node> = Vec::new();
     // The lattice points the slide may move vertex k to (see below), and
     // one partial choice's candidates among them.
-    let mut tube: Vec<([i64; 3], glam::DVec3)> = Vec::new();
+    // (With its squared distance from the vertex.)
+    let mut tube: Vec<([i64; 3], glam::DVec3, f64)> = Vec::new();
     let mut cands: Vec<Candidate> = Vec::new();
+    // Every vertex's nearest lattice point first: a vertex without one
+    // within the tolerance (or not codable) ends the search before its
+    // neighbour's tube is sought.
+    let mut nearests = Vec::with_capacity(n);
+    for &p in points {
+        let q = bcc_nearest(p, half)?;
+        if bcc_point(q, half).distance_squared(p) > tol2 {
+            return None;
+        }
+        nearests.push(q);
+    }
     for k in 1..n {
         let v = points[k];
         let before = points[k - 1];
         let after = points.get(k + 1).copied();
-        let nearest = bcc_nearest(v, half)?;
-        if bcc_point(nearest, half).distance_squared(v) > tol2 {
-            return None;
-        }
+        let nearest = nearests[k];
         // The input segments beside the vertex, for every partial choice.
         let seg_before = Segment::new(before, v);
         let seg_after = after.map(|a| Segment::new(v, a));
         // Where vertex k may go: the lattice points within the tolerance
         // of the input from the vertex to half-way on to the one after
-        // ([`SLIDE_REACH`]), each tested as `feasible` tests the
+        // ([`SLIDE_REACH`], at most [`SLIDE_REACH_TOLERANCES`]), each
+        // tested against the input segments as `feasible` tests the
         // prediction. (Behind the vertex, a point beyond the tolerance of
         // it is feasible only where the vertex before slid past it: with
         // those the bytes were the same within 0.03 %.) Nearest the vertex
@@ -460,13 +481,16 @@ pub fn cheapest_points(
         // 0.1 mm 1.3 % smaller, 10,000 fornix replicas and the noisy heart
         // fibres of `benches/make_unseen.py` 0.2 % and 0.4 % larger).
         tube.clear();
-        let ahead = after.map_or(v, |a| v + (a - v) * SLIDE_REACH);
+        let ahead = after.map_or(v, |a| {
+            let cap = SLIDE_REACH_TOLERANCES * tol2.sqrt() / a.distance(v);
+            v + (a - v) * SLIDE_REACH.min(cap)
+        });
         lattice_near_segment(v, ahead, half, tol2, |q, x| {
             if seg_before.dist2(x) <= tol2 || seg_after.is_some_and(|s| s.dist2(x) <= tol2) {
-                tube.push((q, x));
+                tube.push((q, x, x.distance_squared(v)));
             }
         });
-        tube.sort_by(|a, b| a.1.distance_squared(v).total_cmp(&b.1.distance_squared(v)));
+        tube.sort_by(|a, b| a.2.total_cmp(&b.2));
         next.clear();
         for pi in level[k - 1]..level[k] {
             let node = &flat[pi];
@@ -572,7 +596,7 @@ pub fn cheapest_points(
             };
             add(pred, cost.of(coded([0; 3])), true, NOT_IN_TUBE);
             let zero = (cost.axis)(0);
-            for (i, &(q, _)) in tube.iter().enumerate() {
+            for (i, &(q, ..)) in tube.iter().enumerate() {
                 let d = diff(q);
                 let mut t = d.map(&cost.axis);
                 if let Some(st) = step {
@@ -612,7 +636,7 @@ pub fn cheapest_points(
                 // A point of the tube is within the tolerance of the input
                 // already: only the output segment into it is asked.
                 let feasible = match tube.get(cd.tube as usize) {
-                    Some(&(_, x)) => dist2_to_segment(v, o_prev, x) <= tol2,
+                    Some(&(_, x, _)) => dist2_to_segment(v, o_prev, x) <= tol2,
                     None => feasible(cd.q),
                 };
                 if !feasible || top[..kept].iter().any(|t| t.1 == cd.q) {
@@ -840,6 +864,17 @@ mod tests {
         first: [i64; 3],
         beam: usize,
     ) -> Vec<[i64; 3]> {
+        slid_along(pts, half, tol, first, beam, false)
+    }
+
+    fn slid_along(
+        pts: &[glam::DVec3],
+        half: f64,
+        tol: f64,
+        first: [i64; 3],
+        beam: usize,
+        along: bool,
+    ) -> Vec<[i64; 3]> {
         cheapest_points(
             pts,
             half,
@@ -849,7 +884,7 @@ mod tests {
             second_order,
             RESIDUAL_COST,
             |_| 0,
-            false,
+            along,
         )
         .unwrap()
         .0
@@ -891,7 +926,9 @@ mod tests {
                 p += dir * tol * rng.gen_range(0.2..20.0);
             }
             let first = bcc_nearest(pts[0], half).unwrap();
-            let g = slid_with(&pts, half, tol, first, [1, 4][trial % 2]);
+            // Greedy, the codec's beam and a wider one; costed plainly and
+            // as model 10 codes the step (the bound-keyed candidates).
+            let g = slid_along(&pts, half, tol, first, [1, 2, 4][trial % 3], trial % 2 == 1);
             assert_eq!(g.len(), n);
             assert!(g.iter().all(|k| k[0].rem_euclid(2) == k[1].rem_euclid(2)
                 && k[1].rem_euclid(2) == k[2].rem_euclid(2)));

@@ -978,6 +978,8 @@ fn the_slides_cost_table_is_its_function() {
     assert_eq!(smooth_axis_bits(0), 1.0);
     assert_eq!(smooth_axis_bits(1), 1.0);
     assert_eq!(smooth_axis_bits(5), 4.0); // (5 - 1) / 2 = 2: 1 + 2·(log₂ 3 taken linearly: 1.5)
+                                          // Least at 0, as the slide's bound along the step assumes.
+    assert!((-100_000i64..=100_000).all(|v| smooth_axis_bits(v) >= smooth_axis_bits(0)));
     assert!(smooth_axis_bits(i64::MAX).is_finite() && smooth_axis_bits(i64::MIN + 1).is_finite());
 }
 
