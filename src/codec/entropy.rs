@@ -83,30 +83,38 @@ impl Adaptation {
     }
 }
 
-/// One adaptive binary context. Fresh (`Default`) until the coder first
-/// uses it, which sets it up for the stream's [`Adaptation`].
-#[derive(Clone, Copy, Debug, Default)]
+/// One adaptive binary context. Fresh (`Default`: probability one half,
+/// no updates, as a stream of the current model starts it) until the
+/// coder first uses it; a stream of [`Adaptation::Fixed`] turns a fresh
+/// context into its own kind on first use.
+#[derive(Clone, Copy, Debug)]
 pub struct Bit {
     /// Probability of a 0 in units of `2^-PROB_BITS` (`2^-11` when
-    /// `n == LEGACY`); 0 while fresh.
+    /// `n == LEGACY`).
     p: u16,
     /// Updates so far (saturating below [`LEGACY`]), or [`LEGACY`].
     n: u8,
 }
 
+impl Default for Bit {
+    fn default() -> Self {
+        Bit {
+            p: 1 << (PROB_BITS - 1),
+            n: 0,
+        }
+    }
+}
+
 impl Bit {
-    #[cold]
-    fn start(&mut self, a: Adaptation) {
-        if self.p == 0 {
-            *self = match a {
-                Adaptation::Fixed => Bit {
-                    p: 1 << (LEGACY_PROB_BITS - 1),
-                    n: LEGACY,
-                },
-                Adaptation::WarmUp => Bit {
-                    p: 1 << (PROB_BITS - 1),
-                    n: 0,
-                },
+    /// A fresh context made a [`Adaptation::Fixed`] one (11-bit, one half);
+    /// one already so is left as it is. Under `Fixed` every context is
+    /// either fresh (`n == 0`) or `LEGACY`.
+    #[inline]
+    fn legacy(&mut self) {
+        if self.n != LEGACY {
+            *self = Bit {
+                p: 1 << (LEGACY_PROB_BITS - 1),
+                n: LEGACY,
             };
         }
     }
@@ -122,11 +130,8 @@ impl Bit {
 
     /// Ideal cost in 1/256 bits of coding `bit` in this context now (for the
     /// encoder's choices; the state is not changed). A fresh context: one
-    /// bit.
+    /// bit (its probability is one half under either adaptation).
     pub fn cost(self, bit: bool) -> u32 {
-        if self.p == 0 {
-            return 256;
-        }
         let p0 = self.p as f64 / (1u32 << self.prob_bits()) as f64;
         let p = if bit { 1.0 - p0 } else { p0 };
         (-p.log2() * 256.0) as u32
@@ -145,6 +150,20 @@ impl Bit {
         let mask = (bit as u16).wrapping_neg();
         let down = self.p >> shift;
         let up = (one - self.p) >> shift;
+        self.p = self.p.wrapping_sub(down & mask).wrapping_add(up & !mask);
+    }
+}
+
+impl Bit {
+    /// [`Bit::update`] of a context of [`Adaptation::WarmUp`] (never
+    /// `LEGACY`): the probability always in `PROB_BITS`.
+    #[inline]
+    fn update_warm(&mut self, bit: bool) {
+        let shift = UPDATE_SHIFT[self.n as usize] as u32;
+        self.n = NEXT_COUNT[self.n as usize];
+        let mask = (bit as u16).wrapping_neg();
+        let down = self.p >> shift;
+        let up = ((1u16 << PROB_BITS) - self.p) >> shift;
         self.p = self.p.wrapping_sub(down & mask).wrapping_add(up & !mask);
     }
 }
@@ -286,8 +305,8 @@ impl Encoder {
 
     /// Codes `bit` in the adaptive context `ctx`.
     pub fn bit(&mut self, ctx: &mut Bit, bit: bool) {
-        if ctx.p == 0 {
-            ctx.start(self.adaptation);
+        if self.adaptation == Adaptation::Fixed {
+            ctx.legacy();
         }
         if let Some(t) = self.tally.as_mut() {
             t[self.tag] += ctx.cost(bit) as f64 / 256.0;
@@ -400,10 +419,20 @@ impl<'a> Decoder<'a> {
 
     #[inline]
     pub fn bit(&mut self, ctx: &mut Bit) -> bool {
-        if ctx.p == 0 {
-            ctx.start(self.adaptation);
+        if self.adaptation == Adaptation::Fixed {
+            return self.legacy_bit(ctx);
         }
-        let bit = self.decide((self.range >> ctx.prob_bits()) * ctx.p as u32);
+        let bit = self.decide((self.range >> PROB_BITS) * ctx.p as u32);
+        ctx.update_warm(bit);
+        bit
+    }
+
+    /// [`bit`](Self::bit) in a stream of [`Adaptation::Fixed`].
+    #[cold]
+    #[inline(never)]
+    fn legacy_bit(&mut self, ctx: &mut Bit) -> bool {
+        ctx.legacy();
+        let bit = self.decide((self.range >> LEGACY_PROB_BITS) * ctx.p as u32);
         ctx.update(bit);
         bit
     }
