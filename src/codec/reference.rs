@@ -15,8 +15,6 @@ pub const MAX_BACK: usize = 128;
 /// References whose end points are nearest are costed in full; the others
 /// are not tried (the search stays `O(n)` per curve).
 const SHORTLIST: usize = 4;
-/// Pairs of references are tried among this many best single ones.
-const PAIRED: usize = 3;
 
 /// A curve's reference: `back` curves before it, maybe reversed; and maybe
 /// a second one, whose steps are averaged with the first's.
@@ -703,15 +701,23 @@ fn reference_bits_under(
 /// The cheapest reference for the grid points `g` (curve `k` of its block,
 /// `grids[r]` the regridded decoded curves before it), with its estimated
 /// cost in bits (`cost` of one residual vector): one of the curves whose
-/// ends are nearest, or the mean of two of the best three.
+/// ends are nearest, index-matched or walked. The encoder no longer
+/// chooses two references (their mean step, [`Reference::second`], which
+/// the decoder still reads): measured 2026-11-28 over the shared data at
+/// both tolerances, 10,000 fornix replicas and the heart fibres of
+/// `benches/make_unseen.py`, trying the pairs of the three best singles
+/// (and the best pair walked) changed no file by more than 14 bytes (CST_R
+/// −0.9 % at 0.1 mm, +1.2 % at 0.5 mm; 555 bytes fewer without them over
+/// all 19 files, 0.04 %) while it took 11 % of the encoder's instructions
+/// on the replicas at 0.1 mm: the slide that follows evens out what the
+/// mean step saves on the rounded points.
 ///
 /// Only a reference estimated under `limit` can be used (the caller's
 /// cheapest alternative): one is costed only until it reaches `limit`,
-/// and a result at or above `limit` stands for "none under it". (The
-/// pairs are tried among the three best singles as far as they are known:
-/// the singles over `limit` in the order their partial sums give; and
-/// the walked references are tried on the best index-matched ones so
-/// found.)
+/// and a result at or above `limit` stands for "none under it" (the
+/// walked reference is tried on the best index-matched one as far as it
+/// is known: of singles over `limit`, the one with the least partial
+/// sum).
 pub fn best_reference(
     g: &[[i64; 3]],
     grids: &[Vec<[i64; 3]>],
@@ -761,40 +767,20 @@ pub fn best_reference(
         .collect();
     singles.sort_by_key(|x| (x.1, x.0.back, x.0.reversed));
     let mut best = singles.first().copied()?;
-    let top = &singles[..singles.len().min(PAIRED)];
-    for (x, a) in top.iter().enumerate() {
-        for b in &top[x + 1..] {
-            if a.0.back == b.0.back {
-                continue;
-            }
-            let rf = Reference {
-                second: Some((b.0.back, b.0.reversed)),
-                ..a.0
-            };
-            // A pair is kept only under the best so far.
-            let bits = bits_of(&rf, best.1.min(limit));
-            if bits < best.1 {
-                best = (rf, bits);
-            }
-        }
-    }
-    // Walked: the best found, and the best single where that is a pair.
-    // (Searching them all walked, with no flag, coded the resampled bundles
-    // 0–2 % smaller than this, but the jittered fornix replicas, sampled
-    // exactly as their neighbours are, 2.5 % larger in twice the time.
-    // Walked only where 3–10 % cheaper than matched: the replicas 0.15 %
-    // smaller, the bundles up to 2 % larger, no faster: kept at 0.)
+    // Walked: the best index-matched one. (Searching them all walked, with
+    // no flag, coded the resampled bundles 0–2 % smaller than this, but the
+    // jittered fornix replicas, sampled exactly as their neighbours are,
+    // 2.5 % larger in twice the time. Walked only where 3–10 % cheaper
+    // than matched: the replicas 0.15 % smaller, the bundles up to 2 %
+    // larger, no faster: kept at 0.)
     if rule.walk {
-        let single = singles[0].0;
-        for rf in [best.0, single] {
-            let walked = Reference { walk: true, ..rf };
-            let bits = bits_of(&walked, best.1.min(limit));
-            if bits < best.1 {
-                best = (walked, bits);
-            }
-            if best.0.second.is_none() {
-                break;
-            }
+        let walked = Reference {
+            walk: true,
+            ..best.0
+        };
+        let bits = bits_of(&walked, best.1.min(limit));
+        if bits < best.1 {
+            best = (walked, bits);
         }
     }
     Some(best)
@@ -986,8 +972,15 @@ mod tests {
         let down: Vec<[i64; 3]> = (0..12).map(|i| [4 * i, -2 * (i % 2) - 10, 0]).collect();
         let grids = vec![up.clone(), down.clone(), vec![[0, 0, 0]]];
         let cost = |v: [i64; 3]| v.iter().map(|x| x.unsigned_abs()).sum::<u64>() * 4 + 1;
-        let (rf, bits) = best_reference(&line, &grids, Rule::of_model(7), cost, u64::MAX).unwrap();
-        assert!(rf.second.is_some(), "{rf:?}");
+        // The encoder no longer chooses pairs (see `best_reference`); the
+        // decoder reads them.
+        let rf = Reference {
+            back: 3,
+            reversed: false,
+            second: Some((2, false)),
+            walk: false,
+        };
+        let bits = reference_bits(&line, &rf.resolve(&grids, Rule::of_model(7)), cost);
         let res = Resolved {
             first: (&grids[3 - rf.back][..], rf.reversed),
             second: rf.second.map(|(b, rev)| (&grids[3 - b][..], rev)),
