@@ -855,16 +855,7 @@ mod tests {
     }
     /// The points chosen against second-order prediction.
     fn slid(pts: &[glam::DVec3], half: f64, tol: f64, first: [i64; 3]) -> Vec<[i64; 3]> {
-        slid_with(pts, half, tol, first, 1)
-    }
-    fn slid_with(
-        pts: &[glam::DVec3],
-        half: f64,
-        tol: f64,
-        first: [i64; 3],
-        beam: usize,
-    ) -> Vec<[i64; 3]> {
-        slid_along(pts, half, tol, first, beam, false)
+        slid_along(pts, half, tol, first, 1, false)
     }
 
     fn slid_along(
@@ -990,8 +981,8 @@ mod tests {
                 .collect();
             let first = bcc_nearest(pts[0], half).unwrap();
             let (g1, g4) = (
-                slid_with(&pts, half, tol, first, 1),
-                slid_with(&pts, half, tol, first, 4),
+                slid_along(&pts, half, tol, first, 1, false),
+                slid_along(&pts, half, tol, first, 4, false),
             );
             assert_eq!(g4[0], first);
             let out: Vec<glam::DVec3> = g4.iter().map(|&k| bcc_point(k, half)).collect();
