@@ -132,6 +132,7 @@ pub fn scale_exponent(scale: f64) -> i32 {
 /// within `a√5/4` of it, so at covering radius `T` it has 1.86 times fewer
 /// points per volume than the cubic grid of step `2T/√3`, about 0.9 bits
 /// less per coded point. `None` when not codable.
+#[inline]
 pub fn bcc_nearest(p: glam::DVec3, half: f64) -> Option<[i64; 3]> {
     let x = [p.x / half, p.y / half, p.z / half];
     let limit = (1u64 << super::entropy::MAX_BITS) as f64;
@@ -403,13 +404,14 @@ pub fn cheapest_points(
 ) -> Option<(Vec<[i64; 3]>, u64)> {
     use super::check::dist2_to_segment;
     /// One partial choice: its last point, its parent (an index into
-    /// `flat`, the previous vertex's beam), and its cost and rate so far.
+    /// `flat`, the previous vertex's beam), its cost so far, and its last
+    /// residual as coded (the rate is summed along the chosen path only).
     #[derive(Clone, Copy)]
     struct Node {
         q: [i64; 3],
         parent: u32,
         cost: f64,
-        rate: u64,
+        coded: [i64; 3],
         /// The along-step window for the next vertex
         /// (`predict::step_window`; 0 without `along`).
         window: u64,
@@ -420,6 +422,8 @@ pub fn cheapest_points(
     struct Candidate {
         key: f64,
         q: [i64; 3],
+        /// Its residual as coded, where `exact`.
+        coded: [i64; 3],
         exact: bool,
         /// Its place in the tube, or `NOT_IN_TUBE` (the prediction).
         tube: u32,
@@ -439,17 +443,23 @@ pub fn cheapest_points(
         q: first,
         parent: 0,
         cost: 0.0,
-        rate: 0,
+        coded: [0; 3],
         window: 0,
     });
     level.push(1);
     let mut scratch = vec![[0i64; 3]; n];
+    // Which node of `flat` each scratch entry was copied from: a path is
+    // the same as the one in scratch from the first entry walked back to
+    // that is, so a partial choice copies only where its path differs
+    // (usually one or two points, not `PREDICT_LOOKBACK`).
+    let mut scratch_from = vec![usize::MAX; n];
     let mut next: Vec<Node> = Vec::new();
     // The lattice points the slide may move vertex k to (see below), and
     // one partial choice's candidates among them.
     // (With its squared distance from the vertex.)
     let mut tube: Vec<([i64; 3], glam::DVec3, f64)> = Vec::new();
     let mut cands: Vec<Candidate> = Vec::new();
+    let mut top: Vec<(f64, [i64; 3], [i64; 3])> = Vec::with_capacity(beam);
     // Every vertex's nearest lattice point first: a vertex without one
     // within the tolerance (or not codable) ends the search before its
     // neighbour's tube is sought.
@@ -486,7 +496,9 @@ pub fn cheapest_points(
             v + (a - v) * SLIDE_REACH.min(cap)
         });
         lattice_near_segment(v, ahead, half, tol2, |q, x| {
-            if seg_before.dist2(x) <= tol2 || seg_after.is_some_and(|s| s.dist2(x) <= tol2) {
+            // (After first: the tube lies along it, so the test before is
+            // rarely asked.)
+            if seg_after.is_some_and(|s| s.dist2(x) <= tol2) || seg_before.dist2(x) <= tol2 {
                 tube.push((q, x, x.distance_squared(v)));
             }
         });
@@ -497,14 +509,18 @@ pub fn cheapest_points(
             // The path's last points into the scratch window.
             let mut at = pi;
             for j in (k.saturating_sub(PREDICT_LOOKBACK)..k).rev() {
+                if scratch_from[j] == at {
+                    break;
+                }
                 let nd = flat[at];
                 scratch[j] = nd.q;
+                scratch_from[j] = at;
                 at = nd.parent as usize;
             }
             let o_prev = bcc_point(node.q, half);
             let feasible = |q: [i64; 3]| {
                 let x = bcc_point(q, half);
-                (seg_before.dist2(x) <= tol2 || seg_after.is_some_and(|s| s.dist2(x) <= tol2))
+                (seg_after.is_some_and(|s| s.dist2(x) <= tol2) || seg_before.dist2(x) <= tol2)
                     && dist2_to_segment(v, o_prev, x) <= tol2
             };
             let pred = predict(&scratch[..k], k);
@@ -536,7 +552,8 @@ pub fn cheapest_points(
             };
             let coded = |d: [i64; 3]| step.map_or(d, |st| st.coded(d));
             let parent = pi as u32;
-            let push = |next: &mut Vec<Node>, q: [i64; 3], c: f64| {
+            // (`c` the cost of `q`'s residual as coded, `r`.)
+            let push = |next: &mut Vec<Node>, q: [i64; 3], c: f64, r: [i64; 3]| {
                 let cost = node.cost + c;
                 if let Some(o) = next.iter_mut().find(|o| o.q == q) {
                     if cost < o.cost {
@@ -544,7 +561,7 @@ pub fn cheapest_points(
                             q,
                             parent,
                             cost,
-                            rate: node.rate + rate(coded(diff(q))),
+                            coded: r,
                             window: child_window(q),
                         };
                     }
@@ -553,15 +570,16 @@ pub fn cheapest_points(
                         q,
                         parent,
                         cost,
-                        rate: node.rate + rate(coded(diff(q))),
+                        coded: r,
                         window: child_window(q),
                     });
                 }
             };
             // The nearest point is always feasible: it is within the
             // tolerance of the vertex, which ends both segments.
-            let c_near = cost.of(coded(diff(nearest)));
-            push(&mut next, nearest, c_near);
+            let r_near = coded(diff(nearest));
+            let c_near = cost.of(r_near);
+            push(&mut next, nearest, c_near, r_near);
             // What a child's whole cost must not exceed to be kept: the
             // `beam`-th least of the children so far. Their costs only
             // fall, and one dearer than that ends behind `beam` cheaper
@@ -584,17 +602,19 @@ pub fn cheapest_points(
             // few as can be, and the kept ones are the cheapest `beam`
             // feasible candidates (ties to the earlier made).
             cands.clear();
-            let mut add = |q: [i64; 3], key: f64, exact: bool, tube: u32| {
+            let mut add = |q: [i64; 3], key: f64, coded: [i64; 3], exact: bool, tube: u32| {
                 if key < bar && !over(key) && q != nearest {
                     cands.push(Candidate {
                         key,
                         q,
+                        coded,
                         exact,
                         tube,
                     });
                 }
             };
-            add(pred, cost.of(coded([0; 3])), true, NOT_IN_TUBE);
+            let r_pred = coded([0; 3]);
+            add(pred, cost.of(r_pred), r_pred, true, NOT_IN_TUBE);
             let zero = (cost.axis)(0);
             for (i, &(q, ..)) in tube.iter().enumerate() {
                 let d = diff(q);
@@ -602,12 +622,12 @@ pub fn cheapest_points(
                 if let Some(st) = step {
                     t[st.axis()] = zero;
                 }
-                add(q, cost.sum(t), step.is_none(), i as u32);
+                add(q, cost.sum(t), d, step.is_none(), i as u32);
             }
-            let mut top: [(f64, [i64; 3]); 16] = [(f64::INFINITY, [0; 3]); 16];
-            let mut kept = 0;
+            // The kept candidates: (cost, point, residual as coded).
+            top.clear();
             let live = &mut cands[..];
-            while kept < beam {
+            while top.len() < beam {
                 // The least (key, order made) not yet taken.
                 let mut at = usize::MAX;
                 let mut least = f64::INFINITY;
@@ -622,8 +642,10 @@ pub fn cheapest_points(
                 }
                 let cd = live[at];
                 if !cd.exact {
+                    let r = coded(diff(cd.q));
                     live[at] = Candidate {
-                        key: cost.of(coded(diff(cd.q))),
+                        key: cost.of(r),
+                        coded: r,
                         exact: true,
                         ..cd
                     };
@@ -639,14 +661,13 @@ pub fn cheapest_points(
                     Some(&(_, x, _)) => dist2_to_segment(v, o_prev, x) <= tol2,
                     None => feasible(cd.q),
                 };
-                if !feasible || top[..kept].iter().any(|t| t.1 == cd.q) {
+                if !feasible || top.iter().any(|t| t.1 == cd.q) {
                     continue;
                 }
-                top[kept] = (cd.key, cd.q);
-                kept += 1;
+                top.push((cd.key, cd.q, cd.coded));
             }
-            for &(c, q) in &top[..kept] {
-                push(&mut next, q, c);
+            for &(c, q, r) in &top {
+                push(&mut next, q, c, r);
             }
         }
         next.sort_by(|a, b| a.cost.total_cmp(&b.cost));
@@ -657,10 +678,13 @@ pub fn cheapest_points(
     // The cheapest path, back from its end.
     let mut g = vec![[0i64; 3]; n];
     let mut at = level[n - 1];
-    let total = flat[at].rate;
+    let mut total = 0u64;
     for k in (0..n).rev() {
         let nd = flat[at];
         g[k] = nd.q;
+        if k > 0 {
+            total += rate(nd.coded);
+        }
         at = nd.parent as usize;
     }
     Some((g, total))
