@@ -304,19 +304,39 @@ impl Encoder {
     }
 
     /// Codes `bit` in the adaptive context `ctx`.
+    #[inline]
     pub fn bit(&mut self, ctx: &mut Bit, bit: bool) {
+        if self.adaptation == Adaptation::Fixed || self.tally.is_some() {
+            return self.bit_slow(ctx, bit);
+        }
+        // As the decoder's `bit`: a context of the current model is never
+        // `LEGACY`, so its probability is in `PROB_BITS`.
+        self.encode((self.range >> PROB_BITS) * ctx.p as u32, bit);
+        ctx.update_warm(bit);
+    }
+
+    /// [`bit`](Self::bit) in a stream of [`Adaptation::Fixed`], or tallied.
+    #[cold]
+    #[inline(never)]
+    fn bit_slow(&mut self, ctx: &mut Bit, bit: bool) {
         if self.adaptation == Adaptation::Fixed {
             ctx.legacy();
         }
         if let Some(t) = self.tally.as_mut() {
             t[self.tag] += ctx.cost(bit) as f64 / 256.0;
         }
-        let bound = (self.range >> ctx.prob_bits()) * ctx.p as u32;
+        self.encode((self.range >> ctx.prob_bits()) * ctx.p as u32, bit);
+        ctx.update(bit);
+    }
+
+    /// `bit`, whose 0 takes the range's first `bound`; the range then
+    /// renormalised.
+    #[inline]
+    fn encode(&mut self, bound: u32, bit: bool) {
         // Without a branch on the bit (as the decoder's `decide`).
         let mask = (bit as u32).wrapping_neg();
         self.low += (bound & mask) as u64;
         self.range = (self.range.wrapping_sub(bound) & mask) | (bound & !mask);
-        ctx.update(bit);
         while self.range < TOP {
             self.range <<= 8;
             self.shift_low();
