@@ -680,7 +680,7 @@ impl IntModel {
     }
 
     /// [`put_with`](Self::put_with)'s decoder.
-    #[inline]
+    #[inline(always)]
     fn get_with(&mut self, dec: &mut Decoder, which: SignContext) -> i64 {
         if !dec.bit(&mut self.zero) {
             return 0;

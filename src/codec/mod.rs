@@ -2530,7 +2530,7 @@ pub fn decode_block(
         }
         // Usable points only (finite, within float32, as every reader
         // guarantees): a corrupt stream could decode to anything.
-        if !pts.iter().all(|p| crate::io::fits_f32(*p)) {
+        if !pts.iter().fold(true, |ok, p| ok & crate::io::fits_f32(*p)) {
             for (k, p) in pts.iter().enumerate() {
                 if let Some(why) = crate::io::point_problem(*p) {
                     return Err(bad(format!("point {k} decodes badly: {why}")));

@@ -235,7 +235,9 @@ pub const MAX_COORDINATE: f64 = f32::MAX as f64;
 /// ```
 #[inline]
 pub fn fits_f32(p: DVec3) -> bool {
-    p.x.abs() <= MAX_COORDINATE && p.y.abs() <= MAX_COORDINATE && p.z.abs() <= MAX_COORDINATE
+    // `&`, not `&&`: no branch per coordinate, and a slice's test
+    // vectorises.
+    (p.x.abs() <= MAX_COORDINATE) & (p.y.abs() <= MAX_COORDINATE) & (p.z.abs() <= MAX_COORDINATE)
 }
 
 /// Why a point cannot be used (a non-finite coordinate, or one beyond
