@@ -782,12 +782,28 @@ fn get_residuals(
     predict: impl Fn(&[[i64; 3]], usize) -> [i64; 3],
 ) {
     let mut ctx = RESIDUAL_CONTEXTS - 1;
-    let mut window = 0;
+    let mut window = 0u64;
+    // The squared step lengths in the window, step `i` at `i % WINDOW`:
+    // `predict::step_window` with each step measured once (those from
+    // `measured` on are in `steps`).
+    const WINDOW: usize = AlongStep::STEPS + 1;
+    let mut steps = [0u64; WINDOW];
+    let measured = g.len().saturating_sub(1).max(1);
     let mut before = [0i64; 3];
     for k in g.len()..n {
         let pred = predict(g, k);
-        if along == Some(true) {
-            window = predict::step_window(g, k, window);
+        if along == Some(true) && k >= 2 {
+            let step = predict::step_length2(g, k - 1);
+            window = window.saturating_add(step);
+            if k - 1 > AlongStep::STEPS {
+                let out = k - 1 - AlongStep::STEPS;
+                window = window.saturating_sub(if out >= measured {
+                    steps[out % WINDOW]
+                } else {
+                    predict::step_length2(g, out)
+                });
+            }
+            steps[(k - 1) % WINDOW] = step;
         }
         let d = match along.filter(|_| k >= 2) {
             Some(flag) => {
