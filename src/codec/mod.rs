@@ -1143,7 +1143,9 @@ impl RareVote {
 /// slid along the curve to where they are cheapest against the chosen
 /// prediction ([`quantise::cheapest_points`]), where that is estimated
 /// cheaper than `bits` (of which `own_start_bits` is the start's, without a
-/// reference); `neighbours` does not hold the curve yet.
+/// reference; `second_order_bits` the rounded points' estimate with
+/// second order, start included); `neighbours` does not hold the curve
+/// yet.
 #[allow(clippy::too_many_arguments)]
 fn slid_points(
     points: &[DVec3],
@@ -1152,6 +1154,7 @@ fn slid_points(
     own_kind: OwnPrediction,
     bits: u64,
     own_start_bits: u64,
+    second_order_bits: u64,
     tolerance: f64,
     half: f64,
     screw: Screw,
@@ -1212,12 +1215,12 @@ fn slid_points(
             let kinds = vote.kinds();
             for &kind in kinds {
                 let predict = |k| own_prediction(&g, k, kind, screw);
-                let rounded = (1..g.len())
-                    .map(|k| {
-                        let p = predict(k);
-                        lattice_bits([0, 1, 2].map(|a| g[k][a].wrapping_sub(p[a])))
-                    })
-                    .sum::<u64>();
+                // The rounded points' estimates without the start, as the
+                // caller summed them (`bits` is the mean step's).
+                let rounded = match kind {
+                    OwnPrediction::SecondOrder => second_order_bits,
+                    _ => bits,
+                } - own_start_bits;
                 let (flag, rounded) = flag(&predict, rounded);
                 let own = |g: &[[i64; 3]], k| own_prediction(g, k, kind, screw);
                 let (grid, bits) =
@@ -1339,7 +1342,7 @@ fn choose(
         // cost under half the own prediction, it is not looked for.
         let arcs_far_cheaper = arc_bits.is_some_and(|a| 2 * a < own);
         if arcs_far_cheaper {
-            return (g, None, own_kind, own, own_start);
+            return (g, None, own_kind, own, own_start, linear);
         }
         // A reference is used only under the own prediction and the arcs,
         // and costed only that far ([`reference::best_reference`]):
@@ -1350,19 +1353,19 @@ fn choose(
         // (Voted on only where a reference can be found: a curve of two
         // points or more after another in the block.)
         if g.len() < 2 || neighbours.is_empty() || !reference_vote.tries() {
-            return (g, None, own_kind, own, own_start);
+            return (g, None, own_kind, own, own_start, linear);
         }
         let limit = arc_bits.map_or(own, |a| a.min(own));
         let found = reference::best_reference(&g, neighbours.window(), rule, lattice_bits, limit);
         let won = found.is_some_and(|(_, bits)| bits < limit);
         reference_vote.count(won);
         match found {
-            Some((rf, bits)) if won => (g, Some(rf), OwnPrediction::SecondOrder, bits, 0),
-            _ => (g, None, own_kind, own, own_start),
+            Some((rf, bits)) if won => (g, Some(rf), OwnPrediction::SecondOrder, bits, 0, linear),
+            _ => (g, None, own_kind, own, own_start, linear),
         }
     });
     match (opt.arcs, pts) {
-        (Some((a, decoded)), Some((_, _, _, bits, _)))
+        (Some((a, decoded)), Some((_, _, _, bits, _, _)))
             if arc_bits.is_some_and(|e| {
                 e < bits && !(explore_points && e as f64 >= Calibration::EXPLORE * bits as f64)
             }) =>
@@ -1372,14 +1375,27 @@ fn choose(
             let saving = bits - arc_bits.unwrap_or(0);
             (a, n, arc_estimate.unwrap_or(0), saving)
         }
-        (_, Some((g, reference, own, bits, start_bits))) => {
+        (_, Some((g, reference, own, bits, start_bits, second_order_bits))) => {
             // Arcs and points are weighed by the rounded points' estimate:
             // the slid points' is optimistic (they were chosen by the same
             // static cost; weighed by it, the fornix at 0.1 mm went from 2
             // to 19 points curves and grew 0.7 %).
             let (g, along, own) = slid_points(
-                points, g, reference, own, bits, start_bits, tolerance, half, screw, rule, along,
-                mean_step, vote, neighbours,
+                points,
+                g,
+                reference,
+                own,
+                bits,
+                start_bits,
+                second_order_bits,
+                tolerance,
+                half,
+                screw,
+                rule,
+                along,
+                mean_step,
+                vote,
+                neighbours,
             );
             let n = g.len();
             neighbours.push_lattice(g.clone());
