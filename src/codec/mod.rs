@@ -1245,7 +1245,7 @@ fn slid_points(
             let n = g.len();
             // The estimate's part before the residuals (a one-point curve's).
             let start_bits = reference::reference_bits(&g[..1], &res, lattice_bits);
-            let foot = reference::FootCache::new(None);
+            let foot = reference::FootCache::default();
             let (flag, bits) = flag(&|k| res.predict_next(&g, k, n, &foot), bits);
             let predict = |g: &[[i64; 3]], k| res.predict_next(g, k, n, &foot);
             (slide(&predict, flag, bits - start_bits), flag)
@@ -1938,7 +1938,7 @@ impl CurvePlan {
                             rf.resolve(&grids[..grids.len() - 1], Rule::of_model(params.model));
                         let start = res.start();
                         let n = grid.len();
-                        let foot = reference::FootCache::new(None);
+                        let foot = reference::FootCache::default();
                         CurvePlan::Points {
                             start: [0, 1, 2].map(|a| grid[0][a] - start[a]),
                             residuals: plan_residuals(along, grid, |k| {
@@ -2446,7 +2446,7 @@ pub fn decode_block(
                     let start = res.start();
                     let d = get_lattice(&mut dec, &mut m.parity[0], &mut m.ref_start);
                     g.push([0, 1, 2].map(|a| start[a].wrapping_add(d[a])));
-                    let foot = reference::FootCache::new(None);
+                    let foot = reference::FootCache::default();
                     get_residuals(&mut dec, &mut m.ref_residual, along, &mut g, n, |g, k| {
                         res.predict_next(g, k, n, &foot)
                     });

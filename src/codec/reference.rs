@@ -1,6 +1,8 @@
 //! Inter-curve prediction: a curve's points predicted from a neighbour, as
 //! `Reference` describes.
 
+use std::cell::Cell;
+
 use glam::DVec3;
 
 use super::quantise::{bcc_nearest, bcc_point};
@@ -132,12 +134,36 @@ impl Resolved<'_> {
     /// walk falls back to).
     #[inline]
     fn matched(&self, g: &[[i64; 3]], i: usize, n: usize) -> [i64; 3] {
+        self.matched_with(g, i, n, &Cell::new(None))
+    }
+
+    /// [`matched`](Self::matched), the first reference's matching indices
+    /// of points `i − 2`, `i − 1` and `i` kept in `indices` (each index a
+    /// division: predicted in order, one a point instead of three).
+    #[inline]
+    fn matched_with(
+        &self,
+        g: &[[i64; 3]],
+        i: usize,
+        n: usize,
+        indices: &Cell<Option<(usize, [usize; 3])>>,
+    ) -> [i64; 3] {
         // Each reference point looked up once: the lookups' divisions were a
         // tenth of decoding.
         let (r, rev) = self.first;
         let m = r.len();
-        let before = at(r, matching(i - 1, n, m), rev);
-        let here = at(r, matching(i, n, m), rev);
+        let j = match indices.get() {
+            Some((k, j)) if k == i => j,
+            Some((k, j)) if k + 1 == i => [j[1], j[2], matching(i, n, m)],
+            _ => [
+                if i >= 2 { matching(i - 2, n, m) } else { 0 },
+                matching(i - 1, n, m),
+                matching(i, n, m),
+            ],
+        };
+        indices.set(Some((i, j)));
+        let before = at(r, j[1], rev);
+        let here = at(r, j[2], rev);
         let prev = g[i - 1];
         let p1 = [0, 1, 2].map(|a| prev[a].wrapping_add(here[a].wrapping_sub(before[a])));
         let base = match self.second {
@@ -147,7 +173,7 @@ impl Resolved<'_> {
         if !self.trend || i < 2 {
             return base;
         }
-        let earlier = at(r, matching(i - 2, n, m), rev);
+        let earlier = at(r, j[0], rev);
         let prev2 = g[i - 2];
         let trend = [0, 1, 2].map(|a| {
             let off1 = prev[a].wrapping_sub(before[a]);
@@ -177,7 +203,7 @@ impl Resolved<'_> {
     /// best of the 128 before it): 0.3–0.5 bits per coordinate less on the
     /// resampled bundles at 0.1 mm, about 1 bit on the fornix.
     fn walked(&self, g: &[[i64; 3]], i: usize, n: usize) -> Option<[i64; 3]> {
-        self.walked_with(g, i, n, &std::cell::Cell::new(None))
+        self.walked_with(g, i, n, &Cell::new(None))
     }
 
     /// [`walked`](Self::walked), with the first reference's nearest point
@@ -189,7 +215,7 @@ impl Resolved<'_> {
         g: &[[i64; 3]],
         i: usize,
         n: usize,
-        foot: &FootCache,
+        foot: &Cell<Option<(usize, [i64; 3], DVec3)>>,
     ) -> Option<[i64; 3]> {
         let v = |k: [i64; 3]| DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64);
         let (p, before) = (v(g[i - 1]), v(g[i - 2]));
@@ -219,19 +245,26 @@ impl Resolved<'_> {
     /// [`predict_in`](Self::predict_in) for points predicted in order,
     /// keeping what the next prediction reuses in `foot`.
     #[inline]
-    pub fn predict_next(&self, g: &[[i64; 3]], i: usize, n: usize, foot: &FootCache) -> [i64; 3] {
+    pub fn predict_next(&self, g: &[[i64; 3]], i: usize, n: usize, cache: &FootCache) -> [i64; 3] {
         if self.walk && i >= 2 {
-            if let Some(p) = self.walked_with(g, i, n, foot) {
+            if let Some(p) = self.walked_with(g, i, n, &cache.foot) {
                 return p;
             }
         }
-        self.matched(g, i, n)
+        self.matched_with(g, i, n, &cache.indices)
     }
 }
 
-/// The first reference's nearest point to point `k` of a curve, kept
-/// between walked predictions: `(k, the point, its nearest point)`.
-pub type FootCache = std::cell::Cell<Option<(usize, [i64; 3], DVec3)>>;
+/// What [`Resolved::predict_next`] keeps between predictions of one curve
+/// against one reference: the first reference's nearest point to point `k`
+/// of the curve, `(k, the point, its nearest point)`, for walked
+/// predictions; and the matching indices of the last point predicted by
+/// index, `(i, [j(i − 2), j(i − 1), j(i)])`.
+#[derive(Default)]
+pub struct FootCache {
+    foot: Cell<Option<(usize, [i64; 3], DVec3)>>,
+    indices: Cell<Option<(usize, [usize; 3])>>,
+}
 
 /// Segments a nearest-point search moves from its start at most (each way):
 /// the search stays `O(1)` per point, and a curve's time linear in its
@@ -687,7 +720,7 @@ fn reference_bits_under(
     if res.second.is_some() {
         bits += 6;
     }
-    let foot = FootCache::new(None);
+    let foot = FootCache::default();
     for i in 1..n {
         if bits >= limit {
             break;
@@ -1028,6 +1061,55 @@ mod tests {
                 res(true).predict_in(&parallel, i, 10),
                 res(false).predict_in(&parallel, i, 10)
             );
+        }
+    }
+
+    #[test]
+    fn kept_indices_and_feet_predict_as_a_fresh_search() {
+        // `predict_next` keeps the matching indices and the walked foot
+        // between calls; in the orders its callers use (each point once, as
+        // the decoder; each point several times with other earlier points,
+        // as the slide's partial choices; points skipped) it must predict
+        // what `predict_in`, which keeps nothing, predicts. Random curves
+        // and references of other lengths, both directions, walked or not.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let walk = |rng: &mut rand_chacha::ChaCha8Rng, n: usize| {
+            let mut p = [0i64; 3];
+            (0..n)
+                .map(|_| {
+                    p = p.map(|c| c + 2 * rng.gen_range(-6..=6) + 12);
+                    p
+                })
+                .collect::<Vec<_>>()
+        };
+        for case in 0..200 {
+            let n = rng.gen_range(2..40);
+            let m = rng.gen_range(2..50);
+            let r = walk(&mut rng, m);
+            let g = walk(&mut rng, n);
+            let other = walk(&mut rng, n);
+            let res = Resolved {
+                first: (&r[..], case % 2 == 0),
+                second: None,
+                trend: case % 3 != 0,
+                walk: case % 4 < 2,
+            };
+            let cache = FootCache::default();
+            for i in 1..n {
+                // Another partial choice's points first, then this one's.
+                if i % 3 == 0 {
+                    res.predict_next(&other, i, n, &cache);
+                }
+                assert_eq!(res.predict_next(&g, i, n, &cache), res.predict_in(&g, i, n));
+                if i % 5 == 0 {
+                    assert_eq!(res.predict_next(&g, i, n, &cache), res.predict_in(&g, i, n));
+                }
+            }
+            let cache = FootCache::default();
+            for i in (1..n).step_by(2) {
+                assert_eq!(res.predict_next(&g, i, n, &cache), res.predict_in(&g, i, n));
+            }
         }
     }
 
