@@ -784,11 +784,12 @@ fn get_residuals(
     let mut ctx = RESIDUAL_CONTEXTS - 1;
     let mut window = 0u64;
     // The squared step lengths in the window, step `i` at `i % WINDOW`:
-    // `predict::step_window` with each step measured once (those from
-    // `measured` on are in `steps`).
+    // `predict::step_window` with each step measured once.
     const WINDOW: usize = AlongStep::STEPS + 1;
     let mut steps = [0u64; WINDOW];
-    let measured = g.len().saturating_sub(1).max(1);
+    for i in 1..g.len() {
+        steps[i % WINDOW] = predict::step_length2(g, i);
+    }
     let mut before = [0i64; 3];
     for k in g.len()..n {
         let pred = predict(g, k);
@@ -796,12 +797,7 @@ fn get_residuals(
             let step = predict::step_length2(g, k - 1);
             window = window.saturating_add(step);
             if k - 1 > AlongStep::STEPS {
-                let out = k - 1 - AlongStep::STEPS;
-                window = window.saturating_sub(if out >= measured {
-                    steps[out % WINDOW]
-                } else {
-                    predict::step_length2(g, out)
-                });
+                window = window.saturating_sub(steps[(k - 1 - AlongStep::STEPS) % WINDOW]);
             }
             steps[(k - 1) % WINDOW] = step;
         }
@@ -1245,7 +1241,7 @@ fn slid_points(
             let n = g.len();
             // The estimate's part before the residuals (a one-point curve's).
             let start_bits = reference::reference_bits(&g[..1], &res, lattice_bits);
-            let foot = reference::FootCache::default();
+            let foot = reference::PredictionCache::default();
             let (flag, bits) = flag(&|k| res.predict_next(&g, k, n, &foot), bits);
             let predict = |g: &[[i64; 3]], k| res.predict_next(g, k, n, &foot);
             (slide(&predict, flag, bits - start_bits), flag)
@@ -1938,7 +1934,7 @@ impl CurvePlan {
                             rf.resolve(&grids[..grids.len() - 1], Rule::of_model(params.model));
                         let start = res.start();
                         let n = grid.len();
-                        let foot = reference::FootCache::default();
+                        let foot = reference::PredictionCache::default();
                         CurvePlan::Points {
                             start: [0, 1, 2].map(|a| grid[0][a] - start[a]),
                             residuals: plan_residuals(along, grid, |k| {
@@ -2446,7 +2442,7 @@ pub fn decode_block(
                     let start = res.start();
                     let d = get_lattice(&mut dec, &mut m.parity[0], &mut m.ref_start);
                     g.push([0, 1, 2].map(|a| start[a].wrapping_add(d[a])));
-                    let foot = reference::FootCache::default();
+                    let foot = reference::PredictionCache::default();
                     get_residuals(&mut dec, &mut m.ref_residual, along, &mut g, n, |g, k| {
                         res.predict_next(g, k, n, &foot)
                     });

@@ -245,7 +245,13 @@ impl Resolved<'_> {
     /// [`predict_in`](Self::predict_in) for points predicted in order,
     /// keeping what the next prediction reuses in `foot`.
     #[inline]
-    pub fn predict_next(&self, g: &[[i64; 3]], i: usize, n: usize, cache: &FootCache) -> [i64; 3] {
+    pub fn predict_next(
+        &self,
+        g: &[[i64; 3]],
+        i: usize,
+        n: usize,
+        cache: &PredictionCache,
+    ) -> [i64; 3] {
         if self.walk && i >= 2 {
             if let Some(p) = self.walked_with(g, i, n, &cache.foot) {
                 return p;
@@ -261,7 +267,7 @@ impl Resolved<'_> {
 /// predictions; and the matching indices of the last point predicted by
 /// index, `(i, [j(i − 2), j(i − 1), j(i)])`.
 #[derive(Default)]
-pub struct FootCache {
+pub struct PredictionCache {
     foot: Cell<Option<(usize, [i64; 3], DVec3)>>,
     indices: Cell<Option<(usize, [usize; 3])>>,
 }
@@ -720,7 +726,7 @@ fn reference_bits_under(
     if res.second.is_some() {
         bits += 6;
     }
-    let foot = FootCache::default();
+    let foot = PredictionCache::default();
     for i in 1..n {
         if bits >= limit {
             break;
@@ -1095,7 +1101,7 @@ mod tests {
                 trend: case % 3 != 0,
                 walk: case % 4 < 2,
             };
-            let cache = FootCache::default();
+            let cache = PredictionCache::default();
             for i in 1..n {
                 // Another partial choice's points first, then this one's.
                 if i % 3 == 0 {
@@ -1106,7 +1112,7 @@ mod tests {
                     assert_eq!(res.predict_next(&g, i, n, &cache), res.predict_in(&g, i, n));
                 }
             }
-            let cache = FootCache::default();
+            let cache = PredictionCache::default();
             for i in (1..n).step_by(2) {
                 assert_eq!(res.predict_next(&g, i, n, &cache), res.predict_in(&g, i, n));
             }
