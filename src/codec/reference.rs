@@ -456,6 +456,10 @@ pub struct Neighbours {
     /// costs its start against 64 of them).
     start_half: f64,
     anchors: Vec<[Option<[i64; 3]>; 2]>,
+    /// An arcs curve's first chord (its code: the first end on the start
+    /// grid) and last chord (in length steps), model 14's prediction of
+    /// the length of a curve's first chord anchored on it.
+    chords: Vec<ArcChords>,
     /// Storage of forgotten curves' lattice points, for the next ones: a
     /// block's curves would otherwise each take fresh memory, whose zeroing
     /// by the kernel was a fifth of decoding.
@@ -472,6 +476,7 @@ impl Neighbours {
             ends: Vec::with_capacity(capacity),
             start_half,
             anchors: Vec::with_capacity(capacity),
+            chords: Vec::with_capacity(capacity),
             spare_grids: Vec::new(),
         }
     }
@@ -543,6 +548,19 @@ impl Neighbours {
             _ => [None, None],
         });
         self.ends.push(ends);
+        self.chords.push(ArcChords::default());
+    }
+
+    /// The last curve pushed is an arcs curve with these chords.
+    pub fn set_chords(&mut self, chords: ArcChords) {
+        if let Some(c) = self.chords.last_mut() {
+            *c = chords;
+        }
+    }
+
+    /// Curve `k`'s first and last chords, if it is an arcs curve.
+    pub fn chords(&self, k: usize) -> ArcChords {
+        self.chords.get(k).copied().unwrap_or_default()
     }
 
     /// Curve `k`'s start (or end) on the starts' lattice.
@@ -636,6 +654,14 @@ impl Neighbours {
         }
         &self.grids
     }
+}
+
+/// An arcs curve's first chord (its first end's code, on the grid of the
+/// first step) and last chord (in length steps), where it has them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ArcChords {
+    pub first: Option<[i64; 3]>,
+    pub last: Option<i64>,
 }
 
 /// [`Neighbours::walk_with_middle`] along the `n` points `point(i)`.
