@@ -460,6 +460,10 @@ pub struct Neighbours {
     /// grid) and last chord (in length steps), model 14's prediction of
     /// the length of a curve's first chord anchored on it.
     chords: Vec<ArcChords>,
+    /// `anchors` as real numbers, by axis (start and end of each curve one
+    /// after the other, infinite where there is none), for
+    /// [`Self::nearest_anchors`].
+    anchor_coords: [Vec<f32>; 3],
     /// Storage of forgotten curves' lattice points, for the next ones: a
     /// block's curves would otherwise each take fresh memory, whose zeroing
     /// by the kernel was a fifth of decoding.
@@ -477,6 +481,7 @@ impl Neighbours {
             start_half,
             anchors: Vec::with_capacity(capacity),
             chords: Vec::with_capacity(capacity),
+            anchor_coords: std::array::from_fn(|_| Vec::with_capacity(2 * capacity)),
             spare_grids: Vec::new(),
         }
     }
@@ -549,6 +554,13 @@ impl Neighbours {
         });
         self.ends.push(ends);
         self.chords.push(ArcChords::default());
+        let a = self.anchors[self.anchors.len() - 1];
+        for end in a {
+            let k = end.map_or([f32::INFINITY; 3], |k| k.map(|v| v as f32));
+            for (c, v) in self.anchor_coords.iter_mut().zip(k) {
+                c.push(v);
+            }
+        }
     }
 
     /// The last curve pushed is an arcs curve with these chords.
@@ -556,6 +568,81 @@ impl Neighbours {
         if let Some(c) = self.chords.last_mut() {
             *c = chords;
         }
+    }
+
+    /// The [`NEAR`] anchors among the [`MAX_BACK`] curves before curve `k`
+    /// nearest to `start` (on the starts' lattice), nearest first (of
+    /// equal ones, the nearer curve back, its start before its end), as
+    /// `(curve, at_end, squared distance in lattice units)`; fewer where
+    /// there are fewer.
+    pub fn nearest_anchors(&self, start: [i64; 3], k: usize) -> ([Near; NEAR], usize) {
+        let k = k.min(self.anchors.len());
+        let from = k - MAX_BACK.min(k);
+        // In `f32`, 4 at once (exact for lattice coordinates under 2²⁴;
+        // beyond, rounded the same way by the encoder and the decoder):
+        // in `f64` one by one, the scan of 256 anchors a curve was a third
+        // of decoding the fornix replicas at 0.5 mm.
+        let s = start.map(|v| v as f32);
+        let [xs, ys, zs] = self.anchor_coords.each_ref().map(|c| &c[2 * from..2 * k]);
+        let mut near = [Near::default(); NEAR];
+        let mut n = 0;
+        let mut limit = f32::INFINITY;
+        // Anchors `lo..hi` of the window, newest curve first and its start
+        // before its end, as `best_anchor` takes them: of equal distances
+        // the first found is kept first.
+        let mut take = |d2: &[f32], lo: usize, limit: &mut f32| {
+            for pair in (0..d2.len() / 2).rev() {
+                for at_end in [false, true] {
+                    let d = d2[2 * pair + at_end as usize];
+                    if !(d < *limit) {
+                        continue;
+                    }
+                    let mut at = n.min(NEAR - 1);
+                    while at > 0 && near[at - 1].d2 > d as f64 {
+                        near[at] = near[at - 1];
+                        at -= 1;
+                    }
+                    near[at] = Near {
+                        curve: from + (lo / 2) + pair,
+                        at_end,
+                        d2: d as f64,
+                    };
+                    n = (n + 1).min(NEAR);
+                    if n == NEAR {
+                        *limit = near[NEAR - 1].d2 as f32;
+                    }
+                }
+            }
+        };
+        // Eight at a time from the newest (their distances and least in
+        // vector registers), looked into only where one is under the
+        // limit; the oldest few (`len % 8`, whole curves) one by one.
+        const CHUNK: usize = 8;
+        let len = xs.len();
+        let mut hi = len;
+        while hi >= CHUNK {
+            let lo = hi - CHUNK;
+            let (cx, cy, cz) = (&xs[lo..hi], &ys[lo..hi], &zs[lo..hi]);
+            let mut d2 = [0.0f32; CHUNK];
+            for j in 0..CHUNK {
+                let (x, y, z) = (s[0] - cx[j], s[1] - cy[j], s[2] - cz[j]);
+                d2[j] = x * x + y * y + z * z;
+            }
+            let least = d2
+                .iter()
+                .fold(f32::INFINITY, |m, &d| if d < m { d } else { m });
+            if least < limit {
+                take(&d2, lo, &mut limit);
+            }
+            hi = lo;
+        }
+        let mut d2 = [0.0f32; CHUNK];
+        for j in 0..hi {
+            let (x, y, z) = (s[0] - xs[j], s[1] - ys[j], s[2] - zs[j]);
+            d2[j] = x * x + y * y + z * z;
+        }
+        take(&d2[..hi], 0, &mut limit);
+        (near, n)
     }
 
     /// Curve `k`'s first and last chords, if it is an arcs curve.
@@ -654,6 +741,18 @@ impl Neighbours {
         }
         &self.grids
     }
+}
+
+/// Anchors [`Neighbours::nearest_anchors`] finds.
+pub const NEAR: usize = 4;
+
+/// One of the anchors nearest a start.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Near {
+    pub curve: usize,
+    pub at_end: bool,
+    /// Squared distance from the start, in lattice units.
+    pub d2: f64,
 }
 
 /// An arcs curve's first chord (its first end's code, on the grid of the

@@ -1253,3 +1253,133 @@ fn model_14_walks_the_anchor_as_far_as_its_own_first_chord_and_model_13_streams_
         "first elements: model 14 {new:.0} bits, model 13 {old:.0}"
     );
 }
+
+/// The neighbours'-fit flag of a model-15 block (after the lattice's
+/// exponent and the shared-magnitudes flag).
+fn fit_flag(bytes: &[u8]) -> bool {
+    let mut dec = Decoder::new(bytes);
+    dec.direct(8);
+    dec.direct(1);
+    dec.direct(1) == 1
+}
+
+#[test]
+fn model_15_fits_first_elements_from_the_nearest_anchors_where_that_pays() {
+    // 400 field lines from random footpoints: a neighbour's first stretch
+    // is a smooth function of where it starts, so the walks of the four
+    // anchors nearest a start, fitted linearly in their places, predict
+    // its first element better than its anchor's walk alone; the block
+    // keeps the fit (its flag set), smaller than model 14, every curve
+    // within the tolerance both ways, and a model-14 stream still decodes
+    // as model 14. A block of 60 such lines gains too little (its window
+    // of anchors is sparse) and keeps the plain prediction.
+    let tol = 0.1;
+    let curves = dipole_lines(400, 10.0, 14);
+    let (b15, b14) = coded_by_both(&curves, tol, 15, 14);
+    assert!(fit_flag(&b15.bytes));
+    assert_under(&b15, &b14, 0.99, (15, 14));
+    let few = dipole_lines(60, 10.0, 15);
+    let (f15, f14) = coded_by_both(&few, tol, 15, 14);
+    assert!(!fit_flag(&f15.bytes));
+    assert!(f15.bytes.len() <= f14.bytes.len() + 1);
+}
+
+#[test]
+fn the_nearest_anchors_are_a_full_sort_s_first() {
+    // Against sorting every anchor of the window by (distance, newer
+    // curve first, start before end), on random starts and anchors in a
+    // small box (many equal distances), with empty curves (no anchors).
+    let mut rng = ChaCha8Rng::seed_from_u64(33);
+    for trial in 0..200 {
+        let curves = rng.gen_range(1..300);
+        let mut nb = reference::Neighbours::new(0.1, 0.1, curves);
+        let span = if trial % 2 == 0 { 3.0 } else { 40.0 };
+        let mut ends = Vec::new();
+        for _ in 0..curves {
+            if rng.gen_bool(0.1) {
+                nb.push_empty();
+                ends.push(None);
+                continue;
+            }
+            let mut p = || {
+                DVec3::new(
+                    rng.gen_range(-span..span),
+                    rng.gen_range(-span..span),
+                    rng.gen_range(-span..span),
+                )
+            };
+            let (a, b) = (p(), p());
+            nb.push_points(vec![a, b]);
+            ends.push(Some((a, b)));
+        }
+        let k = curves;
+        let start = [0, 1, 2].map(|_| 2 * rng.gen_range(-300i64..300));
+        let (near, n) = nb.nearest_anchors(start, k);
+        let mut all = Vec::new();
+        for c in k.saturating_sub(reference::MAX_BACK)..k {
+            for at_end in [false, true] {
+                if let Some(r) = nb.anchor(c, at_end) {
+                    let d = [0, 1, 2].map(|i| (start[i] - r[i]) as f32);
+                    let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    all.push((d2, k - c, at_end, c));
+                }
+            }
+        }
+        all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+        assert_eq!(n, all.len().min(reference::NEAR), "trial {trial}");
+        for (got, want) in near[..n].iter().zip(&all) {
+            assert_eq!((got.curve, got.at_end), (want.3, want.2), "trial {trial}");
+            assert_eq!(got.d2, want.0 as f64);
+        }
+    }
+}
+
+#[test]
+fn the_neighbours_fit_is_exact_on_a_constant_and_beats_the_mean_on_a_gradient() {
+    use super::predict::{fit_at_origin, Walked};
+    let mut rng = ChaCha8Rng::seed_from_u64(34);
+    let (mut trials, mut wins, mut fit_error, mut mean_error) = (0, 0, 0.0, 0.0);
+    for _ in 0..100 {
+        let n = rng.gen_range(1..7);
+        let c = DVec3::new(rng.gen_range(-5.0..5.0), rng.gen_range(-5.0..5.0), 1.0);
+        let g = DVec3::new(rng.gen_range(-0.3..0.3), rng.gen_range(-0.3..0.3), 0.1);
+        // Anchors on one side of the start, on a plane (a surface's).
+        let at: Vec<[f64; 3]> = (0..n)
+            .map(|_| [rng.gen_range(1.0..6.0), rng.gen_range(-3.0..3.0), 0.0])
+            .collect();
+        let walked = |v: &dyn Fn(&[f64; 3]) -> DVec3| -> Vec<Walked> {
+            at.iter()
+                .map(|x| {
+                    let d2 = x[0] * x[0] + x[1] * x[1];
+                    Walked {
+                        end: v(x),
+                        middle: 0.5 * v(x),
+                        at: *x,
+                        weight: 1.0 / (d2 + 1.0),
+                    }
+                })
+                .collect()
+        };
+        let constant = walked(&|_| c);
+        let (e, m) = fit_at_origin(&constant).unwrap();
+        assert!((e - c).length() < 1e-12 && (m - 0.5 * c).length() < 1e-12);
+        if n >= 3 {
+            let linear = walked(&|x| c + g * (x[0] + x[1]));
+            let (e, _) = fit_at_origin(&linear).unwrap();
+            let w: f64 = linear.iter().map(|s| s.weight).sum();
+            let mean = linear.iter().fold(DVec3::ZERO, |a, s| a + s.end * s.weight) / w;
+            trials += 1;
+            wins += ((e - c).length() < (mean - c).length()) as usize;
+            (fit_error, mean_error) = (
+                fit_error + (e - c).length(),
+                mean_error + (mean - c).length(),
+            );
+        }
+    }
+    // The ridge shrinks the gradient more across the anchors' thinner
+    // spread, so a single draw may miss by more than the mean; over many
+    // the fit misses by far less.
+    assert!(4 * wins >= 3 * trials, "{wins} of {trials}");
+    assert!(fit_error < 0.6 * mean_error, "{fit_error} {mean_error}");
+    assert!(fit_at_origin(&[]).is_none());
+}
