@@ -743,7 +743,10 @@ impl Neighbours {
     }
 }
 
-/// Anchors [`Neighbours::nearest_anchors`] finds.
+/// Anchors [`Neighbours::nearest_anchors`] finds (for model 15's fit,
+/// measured with 4 to 8 and 12: 4 to 7 within 0.3 % of each other on the
+/// field lines, dipole lines and replicas, 12 up to 0.7 % larger; 4 walks
+/// the fewest neighbours).
 pub const NEAR: usize = 4;
 
 /// One of the anchors nearest a start.
