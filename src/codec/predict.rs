@@ -508,14 +508,16 @@ pub fn fit_at_origin(samples: &[Walked]) -> Option<(DVec3, DVec3)> {
     if !(w > 0.0) {
         return None;
     }
-    let mean = |f: &dyn Fn(&Walked) -> DVec3| {
-        samples
-            .iter()
-            .fold(DVec3::ZERO, |acc, s| acc + f(s) * s.weight)
-            / w
-    };
     let at = |s: &Walked| DVec3::from_array(s.at);
-    let (x_bar, end_bar, middle_bar) = (mean(&at), mean(&|s| s.end), mean(&|s| s.middle));
+    // The weighted means of the places, ends and middles (each summed in
+    // sample order, as one fold each would).
+    let (mut x_bar, mut end_bar, mut middle_bar) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+    for s in samples {
+        x_bar += at(s) * s.weight;
+        end_bar += s.end * s.weight;
+        middle_bar += s.middle * s.weight;
+    }
+    let (x_bar, end_bar, middle_bar) = (x_bar / w, end_bar / w, middle_bar / w);
     // The centred moments: S (symmetric) and the cross terms of each
     // coordinate of `end` and `middle` with x.
     let mut m = [0.0f64; 6];
