@@ -159,8 +159,10 @@ impl Bit {
     /// `LEGACY`): the probability always in `PROB_BITS`.
     #[inline]
     fn update_warm(&mut self, bit: bool) {
-        let shift = UPDATE_SHIFT[self.n as usize] as u32;
-        self.n = NEXT_COUNT[self.n as usize];
+        // One load for both (a bit's update is on the decoder's chain).
+        let step = UPDATE_STEP[self.n as usize];
+        let shift = (step & 0xff) as u32;
+        self.n = (step >> 8) as u8;
         let mask = (bit as u16).wrapping_neg();
         let down = self.p >> shift;
         let up = ((1u16 << PROB_BITS) - self.p) >> shift;
@@ -183,6 +185,18 @@ const UPDATE_SHIFT: [u8; 256] = {
                 ADAPT_SHIFT_MAX
             }) as u8
         };
+        n += 1;
+    }
+    t
+};
+
+/// [`UPDATE_SHIFT`] and [`NEXT_COUNT`] of each count in one entry (the
+/// next count in the high byte).
+const UPDATE_STEP: [u16; 256] = {
+    let mut t = [0u16; 256];
+    let mut n = 0;
+    while n < 256 {
+        t[n] = (NEXT_COUNT[n] as u16) << 8 | UPDATE_SHIFT[n] as u16;
         n += 1;
     }
     t
@@ -795,6 +809,8 @@ mod tests {
                 (shift, next),
                 "count {n}"
             );
+            let step = UPDATE_STEP[n as usize];
+            assert_eq!(((step & 0xff) as u32, (step >> 8) as u8), (shift, next));
         }
     }
 

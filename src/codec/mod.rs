@@ -934,7 +934,9 @@ fn along_bits(g: &[[i64; 3]], predict: &dyn Fn(usize) -> [i64; 3]) -> (u64, u64)
 /// `b`, as coded.
 fn halves(d: [i64; 3]) -> [i64; 3] {
     let b = d[0] & 1;
-    d.map(|v| v.wrapping_sub(b) / 2)
+    // `v − b` is even (a lattice residual's coordinates share a parity),
+    // so the shift is the division.
+    d.map(|v| v.wrapping_sub(b) >> 1)
 }
 
 /// Contexts of a points-mode residual: the size of the one before (a curve's
