@@ -2124,6 +2124,18 @@ const FIT_CHECK: usize = 1024;
 /// 0.7 %; the field lines of `../shared/data` at 0.01 solar radii 2 %).
 const FIT_MARGIN: f64 = 0.01;
 
+/// After so many points curves, a block keeps only the streams of the
+/// magnitude models (per axis or shared, [`ResidualModels::shared`]) that
+/// are ahead, instead of coding both to the block's end. Logged every
+/// doubling from 64 points curves (100,000 fornix replicas at 0.1 mm, 25
+/// blocks; the hair, the heart fibres of `benches/make_unseen.py`, the
+/// fornix): the lead changes by 256 as the per-axis models learn, then
+/// only widens (replicas 0.15–0.26 % at 1,024, 0.19–0.28 % at the end;
+/// hair −0.12 % at 1,024, −0.10 % at the end; heart 0.08 %, 0.09 %).
+/// Coding the second stream was a twentieth of the encoder on the
+/// replicas at 0.1 mm.
+const SHARED_CHECK: usize = 1024;
+
 struct BlockStream {
     enc: Encoder,
     m: Models,
@@ -2355,6 +2367,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     // quarter more time on a block of arcs.
     let mut streams = vec![BlockStream::new(params, scale_exp, tally, false, false)];
     let mut shared_pending = sign_after(params.model);
+    let mut points_curves = 0usize;
     let mut fit = if params.model >= 15 {
         Fit::Pending
     } else {
@@ -2487,6 +2500,19 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 n_elements += 1 + elements.len();
             }
             calibration.add(kind, estimate, streams[0].enc.position_bits() - before);
+            if matches!(code, CurveCode::Points { .. }) {
+                points_curves += 1;
+                if points_curves == SHARED_CHECK {
+                    // Both kinds are there (the shared streams began at the
+                    // first points curve): the kind of the stream ahead is
+                    // kept, with or without the fit.
+                    let ahead = streams
+                        .iter()
+                        .min_by(|a, b| a.enc.position_bits().total_cmp(&b.enc.position_bits()))
+                        .map(|s| s.m.residual.shared);
+                    streams.retain(|s| Some(s.m.residual.shared) == ahead);
+                }
+            }
             if shared_pending || fit == Fit::Pending {
                 held.push((code, plan));
             }
