@@ -943,9 +943,19 @@ pub fn best_reference(
     let bits_of = |rf: &Reference, limit: u64| {
         reference_bits_under(g, &rf.resolve(grids, rule), &cost, limit)
     };
+    // Each costed only while it can still be the least: to one bit past
+    // the least so far where that is under `limit` (what is past it is
+    // dearer than that one, and the least and its ties come out exact);
+    // while none is under `limit`, to `limit` as before (of those, the
+    // least partial sum picks the one tried walked).
+    let mut least = u64::MAX;
     let mut singles: Vec<(Reference, u64)> = short
         .iter()
-        .map(|&(_, rf)| (rf, bits_of(&rf, limit)))
+        .map(|&(_, rf)| {
+            let bits = bits_of(&rf, limit.min(least.saturating_add(1)));
+            least = least.min(bits);
+            (rf, bits)
+        })
         .collect();
     singles.sort_by_key(|x| (x.1, x.0.back, x.0.reversed));
     let mut best = singles.first().copied()?;
