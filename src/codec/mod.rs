@@ -665,7 +665,10 @@ fn get_lattice(dec: &mut Decoder, parity: &mut Bit, m: &mut [IntModel; 3]) -> [i
 /// Static cost of a lattice difference (for the encoder's choices).
 fn lattice_bits(d: [i64; 3]) -> u64 {
     let b = d[0] & 1;
-    1 + (0..3).map(|a| eg_bits((d[a] - b) / 2)).sum::<u64>()
+    // `d − b` even on every axis (one parity): the shift is the division.
+    1 + (0..3)
+        .map(|a| eg_bits(d[a].wrapping_sub(b) >> 1))
+        .sum::<u64>()
 }
 
 /// [`lattice_bits`] without its steps at powers of two: choosing among
