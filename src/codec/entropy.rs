@@ -749,6 +749,7 @@ impl IntModel {
         self.get_magnitude(dec)
     }
 
+    #[inline(always)]
     fn get_magnitude(&mut self, dec: &mut Decoder) -> u64 {
         let mut n = 1;
         while n < MAX_BITS && dec.bit(&mut self.len[n]) {
