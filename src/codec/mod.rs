@@ -1226,6 +1226,7 @@ fn slid_points(
     points: &[DVec3],
     g: Vec<[i64; 3]>,
     reference: Option<reference::Reference>,
+    reference_predicted: &[[i64; 3]],
     own_kind: OwnPrediction,
     bits: u64,
     own_start_bits: u64,
@@ -1321,7 +1322,14 @@ fn slid_points(
             // The estimate's part before the residuals (a one-point curve's).
             let start_bits = reference::reference_bits(&g[..1], &res, lattice_bits);
             let foot = reference::PredictionCache::default();
-            let (flag, bits) = flag(&|k| res.predict_next(&g, k, n, &foot), bits);
+            // The search's predictions of these points where it kept them
+            // all (the same values: a prediction depends on the points
+            // before it only).
+            let (flag, bits) = if reference_predicted.len() == n {
+                flag(&|k| reference_predicted[k], bits)
+            } else {
+                flag(&|k| res.predict_next(&g, k, n, &foot), bits)
+            };
             let predict = |g: &[[i64; 3]], k| res.predict_next(g, k, n, &foot);
             (slide(&predict, flag, bits - start_bits), flag)
         }
@@ -1361,6 +1369,9 @@ fn choose(
     // points so far in the block ([`Calibration`]).
     let arc_estimate = opt.arcs.as_ref().map(|(a, _)| estimated_bits(a));
     let arc_bits = arc_estimate.map(|e| (e as f64 * arcs_scale).round() as u64);
+    // The chosen reference's predictions of the rounded points, for the
+    // slide's along-step flag (a pass over the curve the search made).
+    let mut predicted = Vec::new();
     let pts = opt.points.map(|g| {
         let own_start = lattice_bits([0, 1, 2].map(|a| g[0][a].wrapping_sub(prev.point_start[a])));
         // The own prediction's estimate, summed until it passes `bound`
@@ -1431,7 +1442,14 @@ fn choose(
             return (g, None, own_kind, own, own_start, linear);
         }
         let limit = arc_bits.map_or(own, |a| a.min(own));
-        let found = reference::best_reference(&g, neighbours.window(), rule, lattice_bits, limit);
+        let found = reference::best_reference(
+            &g,
+            neighbours.window(),
+            rule,
+            lattice_bits,
+            limit,
+            &mut predicted,
+        );
         let won = found.is_some_and(|(_, bits)| bits < limit);
         reference_vote.count(won);
         match found {
@@ -1460,6 +1478,7 @@ fn choose(
                 points,
                 g,
                 reference,
+                &predicted,
                 own,
                 bits,
                 start_bits,

@@ -863,8 +863,23 @@ fn reference_bits_under(
     cost: impl Fn([i64; 3]) -> u64,
     limit: u64,
 ) -> u64 {
+    reference_bits_into(g, res, cost, limit, &mut Vec::new())
+}
+
+/// [`reference_bits_under`], the predictions made kept in `predicted`
+/// (point `i`'s at `i`, the reference's start at 0; as far as the sum
+/// went).
+fn reference_bits_into(
+    g: &[[i64; 3]],
+    res: &Resolved,
+    cost: impl Fn([i64; 3]) -> u64,
+    limit: u64,
+    predicted: &mut Vec<[i64; 3]>,
+) -> u64 {
     let n = g.len();
     let start = res.start();
+    predicted.clear();
+    predicted.push(start);
     let mut bits = 8 + cost([0, 1, 2].map(|a| g[0][a].wrapping_sub(start[a])));
     if res.second.is_some() {
         bits += 6;
@@ -875,6 +890,7 @@ fn reference_bits_under(
             break;
         }
         let p = res.predict_next(g, i, n, &foot);
+        predicted.push(p);
         bits += cost([0, 1, 2].map(|a| g[i][a].wrapping_sub(p[a])));
     }
     bits
@@ -900,12 +916,18 @@ fn reference_bits_under(
 /// walked reference is tried on the best index-matched one as far as it
 /// is known: of singles over `limit`, the one with the least partial
 /// sum).
+///
+/// Its predictions of `g`'s points are left in `predicted` (as
+/// [`reference_bits_into`] keeps them: all of them where its estimate is
+/// under `limit`), for the encoder's next look at the same predictions
+/// (the along-step flag).
 pub fn best_reference(
     g: &[[i64; 3]],
     grids: &[Vec<[i64; 3]>],
     rule: Rule,
     cost: impl Fn([i64; 3]) -> u64,
     limit: u64,
+    predicted: &mut Vec<[i64; 3]>,
 ) -> Option<(Reference, u64)> {
     let k = grids.len();
     let n = g.len();
@@ -940,8 +962,11 @@ pub fn best_reference(
         short.truncate(SHORTLIST);
     }
     short.sort_by_key(|s| (s.0, s.1.back, s.1.reversed));
-    let bits_of = |rf: &Reference, limit: u64| {
-        reference_bits_under(g, &rf.resolve(grids, rule), &cost, limit)
+    // The predictions of the one being costed and of the best so far.
+    let mut trial = Vec::with_capacity(g.len());
+    predicted.clear();
+    let bits_of = |rf: &Reference, limit: u64, trial: &mut Vec<[i64; 3]>| {
+        reference_bits_into(g, &rf.resolve(grids, rule), &cost, limit, trial)
     };
     // Each costed only while it can still be the least: to one bit past
     // the least so far where that is under `limit` (what is past it is
@@ -949,16 +974,19 @@ pub fn best_reference(
     // while none is under `limit`, to `limit` as before (of those, the
     // least partial sum picks the one tried walked).
     let mut least = u64::MAX;
-    let mut singles: Vec<(Reference, u64)> = short
-        .iter()
-        .map(|&(_, rf)| {
-            let bits = bits_of(&rf, limit.min(least.saturating_add(1)));
-            least = least.min(bits);
-            (rf, bits)
-        })
-        .collect();
-    singles.sort_by_key(|x| (x.1, x.0.back, x.0.reversed));
-    let mut best = singles.first().copied()?;
+    let mut best: Option<(Reference, u64)> = None;
+    for &(_, rf) in &short {
+        let bits = bits_of(&rf, limit.min(least.saturating_add(1)), &mut trial);
+        least = least.min(bits);
+        // The least by (estimate, back, reversed), as sorting them would
+        // find it.
+        let order = |x: &(Reference, u64)| (x.1, x.0.back, x.0.reversed);
+        if best.is_none_or(|b| order(&(rf, bits)) < order(&b)) {
+            best = Some((rf, bits));
+            std::mem::swap(predicted, &mut trial);
+        }
+    }
+    let mut best = best?;
     // Walked: the best index-matched one. (Searching them all walked, with
     // no flag, coded the resampled bundles 0–2 % smaller than this, but the
     // jittered fornix replicas, sampled exactly as their neighbours are,
@@ -970,9 +998,10 @@ pub fn best_reference(
             walk: true,
             ..best.0
         };
-        let bits = bits_of(&walked, best.1.min(limit));
+        let bits = bits_of(&walked, best.1.min(limit), &mut trial);
         if bits < best.1 {
             best = (walked, bits);
+            std::mem::swap(predicted, &mut trial);
         }
     }
     Some(best)
@@ -1141,6 +1170,7 @@ mod tests {
             Rule::of_model(7),
             |v| if v == [0, 0, 0] { 1 } else { 9 },
             u64::MAX,
+            &mut Vec::new(),
         )
         .unwrap();
         assert_eq!(
@@ -1304,14 +1334,25 @@ mod tests {
                     walk(&mut rng, m, o)
                 })
                 .collect();
-            let Some((free, free_bits)) = best_reference(&g, &grids, rule, cost, u64::MAX) else {
+            let Some((free, free_bits)) =
+                best_reference(&g, &grids, rule, cost, u64::MAX, &mut Vec::new())
+            else {
                 continue;
             };
             let limit = rng.gen_range(free_bits / 2..free_bits * 2 + 2);
-            let (rf, bits) = best_reference(&g, &grids, rule, cost, limit).unwrap();
-            let exact = reference_bits(&g, &rf.resolve(&grids, rule), cost);
+            let mut predicted = Vec::new();
+            let (rf, bits) = best_reference(&g, &grids, rule, cost, limit, &mut predicted).unwrap();
+            let res = rf.resolve(&grids, rule);
+            let exact = reference_bits(&g, &res, cost);
             if bits < limit {
                 assert_eq!(bits, exact, "{rf:?}");
+                // The predictions kept are the chosen reference's, all of
+                // them.
+                let foot = PredictionCache::default();
+                let again: Vec<[i64; 3]> = std::iter::once(res.start())
+                    .chain((1..n).map(|i| res.predict_next(&g, i, n, &foot)))
+                    .collect();
+                assert_eq!(predicted, again, "{rf:?}");
                 under += 1;
             } else {
                 // (A pair, or a walked reference, is tried on the best
