@@ -1214,6 +1214,11 @@ impl RareVote {
     }
 }
 
+/// [`slid_points`]' result: the points, the along-step flag, the own
+/// prediction's kind, and the predictions of the points where they were
+/// slid ([`quantise::cheapest_points`]).
+type SlidCurve = (Vec<[i64; 3]>, bool, OwnPrediction, Option<Vec<[i64; 3]>>);
+
 /// A points curve's lattice points `g` (rounded, estimated at `bits`)
 /// slid along the curve to where they are cheapest against the chosen
 /// prediction ([`quantise::cheapest_points`]), where that is estimated
@@ -1239,7 +1244,7 @@ fn slid_points(
     mean_step: bool,
     vote: &mut SlideVote,
     neighbours: &mut Neighbours,
-) -> (Vec<[i64; 3]>, bool, OwnPrediction) {
+) -> SlidCurve {
     let tol = encoder::acceptance_tolerance(tolerance, points);
     // With `along` (model 10) the curve's flag: whether the rounded points
     // are estimated at least 5 % cheaper with the along-step prediction
@@ -1275,7 +1280,7 @@ fn slid_points(
             lattice_bits,
             flag,
         )
-        .filter(|(_, residuals)| *residuals < limit)
+        .filter(|(_, residuals, _)| *residuals < limit)
     };
     let (slid, flag) = match reference {
         // Where the mean step (model 13) is the rounded points' cheapest
@@ -1287,7 +1292,14 @@ fn slid_points(
         // larger, 0.6 % with a 5 % margin; slid, 1.2 % smaller, at 12 % more
         // instructions; sliding both for every curve: 18 %, same bytes).
         None if mean_step && own_kind == OwnPrediction::MeanStep => {
-            let mut best: Option<(u64, Vec<[i64; 3]>, bool, OwnPrediction)> = None;
+            type Kept = (
+                u64,
+                Vec<[i64; 3]>,
+                bool,
+                OwnPrediction,
+                Option<Vec<[i64; 3]>>,
+            );
+            let mut best: Option<Kept> = None;
             let kinds = vote.kinds();
             for &kind in kinds {
                 let predict = |k| own_prediction(&g, k, kind, screw);
@@ -1299,17 +1311,19 @@ fn slid_points(
                 } - own_start_bits;
                 let (flag, rounded) = flag(&predict, rounded);
                 let own = |g: &[[i64; 3]], k| own_prediction(g, k, kind, screw);
-                let (grid, bits) =
-                    slide(&own, flag, rounded).unwrap_or_else(|| (g.clone(), rounded));
+                let (grid, bits, predicted) = match slide(&own, flag, rounded) {
+                    Some((grid, bits, predicted)) => (grid, bits, Some(predicted)),
+                    None => (g.clone(), rounded, None),
+                };
                 if best.as_ref().is_none_or(|b| bits < b.0) {
-                    best = Some((bits, grid, flag, kind));
+                    best = Some((bits, grid, flag, kind, predicted));
                 }
             }
-            let (_, grid, flag, kind) = best.expect("a kind was tried");
+            let (_, grid, flag, kind, predicted) = best.expect("a kind was tried");
             if kinds.len() == 2 {
                 vote.count(kind);
             }
-            return (grid, flag, kind);
+            return (grid, flag, kind, predicted);
         }
         None => {
             let (flag, bits) = flag(&|k| own_prediction(&g, k, own_kind, screw), bits);
@@ -1334,8 +1348,16 @@ fn slid_points(
             (slide(&predict, flag, bits - start_bits), flag)
         }
     };
-    (slid.map_or(g, |(c, _)| c), flag, own_kind)
+    match slid {
+        Some((grid, _, predicted)) => (grid, flag, own_kind, Some(predicted)),
+        None => (g, flag, own_kind, None),
+    }
 }
+
+/// [`choose`]'s result: the code, its decoded point count, its estimate and
+/// what the arcs saved, and for a slid points curve the predictions its
+/// residuals are from ([`quantise::cheapest_points`]).
+type Chosen = (CurveCode, usize, u64, u64, Option<Vec<[i64; 3]>>);
 
 /// Chooses one curve's code given the block so far: arcs, or points with
 /// their own or a neighbour's prediction, whichever is estimated cheaper
@@ -1360,10 +1382,10 @@ fn choose(
     vote: &mut SlideVote,
     screw_vote: &mut RareVote,
     reference_vote: &mut RareVote,
-) -> (CurveCode, usize, u64, u64) {
+) -> Chosen {
     if points.is_empty() {
         neighbours.push_empty();
-        return (CurveCode::Empty, 0, 0, 0);
+        return (CurveCode::Empty, 0, 0, 0, None);
     }
     // The arcs' estimate, scaled by what arcs have really cost against
     // points so far in the block ([`Calibration`]).
@@ -1467,14 +1489,14 @@ fn choose(
             neighbours.push_points(decoded);
             neighbours.set_chords(arc_chords(&a));
             let saving = bits - arc_bits.unwrap_or(0);
-            (a, n, arc_estimate.unwrap_or(0), saving)
+            (a, n, arc_estimate.unwrap_or(0), saving, None)
         }
         (_, Some((g, reference, own, bits, start_bits, second_order_bits))) => {
             // Arcs and points are weighed by the rounded points' estimate:
             // the slid points' is optimistic (they were chosen by the same
             // static cost; weighed by it, the fornix at 0.1 mm went from 2
             // to 19 points curves and grew 0.7 %).
-            let (g, along, own) = slid_points(
+            let (g, along, own, predicted) = slid_points(
                 points,
                 g,
                 reference,
@@ -1504,6 +1526,7 @@ fn choose(
                 n,
                 bits,
                 0,
+                predicted,
             )
         }
         (Some((a, decoded)), None) => {
@@ -1512,11 +1535,11 @@ fn choose(
             neighbours.push_points(decoded);
             neighbours.set_chords(arc_chords(&a));
             let e = arc_estimate.unwrap_or(0);
-            (a, n, e, e)
+            (a, n, e, e, None)
         }
         (None, None) => {
             neighbours.push_points(points.to_vec());
-            (CurveCode::Raw(points.to_vec()), points.len(), 0, 0)
+            (CurveCode::Raw(points.to_vec()), points.len(), 0, 0, None)
         }
     }
 }
@@ -2017,6 +2040,7 @@ impl CurvePlan {
         q: &Quantiser,
         params: &CodecParams,
         fit: bool,
+        predicted: Option<&[[i64; 3]]>,
     ) -> Self {
         match code {
             CurveCode::Arcs {
@@ -2049,15 +2073,18 @@ impl CurvePlan {
                         let foot = reference::PredictionCache::default();
                         CurvePlan::Points {
                             start: [0, 1, 2].map(|a| grid[0][a] - start[a]),
-                            residuals: plan_residuals(along, grid, |k| {
-                                res.predict_next(grid, k, n, &foot)
+                            residuals: plan_residuals(along, grid, |k| match predicted {
+                                // The slide's, of these same points.
+                                Some(p) => p[k],
+                                None => res.predict_next(grid, k, n, &foot),
                             }),
                         }
                     }
                     None => CurvePlan::Points {
                         start: [0, 1, 2].map(|a| grid[0][a] - prev.point_start[a]),
-                        residuals: plan_residuals(along, grid, |k| {
-                            own_prediction(grid, k, *own, screw(params.model))
+                        residuals: plan_residuals(along, grid, |k| match predicted {
+                            Some(p) => p[k],
+                            None => own_prediction(grid, k, *own, screw(params.model)),
                         }),
                     },
                 }
@@ -2430,7 +2457,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
             // The choice, in order: a points-mode curve may lean on those
             // before.
             let before = streams[0].enc.position_bits();
-            let (code, n, estimate, saving) = choose(
+            let (code, n, estimate, saving, predicted) = choose(
                 points.as_ref(),
                 opt,
                 params.tolerance,
@@ -2463,6 +2490,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 &streams[0].q,
                 params,
                 fit != Fit::Dropped,
+                predicted.as_deref(),
             );
             seen += 1;
             if shared_pending && matches!(code, CurveCode::Points { .. }) {
