@@ -368,8 +368,8 @@ fn walk_step(
 /// is exact where the `f64` form is (every codable input) and took a fifth
 /// of the decoder's time in `f64`.
 fn quarter_nearest(base: [i64; 3], trend: [i64; 3]) -> [i64; 3] {
-    // In `i64` where that does not overflow (every codable point's case):
-    // the `i128` sums were a twentieth of decoding the fornix replicas.
+    // In `i64` where that does not overflow (every codable point's case;
+    // 0.6 % fewer instructions decoding the fornix replicas than `i128`).
     let sum = |a: usize| base[a].checked_mul(4)?.checked_add(trend[a]);
     let x = match (sum(0), sum(1), sum(2)) {
         (Some(x), Some(y), Some(z)) => {
