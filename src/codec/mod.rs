@@ -1279,6 +1279,9 @@ fn slid_points(
             smooth_lattice_bits(),
             lattice_bits,
             flag,
+            // The rounded points are the nearest lattice points
+            // (`CurveEncoder::points_code`, the same lattice and test).
+            Some(&g),
         )
         .filter(|(_, residuals, _)| *residuals < limit)
     };

@@ -384,7 +384,8 @@ const _: () = assert!(super::predict::AlongStep::STEPS < PREDICT_LOOKBACK);
 /// `beam = 1` is greedy. Linear in the curve's length (each vertex's
 /// candidates bounded by the reach in tolerances): `predict` sees the
 /// chosen points only through `g[k − PREDICT_LOOKBACK..k]` (the rest of
-/// the slice is scratch).
+/// the slice is scratch). `rounded`, where given, are the points' nearest
+/// lattice points, each within `√tol2` (as found here otherwise).
 /// Returns the points, the sum of `rate` over their residuals (the
 /// prediction's own, so a caller need not predict again) and the
 /// predictions they are residuals of (`predict(points, k)` at `k ≥ 1`; 0 at
@@ -402,6 +403,7 @@ pub fn cheapest_points(
     cost: AxisCost<impl Fn(i64) -> f64>,
     rate: impl Fn([i64; 3]) -> u64,
     along: bool,
+    rounded: Option<&[[i64; 3]]>,
 ) -> Option<Slid> {
     use super::check::dist2_to_segment;
     /// One partial choice: its last point, its parent (an index into
@@ -466,15 +468,31 @@ pub fn cheapest_points(
     let mut top: Vec<(f64, [i64; 3], [i64; 3])> = Vec::with_capacity(beam);
     // Every vertex's nearest lattice point first: a vertex without one
     // within the tolerance (or not codable) ends the search before its
-    // neighbour's tube is sought.
-    let mut nearests = Vec::with_capacity(n);
-    for &p in points {
-        let q = bcc_nearest(p, half)?;
-        if bcc_point(q, half).distance_squared(p) > tol2 {
-            return None;
+    // neighbour's tube is sought. (The caller's, where it has them: the
+    // encoder rounded the points already.)
+    let nearests = match rounded {
+        Some(r) if r.len() == n => {
+            debug_assert!(
+                r.iter()
+                    .zip(points)
+                    .all(|(&q, &p)| bcc_nearest(p, half) == Some(q)
+                        && bcc_point(q, half).distance_squared(p) <= tol2),
+                "the rounded points given are the nearest lattice points"
+            );
+            std::borrow::Cow::Borrowed(r)
         }
-        nearests.push(q);
-    }
+        _ => {
+            let mut nearests = Vec::with_capacity(n);
+            for &p in points {
+                let q = bcc_nearest(p, half)?;
+                if bcc_point(q, half).distance_squared(p) > tol2 {
+                    return None;
+                }
+                nearests.push(q);
+            }
+            std::borrow::Cow::Owned(nearests)
+        }
+    };
     for k in 1..n {
         let v = points[k];
         let before = points[k - 1];
@@ -912,6 +930,7 @@ mod tests {
             RESIDUAL_COST,
             |_| 0,
             along,
+            None,
         )
         .unwrap()
         .0
@@ -966,6 +985,7 @@ mod tests {
                 RESIDUAL_COST,
                 |_| 0,
                 trial % 2 == 1,
+                None,
             )
             .unwrap();
             assert_eq!(g.len(), n);
