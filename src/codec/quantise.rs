@@ -920,6 +920,18 @@ mod tests {
         beam: usize,
         along: bool,
     ) -> Vec<[i64; 3]> {
+        slide_second_order(pts, half, tol, first, beam, along).0
+    }
+
+    /// [`cheapest_points`] against second-order prediction, all it returns.
+    fn slide_second_order(
+        pts: &[glam::DVec3],
+        half: f64,
+        tol: f64,
+        first: [i64; 3],
+        beam: usize,
+        along: bool,
+    ) -> Slid {
         cheapest_points(
             pts,
             half,
@@ -933,7 +945,6 @@ mod tests {
             None,
         )
         .unwrap()
-        .0
     }
     fn total_cost(g: &[[i64; 3]]) -> f64 {
         (1..g.len())
@@ -975,19 +986,8 @@ mod tests {
             // Greedy, the codec's beam and a wider one; costed plainly and
             // as model 10 codes the step (the bound-keyed candidates).
             let beam = [1, 2, 4][trial % 3];
-            let (g, _, predicted) = cheapest_points(
-                &pts,
-                half,
-                tol * tol,
-                first,
-                beam,
-                second_order,
-                RESIDUAL_COST,
-                |_| 0,
-                trial % 2 == 1,
-                None,
-            )
-            .unwrap();
+            let (g, _, predicted) =
+                slide_second_order(&pts, half, tol, first, beam, trial % 2 == 1);
             assert_eq!(g.len(), n);
             // The predictions returned are those of the chosen points.
             for k in 1..n {
