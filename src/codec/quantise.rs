@@ -909,18 +909,7 @@ mod tests {
     }
     /// The points chosen against second-order prediction.
     fn slid(pts: &[glam::DVec3], half: f64, tol: f64, first: [i64; 3]) -> Vec<[i64; 3]> {
-        slid_along(pts, half, tol, first, 1, false)
-    }
-
-    fn slid_along(
-        pts: &[glam::DVec3],
-        half: f64,
-        tol: f64,
-        first: [i64; 3],
-        beam: usize,
-        along: bool,
-    ) -> Vec<[i64; 3]> {
-        slide_second_order(pts, half, tol, first, beam, along).0
+        slide_second_order(pts, half, tol, first, 1, false).0
     }
 
     /// [`cheapest_points`] against second-order prediction, all it returns.
@@ -1053,8 +1042,8 @@ mod tests {
                 .collect();
             let first = bcc_nearest(pts[0], half).unwrap();
             let (g1, g4) = (
-                slid_along(&pts, half, tol, first, 1, false),
-                slid_along(&pts, half, tol, first, 4, false),
+                slide_second_order(&pts, half, tol, first, 1, false).0,
+                slide_second_order(&pts, half, tol, first, 4, false).0,
             );
             assert_eq!(g4[0], first);
             let out: Vec<glam::DVec3> = g4.iter().map(|&k| bcc_point(k, half)).collect();
