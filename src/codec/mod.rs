@@ -1932,6 +1932,16 @@ pub fn encode_block_on<C: AsRef<[DVec3]> + Sync>(
 /// cores and a GPU batch busy.
 const CALIBRATION_CHUNK: usize = 256;
 
+/// A block's first chunk, shorter: it searches every curve's arcs
+/// ([`ArcsWorth`] has seen nothing yet), and on noisy fibres at fine
+/// tolerances, where arcs almost never win, that search was 6 % of the
+/// encoder. Measured against a first chunk of 256 (10,000 replicas at
+/// 0.1 mm: 3.5 % fewer instructions, 32 curves 4 %; bytes within 10 of
+/// 330,010 on the replicas, 133,831 on the hair at 0.1 mm and 189,027 on
+/// the heart fibres at 0.1 mm, and equal on the hair at 0.5 mm, the field
+/// lines, the dipole lines, CC and the fornix at 0.5 mm).
+const FIRST_CHUNK: usize = 64;
+
 /// The options of a chunk of a block's curves, searched in parallel (or
 /// with `checker`, all together, their checks in batches).
 fn chunk_options<C: AsRef<[DVec3]> + Sync>(
@@ -2442,7 +2452,11 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     let mut vote = SlideVote::default();
     let mut screw_vote = RareVote::default();
     let mut reference_vote = RareVote::default();
-    for chunk in curves.chunks(CALIBRATION_CHUNK) {
+    let (head, tail) = curves.split_at(FIRST_CHUNK.min(curves.len()));
+    let chunks = std::iter::once(head)
+        .filter(|h| !h.is_empty())
+        .chain(tail.chunks(CALIBRATION_CHUNK));
+    for chunk in chunks {
         // Each chunk's searches with what the curves before it taught
         // ([`encoder::GiveUp`], [`ArcsWorth`]).
         let sampled = !worth.pays();

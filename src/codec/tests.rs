@@ -656,10 +656,11 @@ fn the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does()
     w.add(0, 60);
     assert!(w.pays(), "{} of {}", w.saved, w.total);
 
-    // A block of 768 jittered fibres (points win) and then 512 smooth
-    // helices (arcs far cheaper): the fibres' later chunks search only a
-    // sample, and the helices' sample turns the full search back on, so
-    // the last chunk goes as arcs. Every curve within the tolerance.
+    // A block of jittered fibres (points win) to the end of its fourth
+    // chunk and then two chunks of smooth helices (arcs far cheaper): the
+    // fibres' later chunks search only a sample, and the helices' sample
+    // turns the full search back on, so the last chunk goes as arcs. Every
+    // curve within the tolerance.
     let tol = 0.1;
     let mut rng = ChaCha8Rng::seed_from_u64(43);
     let gauss = move |rng: &mut ChaCha8Rng| {
@@ -667,7 +668,8 @@ fn the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does()
         (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos() * tol / 2.0
     };
     let mut curves = Vec::new();
-    for c in 0..768 {
+    let fibres = FIRST_CHUNK + 3 * CALIBRATION_CHUNK;
+    for c in 0..fibres {
         let phase = c as f64 * 0.01;
         curves.push(
             (0..40)
@@ -679,7 +681,7 @@ fn the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does()
                 .collect::<Vec<_>>(),
         );
     }
-    for c in 0..512 {
+    for c in 0..2 * CALIBRATION_CHUNK {
         let r = 3.0 + (c % 7) as f64 * 0.5;
         curves.push(
             (0..80)
@@ -691,15 +693,16 @@ fn the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does()
     let block = check_block(&curves, tol);
     let arcs =
         |range: std::ops::Range<usize>| block.kinds[range].iter().filter(|&&k| k == 2).count();
-    let noisy = arcs(0..768);
+    let noisy = arcs(0..fibres);
     assert!(noisy < 40, "{noisy} noisy fibres went as arcs");
-    let last = arcs(1024..1280);
+    let helices = fibres + CALIBRATION_CHUNK;
+    let last = arcs(helices..helices + CALIBRATION_CHUNK);
     assert!(
         last >= 250,
         "only {last} of the last 256 helices went as arcs"
     );
     // And the sampled chunk's helices: the sample's arcs, the rest points.
-    let sampled = arcs(768..1024);
+    let sampled = arcs(fibres..helices);
     assert!(
         (8..=32).contains(&sampled),
         "{sampled} of the first helix chunk as arcs"
