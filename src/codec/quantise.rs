@@ -264,13 +264,78 @@ const SLIDE_REACH_TOLERANCES: f64 = 16.0;
 /// of the segment `a`–`b` (a point on the boundary may be missed or not
 /// by rounding).
 ///
-/// Plane by plane across the segment's longest axis (the lattice's points
+/// Up to [`BOX_RADII`] radii long, every lattice point of the box about
+/// the segment grown by `√r2` is tested (the lattice's points have
+/// coordinates of one parity, so a row along the last axis steps by two);
+/// longer, windows plane by plane about the segment's line
+/// ([`lattice_near_long_segment`]), which test fewer points but cost more
+/// to set up. The slide's segments are mostly a few radii long: with the
+/// windows only, the encoder took 6.88 G instructions on 10,000 fornix
+/// replicas at 0.1 mm (segments of about 4 radii), with the box 6.46 G;
+/// with the box only, the resampled bundles of the shared data (16 radii)
+/// took 10–16 % more (the same containers either way).
+fn lattice_near_segment(
+    a: glam::DVec3,
+    b: glam::DVec3,
+    half: f64,
+    r2: f64,
+    mut f: impl FnMut([i64; 3], glam::DVec3),
+) {
+    let d = b - a;
+    let dd = d.length_squared();
+    if dd > BOX_RADII * BOX_RADII * r2 {
+        return lattice_near_long_segment(a, b, half, r2, f);
+    }
+    let inv = if dd > 0.0 { 1.0 / dd } else { 0.0 };
+    let r = r2.sqrt();
+    let inv_half = 1.0 / half;
+    // (Integer floors and ceilings: the libm calls were a tenth of the
+    // slide.)
+    let lo = (a.min(b) - glam::DVec3::splat(r)) * inv_half;
+    let hi = (a.max(b) + glam::DVec3::splat(r)) * inv_half;
+    let ceil = |y: f64| -floor_small(-y) as i64;
+    let floor = |y: f64| floor_small(y) as i64;
+    let (lo, hi) = (
+        [ceil(lo.x), ceil(lo.y), ceil(lo.z)],
+        [floor(hi.x), floor(hi.y), floor(hi.z)],
+    );
+    // The first of `parity` from `k` up.
+    let from = |k: i64, parity: i64| k + ((k - parity) & 1);
+    for k0 in lo[0]..=hi[0] {
+        let parity = k0 & 1;
+        let w0 = k0 as f64 * half - a.x;
+        let mut k1 = from(lo[1], parity);
+        while k1 <= hi[1] {
+            let w1 = k1 as f64 * half - a.y;
+            let along01 = w0 * d.x + w1 * d.y;
+            let mut k2 = from(lo[2], parity);
+            while k2 <= hi[2] {
+                let w2 = k2 as f64 * half - a.z;
+                let t = ((along01 + w2 * d.z) * inv).clamp(0.0, 1.0);
+                let (e0, e1, e2) = (w0 - d.x * t, w1 - d.y * t, w2 - d.z * t);
+                if e0 * e0 + e1 * e1 + e2 * e2 <= r2 {
+                    let k = [k0, k1, k2];
+                    f(k, bcc_point(k, half));
+                }
+                k2 += 2;
+            }
+            k1 += 2;
+        }
+    }
+}
+
+/// The longest segment, in radii, whose box [`lattice_near_segment`]
+/// searches.
+const BOX_RADII: f64 = 6.0;
+
+/// [`lattice_near_segment`] for a segment long against the radius
+/// (many radii: most of its box is far from it): plane by plane across the segment's longest axis (the lattice's points
 /// of one parity lie in every other plane): in a plane, such a point is in
 /// the section of the cylinder around the segment's line, an ellipse about
 /// the line's point whose extent on axis `j` is `√r2·√(1 + (dⱼ/d₀)²)`
 /// (`d` the segment's direction, `d₀` on the longest axis), or in the
 /// section of the ball at an end. Each candidate in that window is tested.
-fn lattice_near_segment(
+fn lattice_near_long_segment(
     a: glam::DVec3,
     b: glam::DVec3,
     half: f64,
