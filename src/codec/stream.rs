@@ -214,7 +214,7 @@ pub fn compress_blocks(
     // free, so no block waits for a group's slowest. At most
     // `BLOCKS_PER_THREAD` per thread are read and not yet written (memory
     // bound: about 5 MB each).
-    let in_flight_limit = BLOCKS_PER_THREAD * rayon::current_num_threads().max(1);
+    let unwritten_limit = BLOCKS_PER_THREAD * rayon::current_num_threads().max(1);
     type Done = (
         usize,
         Result<(BlockBytes, Result<(), (usize, String)>), (usize, String)>,
@@ -225,13 +225,17 @@ pub fn compress_blocks(
     let mut read = 0u64;
     let mut ended = false;
     let mut read_error: Option<IoError> = None;
-    let mut in_flight = 0usize;
+    // Blocks handed to the pool whose result has not come back.
+    let mut running = 0usize;
     let mut written = 0usize;
     let mut done: std::collections::BTreeMap<usize, Done> = std::collections::BTreeMap::new();
     let params = &params;
     rayon::in_place_scope(|s| -> Result<(), IoError> {
         loop {
-            while !ended && read_error.is_none() && in_flight < in_flight_limit {
+            // (Counted until written, not until done: a slow block holds
+            // the reading back, so that the blocks done after it, waiting
+            // to be written, stay within the bound.)
+            while !ended && read_error.is_none() && spans.len() - written < unwritten_limit {
                 let batch = match read_batch(reader, &mut ended) {
                     Ok(b) if b.is_empty() => break,
                     Ok(b) => b,
@@ -244,7 +248,7 @@ pub fn compress_blocks(
                 let points = batch.iter().map(|c| c.points.len() as u64).sum();
                 spans.push((batch.len() as u64, read, points));
                 read += batch.len() as u64;
-                in_flight += 1;
+                running += 1;
                 let tx = tx.clone();
                 s.spawn(move |_| {
                     let ins: Vec<CurveIn> = batch
@@ -265,14 +269,14 @@ pub fn compress_blocks(
                     let _ = tx.send((index, result));
                 });
             }
-            if in_flight == 0 {
+            if running == 0 {
                 return match read_error.take() {
                     Some(e) => Err(e),
                     None => Ok(()),
                 };
             }
             let (index, result) = receive(&rx);
-            in_flight -= 1;
+            running -= 1;
             done.insert(index, (index, result));
             // Written in order; the first failure in order is the one
             // reported (the tasks still running end with the scope).
@@ -844,11 +848,11 @@ mod tests {
 
     #[test]
     fn compressed_blocks_are_the_same_on_any_pool_and_in_order() {
-        // Five blocks, taken by whichever thread is free: the container is
+        // Three blocks, taken by whichever thread is free: the container is
         // the same byte for byte on one, two and three threads (one of
         // them the pool's only worker, waiting for the blocks it encodes),
         // and decodes to the curves in order.
-        let count = 4 * BLOCK_CURVES + 17;
+        let count = 2 * BLOCK_CURVES + 17;
         let mut all = Vec::new();
         for threads in [1, 2, 3] {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -868,11 +872,78 @@ mod tests {
     }
 
     #[test]
+    fn blocks_read_and_not_yet_written_stay_within_the_bound() {
+        // At every block written, the curves read past it are at most
+        // BLOCKS_PER_THREAD blocks per thread: memory stays bounded
+        // however slow one block is against the others (counted until
+        // done instead of written, this read every block ahead).
+        struct Counting(
+            std::vec::IntoIter<Curve>,
+            std::sync::Arc<std::sync::atomic::AtomicU64>,
+            Metadata,
+        );
+        impl Iterator for Counting {
+            type Item = Result<Curve, IoError>;
+            fn next(&mut self) -> Option<Self::Item> {
+                let c = self.0.next()?;
+                self.1.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                Some(Ok(c))
+            }
+        }
+        impl CurveReader for Counting {
+            fn metadata(&self) -> &Metadata {
+                &self.2
+            }
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let blocks = 8;
+        let read = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let meta = Metadata::new(Format::Json);
+        let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec![]);
+        // The first block's curves ten times as long: it takes longer than
+        // the others, which are done while it runs and wait to be written.
+        let mut curves = short_curves(blocks * BLOCK_CURVES, &[]);
+        for c in &mut curves[..BLOCK_CURVES] {
+            let p = c.points.clone();
+            c.points = (0..30)
+                .map(|i| p[i % 3] + DVec3::new(0.0, 0.0, 0.3 * (i / 3) as f64))
+                .collect();
+        }
+        let mut reader = Counting(curves.into_iter(), read.clone(), meta);
+        let mut writer = CodecWriter::in_memory(&header);
+        let mut worst = 0u64;
+        let mut calls = 0;
+        pool.install(|| {
+            compress_blocks(
+                &mut reader,
+                Path::new("in.json"),
+                &mut writer,
+                &header,
+                None,
+                &mut |written| {
+                    calls += 1;
+                    let now = read.load(std::sync::atomic::Ordering::Relaxed);
+                    worst = worst.max(now - written);
+                },
+            )
+        })
+        .unwrap();
+        assert_eq!(calls, blocks);
+        let bound = (BLOCKS_PER_THREAD * 2 * BLOCK_CURVES) as u64;
+        assert!(worst <= bound, "{worst} curves read ahead, bound {bound}");
+        // (And it does read ahead: blocks are coded while others are read.)
+        assert!(worst >= BLOCK_CURVES as u64, "{worst}");
+    }
+
+    #[test]
     fn the_first_failing_block_in_order_is_reported() {
-        // Bad curves in blocks 1 and 3: whichever finishes first, the
+        // Bad curves in blocks 1 and 2: whichever finishes first, the
         // error is block 1's (a curve of it, the file named).
         let first_bad = BLOCK_CURVES + 5;
-        let curves = short_curves(4 * BLOCK_CURVES, &[first_bad, 3 * BLOCK_CURVES + 2]);
+        let curves = short_curves(3 * BLOCK_CURVES, &[first_bad, 2 * BLOCK_CURVES + 2]);
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
