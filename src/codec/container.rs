@@ -630,8 +630,13 @@ impl BlockBytes {
     /// }
     /// ```
     pub fn verify(&self, params: &CodecParams) -> Result<(), (usize, String)> {
-        let back = decode_block(&self.geometry, self.curves as usize, params)
-            .map_err(|e| (0, format!("the block would not decode: {e}")))?;
+        let back =
+            decode_block(&self.geometry, self.curves as usize, params).map_err(|e| match e {
+                super::DecodeError::Curve { curve, why } => {
+                    (curve, format!("the block would not decode: {why}"))
+                }
+                e => (0, format!("the block would not decode: {e}")),
+            })?;
         for (k, (b, &e)) in back.iter().zip(&self.empty).enumerate() {
             if b.is_empty() != e {
                 return Err((k, "the curve would not decode".into()));
@@ -745,6 +750,22 @@ pub fn encode_block_bytes_on(
                     c.points.len()
                 ),
             ));
+        }
+    }
+    // A finite point beyond what the output formats store (float32) would
+    // not decode (`verify` finds it, but only as the block's): refused
+    // here, naming the curve and the point. (Points that are not finite
+    // are the encoder's to refuse.)
+    for (k, c) in curves.iter().enumerate() {
+        if c.points.iter().all(|&p| crate::io::fits_f32(p)) {
+            continue;
+        }
+        for (i, &p) in c.points.iter().enumerate() {
+            if p.is_finite() {
+                if let Some(why) = crate::io::point_problem(p) {
+                    return Err((k, format!("point {i}: {why}")));
+                }
+            }
         }
     }
     let pts: Vec<&[DVec3]> = curves.iter().map(|c| c.points).collect();

@@ -941,7 +941,7 @@ mod tests {
     #[test]
     fn the_first_failing_block_in_order_is_reported() {
         // Bad curves in blocks 1 and 2: whichever finishes first, the
-        // error is block 1's (a curve of it, the file named).
+        // error names block 1's (and the file, the point, the reason).
         let first_bad = BLOCK_CURVES + 5;
         let curves = short_curves(3 * BLOCK_CURVES, &[first_bad, 2 * BLOCK_CURVES + 2]);
         for threads in [1, 2] {
@@ -950,9 +950,10 @@ mod tests {
                 .build()
                 .unwrap();
             let e = pool.install(|| compressed(curves.clone())).unwrap_err();
-            let block = e.curve.map(|c| c as usize / BLOCK_CURVES);
-            assert_eq!(block, Some(first_bad / BLOCK_CURVES), "{e}");
-            assert!(e.to_string().contains("in.json"), "{e}");
+            assert_eq!(e.curve, Some(first_bad as u64), "{e}");
+            let text = e.to_string();
+            assert!(text.contains("in.json") && text.contains("point 0"), "{e}");
+            assert!(text.contains("beyond the float32 range"), "{e}");
         }
         // A reader that fails in block 2, after a bad curve in block 0: the
         // bad curve is reported; with only the reader's failure, that.
@@ -974,7 +975,7 @@ mod tests {
         }
         let meta = Metadata::new(Format::Json);
         let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec![]);
-        for (bad, want) in [(vec![7usize], Some(0)), (vec![], None)] {
+        for (bad, want) in [(vec![7usize], Some(7)), (vec![], None)] {
             let curves = short_curves(3 * BLOCK_CURVES, &bad);
             let mut writer = CodecWriter::in_memory(&header);
             let e = compress_blocks(
@@ -986,7 +987,7 @@ mod tests {
                 &mut |_| {},
             )
             .unwrap_err();
-            assert_eq!(e.curve.map(|c| c as usize / BLOCK_CURVES), want, "{e}");
+            assert_eq!(e.curve, want, "{e}");
             if want.is_none() {
                 assert!(e.to_string().contains("truncated"), "{e}");
             }
