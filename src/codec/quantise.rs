@@ -283,11 +283,11 @@ fn lattice_near_segment(
 ) {
     let d = b - a;
     let dd = d.length_squared();
-    if dd > BOX_RADII * BOX_RADII * r2 {
-        return lattice_near_long_segment(a, b, half, r2, f);
-    }
     let inv = if dd > 0.0 { 1.0 / dd } else { 0.0 };
     let r = r2.sqrt();
+    if dd > BOX_RADII * BOX_RADII * r2 {
+        return lattice_near_long_segment(a, d, inv, half, r2, f);
+    }
     let inv_half = 1.0 / half;
     // (Integer floors and ceilings: the libm calls were a tenth of the
     // slide.)
@@ -328,23 +328,22 @@ fn lattice_near_segment(
 /// searches.
 const BOX_RADII: f64 = 6.0;
 
-/// [`lattice_near_segment`] for a segment long against the radius
-/// (many radii: most of its box is far from it): plane by plane across the segment's longest axis (the lattice's points
+/// [`lattice_near_segment`] for a segment `a`–`a + d` long against the
+/// radius (many radii: most of its box is far from it; `inv` is `1/|d|²`):
+/// plane by plane across the segment's longest axis (the lattice's points
 /// of one parity lie in every other plane): in a plane, such a point is in
 /// the section of the cylinder around the segment's line, an ellipse about
 /// the line's point whose extent on axis `j` is `√r2·√(1 + (dⱼ/d₀)²)`
-/// (`d` the segment's direction, `d₀` on the longest axis), or in the
-/// section of the ball at an end. Each candidate in that window is tested.
+/// (`d₀` on the longest axis), or in the section of the ball at an end.
+/// Each candidate in that window is tested.
 fn lattice_near_long_segment(
     a: glam::DVec3,
-    b: glam::DVec3,
+    d: glam::DVec3,
+    inv: f64,
     half: f64,
     r2: f64,
     mut f: impl FnMut([i64; 3], glam::DVec3),
 ) {
-    let d = b - a;
-    let dd = d.length_squared();
-    let inv = if dd > 0.0 { 1.0 / dd } else { 0.0 };
     let r = r2.sqrt();
     let long = d.abs().max_position();
     let (o1, o2) = ((long + 1) % 3, (long + 2) % 3);
