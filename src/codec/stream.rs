@@ -230,7 +230,7 @@ pub fn compress_blocks(
     let mut written = 0usize;
     let mut done: std::collections::BTreeMap<usize, Done> = std::collections::BTreeMap::new();
     let params = &params;
-    rayon::in_place_scope(|s| -> Result<(), IoError> {
+    rayon::in_place_scope_fifo(|s| -> Result<(), IoError> {
         loop {
             // (Counted until written, not until done: a slow block holds
             // the reading back, so that the blocks done after it, waiting
@@ -250,7 +250,9 @@ pub fn compress_blocks(
                 read += batch.len() as u64;
                 running += 1;
                 let tx = tx.clone();
-                s.spawn(move |_| {
+                // (First in, first out: the blocks are started in the order
+                // they are written in.)
+                s.spawn_fifo(move |_| {
                     let ins: Vec<CurveIn> = batch
                         .iter()
                         .map(|c| CurveIn {
@@ -260,11 +262,15 @@ pub fn compress_blocks(
                             curve_data: &c.curve_data,
                         })
                         .collect();
-                    let result =
+                    // A panic would leave this thread waiting for the
+                    // block's result: it becomes the block's error.
+                    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                         encode_block_bytes_on(&ins, params, n_cd, n_pd, checker).map(|block| {
                             let verified = block.verify(params);
                             (block, verified)
-                        });
+                        })
+                    }))
+                    .unwrap_or_else(|_| Err((0, "internal error: the encoder panicked".into())));
                     // (The receiver outlives every task of the scope.)
                     let _ = tx.send((index, result));
                 });
@@ -487,9 +493,19 @@ pub fn decompress_range(
                 match reader.read_block_bytes(wanted[spawned]) {
                     Ok(raw) => {
                         let (sender, k) = (sender.clone(), spawned);
+                        let path = &path;
                         s.spawn_fifo(move |_| {
+                            // A panic would leave this thread waiting for
+                            // the block: it becomes the block's error.
+                            let decoded =
+                                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                                    decode(raw)
+                                }))
+                                .unwrap_or_else(|_| {
+                                    Err(IoError::new(path, "internal error: the decoder panicked"))
+                                });
                             // The receiver is gone only after an error.
-                            let _ = sender.send((k, decode(raw)));
+                            let _ = sender.send((k, decoded));
                         });
                         spawned += 1;
                     }
@@ -936,6 +952,48 @@ mod tests {
         assert!(worst <= bound, "{worst} curves read ahead, bound {bound}");
         // (And it does read ahead: blocks are coded while others are read.)
         assert!(worst >= BLOCK_CURVES as u64, "{worst}");
+    }
+
+    #[test]
+    fn a_panicking_block_is_an_error_not_a_hang() {
+        // A checker that panics (a backend's bug): the block's task ends
+        // with an error the writing thread reports, instead of leaving it
+        // waiting for the block forever.
+        struct Panics;
+        impl crate::codec::ArcChecker for Panics {
+            fn open(
+                &self,
+                _: &[DVec3],
+            ) -> Result<Box<dyn crate::codec::ArcCheckBlock + '_>, String> {
+                panic!("a checker's bug");
+            }
+        }
+        let meta = Metadata::new(Format::Json);
+        let header = CodecHeader::new(0.01, SourceMeta::from_metadata(&meta, None), vec![]);
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut writer = CodecWriter::in_memory(&header);
+            let e = pool
+                .install(|| {
+                    compress_blocks(
+                        &mut crate::io::VecReader::new(
+                            meta.clone(),
+                            short_curves(BLOCK_CURVES + 9, &[]),
+                        ),
+                        Path::new("in.json"),
+                        &mut writer,
+                        &header,
+                        Some(&Panics),
+                        &mut |_| {},
+                    )
+                })
+                .unwrap_err();
+            assert!(e.to_string().contains("panicked"), "{e}");
+            assert_eq!(e.curve, Some(0), "{e}");
+        }
     }
 
     #[test]
