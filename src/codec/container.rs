@@ -752,27 +752,14 @@ pub fn encode_block_bytes_on(
             ));
         }
     }
-    // A finite point beyond what the output formats store (float32) would
-    // not decode (`verify` finds it, but only as the block's): refused
-    // here, naming the curve and the point. (Points that are not finite
-    // are the encoder's to refuse.)
-    for (k, c) in curves.iter().enumerate() {
-        if c.points.iter().all(|&p| crate::io::fits_f32(p)) {
-            continue;
-        }
-        for (i, &p) in c.points.iter().enumerate() {
-            if p.is_finite() {
-                if let Some(why) = crate::io::point_problem(p) {
-                    return Err((k, format!("point {i}: {why}")));
-                }
-            }
-        }
-    }
     let pts: Vec<&[DVec3]> = curves.iter().map(|c| c.points).collect();
     let encoded =
         super::encode_block_on(&pts, params, n_point_data > 0, checker).map_err(|e| match e {
             super::EncodeError::NonFinite { curve, point } => {
                 (curve, format!("point {point} is not finite"))
+            }
+            super::EncodeError::BeyondFloat32 { curve, point, why } => {
+                (curve, format!("point {point}: {why}"))
             }
             e => (0, e.to_string()),
         })?;

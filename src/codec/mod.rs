@@ -300,6 +300,17 @@ pub enum EncodeError {
         /// Index of the point in the curve.
         point: usize,
     },
+    #[error("curve {curve}: point {point}: {why}")]
+    /// A point is finite but beyond what the output formats store
+    /// (float32): it would not decode.
+    BeyondFloat32 {
+        /// Index of the curve in the block.
+        curve: usize,
+        /// Index of the point in the curve.
+        point: usize,
+        /// Which coordinate, and its value ([`crate::io::point_problem`]).
+        why: String,
+    },
     #[error("tolerance {0} is not a positive finite number")]
     /// The tolerance is not a positive finite number.
     BadTolerance(f64),
@@ -2393,9 +2404,20 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     if !(params.tolerance.is_finite() && params.tolerance > 0.0) {
         return Err(EncodeError::BadTolerance(params.tolerance));
     }
+    // Every point finite and within float32's range (the output formats'),
+    // the first that is not named.
     for (c, pts) in curves.iter().enumerate() {
-        if let Some(k) = pts.as_ref().iter().position(|p| !p.is_finite()) {
-            return Err(EncodeError::NonFinite { curve: c, point: k });
+        if let Some(k) = pts.as_ref().iter().position(|&p| !crate::io::fits_f32(p)) {
+            let p = pts.as_ref()[k];
+            return Err(if p.is_finite() {
+                EncodeError::BeyondFloat32 {
+                    curve: c,
+                    point: k,
+                    why: crate::io::point_problem(p).unwrap_or_default(),
+                }
+            } else {
+                EncodeError::NonFinite { curve: c, point: k }
+            });
         }
     }
     // The points lattice of this block, sized by its largest coordinate

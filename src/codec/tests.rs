@@ -148,6 +148,16 @@ fn bad_input_is_an_error_not_a_panic() {
     let params = CodecParams::new(0.1);
     let e = encode_block(&[vec![DVec3::ZERO], vec![DVec3::NAN]], &params).unwrap_err();
     assert_eq!(e, EncodeError::NonFinite { curve: 1, point: 0 });
+    // Finite but beyond float32 (the output formats'): named, not coded raw
+    // into a block that would not decode.
+    let far = vec![DVec3::ZERO, DVec3::new(0.0, 1e300, 0.0)];
+    match encode_block(&[vec![DVec3::ZERO], far], &params).unwrap_err() {
+        EncodeError::BeyondFloat32 { curve, point, why } => {
+            assert_eq!((curve, point), (1, 1));
+            assert!(why.contains("beyond the float32 range"), "{why}");
+        }
+        e => panic!("{e}"),
+    }
     assert!(encode_block::<Vec<DVec3>>(&[], &CodecParams::new(0.0)).is_err());
     assert!(encode_block::<Vec<DVec3>>(&[], &CodecParams::new(f64::NAN)).is_err());
 }
