@@ -215,11 +215,9 @@ pub fn compress_blocks(
     // `BLOCKS_PER_THREAD` per thread are read and not yet written (memory
     // bound: about 5 MB each).
     let unwritten_limit = BLOCKS_PER_THREAD * rayon::current_num_threads().max(1);
-    type Done = (
-        usize,
-        Result<(BlockBytes, Result<(), (usize, String)>), (usize, String)>,
-    );
-    let (tx, rx) = std::sync::mpsc::channel::<Done>();
+    // A block's result: the block and its verification, or its error.
+    type Done = Result<(BlockBytes, Result<(), (usize, String)>), (usize, String)>;
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, Done)>();
     // Each block's curve count, first curve and point count, by its index.
     let mut spans: Vec<(u64, u64, u64)> = Vec::new();
     let mut read = 0u64;
@@ -283,10 +281,10 @@ pub fn compress_blocks(
             }
             let (index, result) = receive(&rx);
             running -= 1;
-            done.insert(index, (index, result));
+            done.insert(index, result);
             // Written in order; the first failure in order is the one
             // reported (the tasks still running end with the scope).
-            while let Some((_, result)) = done.remove(&written) {
+            while let Some(result) = done.remove(&written) {
                 let (curves, first, points) = spans[written];
                 let (block, verified) = result.map_err(|(k, why)| {
                     IoError::new(input, format!("cannot be compressed: {why}"))
