@@ -369,7 +369,7 @@ pub fn best_rotation(from: &[DVec3], to: &[DVec3]) -> Option<glam::DMat3> {
     let c2 = -2.0 * m.iter().flatten().map(|x| x * x).sum::<f64>();
     let det_m = sxx * (syy * szz - syz * szy) - sxy * (syx * szz - syz * szx)
         + sxz * (syx * szy - syy * szx);
-    let (c1, c0) = (-8.0 * det_m, adjugate4(&n).1);
+    let (c1, c0) = (-8.0 * det_m, det4(&n));
     let mut lambda = e0;
     for _ in 0..30 {
         let l2 = lambda * lambda;
@@ -428,25 +428,48 @@ pub fn best_rotation(from: &[DVec3], to: &[DVec3]) -> Option<glam::DMat3> {
     ))
 }
 
+/// The 2 × 2 minors of a 4 × 4 matrix's top row pair (`s`) and bottom row
+/// pair (`c`), and its determinant from them (Laplace expansion by
+/// complementary minors).
+#[inline]
+fn minors4(a: &[[f64; 4]; 4]) -> ([f64; 6], [f64; 6], f64) {
+    let [[a00, a01, a02, a03], [a10, a11, a12, a13], [a20, a21, a22, a23], [a30, a31, a32, a33]] =
+        *a;
+    let s = [
+        a00 * a11 - a10 * a01,
+        a00 * a12 - a10 * a02,
+        a00 * a13 - a10 * a03,
+        a01 * a12 - a11 * a02,
+        a01 * a13 - a11 * a03,
+        a02 * a13 - a12 * a03,
+    ];
+    let c = [
+        a20 * a31 - a30 * a21,
+        a20 * a32 - a30 * a22,
+        a20 * a33 - a30 * a23,
+        a21 * a32 - a31 * a22,
+        a21 * a33 - a31 * a23,
+        a22 * a33 - a32 * a23,
+    ];
+    let det = s[0] * c[5] - s[1] * c[4] + s[2] * c[3] + s[3] * c[2] - s[4] * c[1] + s[5] * c[0];
+    (s, c, det)
+}
+
+/// The determinant of a 4 × 4 matrix, as [`adjugate4`] gives it (the same
+/// operations, so the same bits) without the adjugate: the characteristic
+/// polynomial needs only this, and the adjugate's sixteen cofactors were a
+/// tenth of decoding the hair.
+fn det4(a: &[[f64; 4]; 4]) -> f64 {
+    minors4(a).2
+}
+
 /// The adjugate of a 4 × 4 matrix and its determinant, from the 2 × 2
 /// minors of its top and bottom row pairs (Laplace expansion by
 /// complementary minors).
 fn adjugate4(a: &[[f64; 4]; 4]) -> ([[f64; 4]; 4], f64) {
     let [[a00, a01, a02, a03], [a10, a11, a12, a13], [a20, a21, a22, a23], [a30, a31, a32, a33]] =
         *a;
-    let s0 = a00 * a11 - a10 * a01;
-    let s1 = a00 * a12 - a10 * a02;
-    let s2 = a00 * a13 - a10 * a03;
-    let s3 = a01 * a12 - a11 * a02;
-    let s4 = a01 * a13 - a11 * a03;
-    let s5 = a02 * a13 - a12 * a03;
-    let c5 = a22 * a33 - a32 * a23;
-    let c4 = a21 * a33 - a31 * a23;
-    let c3 = a21 * a32 - a31 * a22;
-    let c2 = a20 * a33 - a30 * a23;
-    let c1 = a20 * a32 - a30 * a22;
-    let c0 = a20 * a31 - a30 * a21;
-    let det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0;
+    let ([s0, s1, s2, s3, s4, s5], [c0, c1, c2, c3, c4, c5], det) = minors4(a);
     let adj = [
         [
             a11 * c5 - a12 * c4 + a13 * c3,
