@@ -658,6 +658,35 @@ mod tests {
         assert!((mid - DVec3::new(1.0, 0.2, 0.0)).length() < 1e-12);
     }
 
+    /// `det4` is `adjugate4`'s determinant bit for bit (the decoder's
+    /// screw prediction depends on it), and the adjugate is the inverse
+    /// times the determinant.
+    #[test]
+    fn det4_is_the_adjugates_determinant_bit_for_bit() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 20.0 - 10.0
+        };
+        for _ in 0..2000 {
+            let a: [[f64; 4]; 4] = std::array::from_fn(|_| std::array::from_fn(|_| next()));
+            let (adj, det) = adjugate4(&a);
+            assert_eq!(det4(&a).to_bits(), det.to_bits());
+            // A · adj(A) = det(A) · I.
+            for r in 0..4 {
+                for c in 0..4 {
+                    let v: f64 = (0..4).map(|k| a[r][k] * adj[k][c]).sum();
+                    let want = if r == c { det } else { 0.0 };
+                    // (Entries up to 10, cofactors up to 6·10³: rounding
+                    // of order 10⁻¹¹.)
+                    assert!((v - want).abs() <= 1e-8, "{v} {want}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn best_rotation_recovers_a_rotation_from_noisy_pairs() {
         use rand::{Rng, SeedableRng};
