@@ -428,29 +428,26 @@ pub fn best_rotation(from: &[DVec3], to: &[DVec3]) -> Option<glam::DMat3> {
     ))
 }
 
+/// The 2 × 2 minors of the rows `x`, `y` in columns (0 1), (0 2), (0 3),
+/// (1 2), (1 3), (2 3).
+#[inline(always)]
+fn minors2(x: [f64; 4], y: [f64; 4]) -> [f64; 6] {
+    [
+        x[0] * y[1] - y[0] * x[1],
+        x[0] * y[2] - y[0] * x[2],
+        x[0] * y[3] - y[0] * x[3],
+        x[1] * y[2] - y[1] * x[2],
+        x[1] * y[3] - y[1] * x[3],
+        x[2] * y[3] - y[2] * x[3],
+    ]
+}
+
 /// The 2 × 2 minors of a 4 × 4 matrix's top row pair (`s`) and bottom row
 /// pair (`c`), and its determinant from them (Laplace expansion by
 /// complementary minors).
 #[inline]
 fn minors4(a: &[[f64; 4]; 4]) -> ([f64; 6], [f64; 6], f64) {
-    let [[a00, a01, a02, a03], [a10, a11, a12, a13], [a20, a21, a22, a23], [a30, a31, a32, a33]] =
-        *a;
-    let s = [
-        a00 * a11 - a10 * a01,
-        a00 * a12 - a10 * a02,
-        a00 * a13 - a10 * a03,
-        a01 * a12 - a11 * a02,
-        a01 * a13 - a11 * a03,
-        a02 * a13 - a12 * a03,
-    ];
-    let c = [
-        a20 * a31 - a30 * a21,
-        a20 * a32 - a30 * a22,
-        a20 * a33 - a30 * a23,
-        a21 * a32 - a31 * a22,
-        a21 * a33 - a31 * a23,
-        a22 * a33 - a32 * a23,
-    ];
+    let (s, c) = (minors2(a[0], a[1]), minors2(a[2], a[3]));
     let det = s[0] * c[5] - s[1] * c[4] + s[2] * c[3] + s[3] * c[2] - s[4] * c[1] + s[5] * c[0];
     (s, c, det)
 }
@@ -663,15 +660,11 @@ mod tests {
     /// times the determinant.
     #[test]
     fn det4_is_the_adjugates_determinant_bit_for_bit() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 20.0 - 10.0
-        };
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
         for _ in 0..2000 {
-            let a: [[f64; 4]; 4] = std::array::from_fn(|_| std::array::from_fn(|_| next()));
+            let a: [[f64; 4]; 4] =
+                std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-10.0..10.0)));
             let (adj, det) = adjugate4(&a);
             assert_eq!(det4(&a).to_bits(), det.to_bits());
             // A · adj(A) = det(A) · I.
