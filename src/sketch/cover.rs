@@ -528,12 +528,12 @@ fn fit_at(
     // that loops has many — so one start is not enough).
     // Implausible candidates last (they are grown only where nothing else
     // is left).
-    candidates.sort_by(|x, y| {
-        plausible(&y.2)
-            .cmp(&plausible(&x.2))
-            .then(y.0.cmp(&x.0))
-            .then(x.1.total_cmp(&y.1))
-    });
+    // (Each candidate's plausibility once: it measures every vertex.)
+    let mut candidates: Vec<(bool, (usize, f64, Piece))> = candidates
+        .into_iter()
+        .map(|c| (plausible(&c.2), c))
+        .collect();
+    candidates.sort_by(|(px, x), (py, y)| py.cmp(px).then(y.0.cmp(&x.0)).then(x.1.total_cmp(&y.1)));
     let obj = Objective {
         alpha_t: 0.0,
         emax: opts.emax,
@@ -542,7 +542,7 @@ fn fit_at(
     // is the same in any range around it (see SeedFits).
     let mut reach = candidates
         .iter()
-        .fold((s, s), |(f, l), c| (f.min(c.2.first), l.max(c.2.last)));
+        .fold((s, s), |(f, l), (_, c)| (f.min(c.2.first), l.max(c.2.last)));
     let refined = if opts.gain > COVER_GAIN {
         NOISY_REFINED_CANDIDATES
     } else {
@@ -551,7 +551,7 @@ fn fit_at(
     let grown: Vec<Piece> = candidates
         .into_par_iter()
         .take(refined)
-        .map(|(_, _, mut piece)| {
+        .map(|(_, (_, _, mut piece))| {
             for _ in 0..GROW_ROUNDS {
                 if piece.ts.len() >= 3 {
                     refine(points, &mut piece, &obj, opts.gain, GROW_ITERATIONS);

@@ -505,11 +505,18 @@ pub fn refine_to(
                 let jac = e.param_jacobian_at(f);
                 let row: [f64; PARAMS] = std::array::from_fn(|q| -wd * f.normal.dot(jac[q]));
                 let r = wd * f.offset;
+                // The block's upper triangle only: it is symmetric (and
+                // `x·y` is `y·x` in floating point too), mirrored below.
                 for a in 0..PARAMS {
                     jtr[base + a] += row[a] * r;
-                    for b in 0..PARAMS {
+                    for b in a..PARAMS {
                         jtj[(base + a) * n + base + b] += row[a] * row[b];
                     }
+                }
+            }
+            for a in 0..PARAMS {
+                for b in 0..a {
+                    jtj[(base + a) * n + base + b] = jtj[(base + b) * n + base + a];
                 }
             }
         }
