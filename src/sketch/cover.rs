@@ -488,7 +488,7 @@ fn fit_at(
     };
     // The neighbours' fits are independent: in parallel, collected in
     // neighbour order.
-    let mut candidates: Vec<(usize, f64, Piece)> = (first_n..=last_n)
+    let candidates: Vec<(usize, f64, Piece)> = (first_n..=last_n)
         .into_par_iter()
         .filter(|&n| n != s)
         .flat_map_iter(|n| {
@@ -500,13 +500,33 @@ fn fit_at(
             let floor = 0.05 * scale2.sqrt();
             let a0 = (v.x / (alpha.cos() - 1.0)).max(floor);
             let b0 = (v.y / alpha).max(floor);
+            // The sines and cosines that do not change from one evaluation
+            // to the next, once (each evaluation then takes one `sin_cos`,
+            // of the tilt, where it took six; the same values, so the same
+            // fits).
+            let (at_0, at_alpha, at_minus_alpha) =
+                (0f64.sin_cos(), alpha.sin_cos(), (-alpha).sin_cos());
             let e = move |x: &[f64; 3]| {
                 let h = ProjectedHelix::new(x[0].abs(), x[1].abs(), x[2]);
+                let tilt = h.c.sin_cos();
                 // Along the sketch, t runs one way or the other: compare
                 // tangents up to that sign (fixed at t = 0 by T̂_H(0) = ±y).
-                let lead = h.derivative(0.0).y.signum();
-                let tangent = h.unit_tangent(alpha).unwrap_or(DVec2::ZERO) * lead;
-                BETA_D * (v - h.point(alpha * lead)).length_squared() / scale2
+                let lead = h.derivative_trig(at_0, tilt).y.signum();
+                let tangent = h
+                    .derivative_trig(at_alpha, tilt)
+                    .try_normalize()
+                    .unwrap_or(DVec2::ZERO)
+                    * lead;
+                let t = alpha * lead;
+                let at_t = if lead == 1.0 {
+                    at_alpha
+                } else if lead == -1.0 {
+                    at_minus_alpha
+                } else {
+                    t.sin_cos()
+                };
+                let p = h.point_3d_trig(t, at_t, tilt);
+                BETA_D * (v - DVec2::new(p.x, p.y)).length_squared() / scale2
                     + (1.0 - BETA_D) * (tn - tangent).length_squared()
             };
             // Several starting tilts: the two-vertex problem has several

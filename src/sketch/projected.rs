@@ -64,8 +64,18 @@ impl ProjectedHelix {
     /// assert!((DQuat::from_rotation_x(c) * prim - h.point_3d(t)).length() < 1e-14);
     /// ```
     pub fn point_3d(&self, t: f64) -> DVec3 {
-        let (st, ct) = t.sin_cos();
-        let (sc, cc) = self.c.sin_cos();
+        self.point_3d_trig(t, t.sin_cos(), self.c.sin_cos())
+    }
+
+    /// [`point_3d`](Self::point_3d) with `(sin t, cos t)` and
+    /// `(sin c, cos c)` given (the same operations, so the same bits).
+    #[inline]
+    pub(crate) fn point_3d_trig(
+        &self,
+        t: f64,
+        (st, ct): (f64, f64),
+        (sc, cc): (f64, f64),
+    ) -> DVec3 {
         DVec3::new(
             self.a * (ct - 1.0),
             self.b * t * cc - self.a * sc * st,
@@ -122,8 +132,13 @@ impl ProjectedHelix {
     /// assert_eq!(h.derivative(t), h.derivative_3d(t).truncate());
     /// ```
     pub fn derivative(&self, t: f64) -> DVec2 {
-        let (st, ct) = t.sin_cos();
-        let (sc, cc) = self.c.sin_cos();
+        self.derivative_trig(t.sin_cos(), self.c.sin_cos())
+    }
+
+    /// [`derivative`](Self::derivative) with `(sin t, cos t)` and
+    /// `(sin c, cos c)` given (the same operations, so the same bits).
+    #[inline]
+    pub(crate) fn derivative_trig(&self, (st, ct): (f64, f64), (sc, cc): (f64, f64)) -> DVec2 {
         DVec2::new(-self.a * st, self.b * cc - self.a * sc * ct)
     }
 
