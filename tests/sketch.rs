@@ -557,7 +557,6 @@ fn noisy_drawings_are_lifted_to_few_plausible_helices() {
             (*helices, r.helices.len(), ratio, r.drawn_error / sigma)
         })
         .collect();
-    eprintln!("{runs:?}");
     let exact_count = runs.iter().filter(|r| r.0 == r.1).count();
     let near_depth = runs.iter().filter(|r| (0.5..=2.0).contains(&r.2)).count();
     // Measured: 13 and 15 of these 15; 15 and 15 since a short piece
@@ -650,6 +649,34 @@ fn a_curl_taken_by_a_flat_arc_is_found_from_a_confident_seed() {
         // Every drawn vertex within a few σ (measured: 3.1–5.9).
         assert!(*drawn < 8.0, "seed {seed}: {runs:?}");
     }
+}
+
+#[test]
+fn four_curls_at_a_thousandth_of_noise_come_back_as_four_helices_of_their_depth() {
+    // Issue 22's four-helix drawing at 0.1 % noise, the benchmark's first
+    // eight seeds. Measured 2026-11-29: 8 of 8 with four helices and the
+    // depth within 2× of the exact drawing's; before slivers were absorbed
+    // ahead of the junction slides, seed 5 came back 3.7× too deep (a
+    // slide grew the sliver at the third corner into a piece across it).
+    // At least 7 of 8: the lift's outcome on about one noisy drawing in
+    // twenty is decided by last-bit rounding (see the test above).
+    use rayon::prelude::*;
+    use strandfit::synthetic::synthetic_sketch_curls;
+    let d = synthetic_sketch_curls(500, 4);
+    let exact = depth(&lift_sketch(&d, &SketchOptions::default()).unwrap());
+    let sigma = 1e-3 * polyline_length(&d);
+    let runs: Vec<(u64, usize, f64)> = (0u64..8)
+        .into_par_iter()
+        .map(|seed| {
+            let r = lift_sketch(&with_noise(&d, sigma, seed), &SketchOptions::default()).unwrap();
+            (seed, r.helices.len(), depth(&r) / exact)
+        })
+        .collect();
+    let right = runs
+        .iter()
+        .filter(|(_, n, ratio)| *n == 4 && (0.5..=2.0).contains(ratio))
+        .count();
+    assert!(right >= 7, "{right}/8 right: {runs:?}");
 }
 
 /// A stroke as a hand and a screen draw it: `d` scaled to `pixels` of
