@@ -962,17 +962,16 @@ pub(super) fn cover_probed(
         Vec::new()
     };
     out.sort_by_key(|p| p.first);
-    // Beyond the paper: junctions put where the two helices fit best,
-    // neighbours one helix fits merged, slivers absorbed; again while the
-    // number of pieces drops.
-    // Slivers first: a junction slide beside a sliver (a walk stopped a
-    // vertex or two short of a corner) grows the sliver, the slides going
-    // on while the best lies at the window's edge, into a piece across the
-    // corner that neither helix fits (measured 2026-11-29: on the
-    // benchmark's 480 drawings at 0.1 % and 0.3 % noise the count and the
-    // depth right on 394 against 389, 9 gained and 4 lost, among the gains
-    // four curls of 3.3–5.6× the exact depth brought within 2×; the 320
-    // at lower noise 311 against 312).
+    // Beyond the paper: slivers absorbed, then junctions put where the two
+    // helices fit best, neighbours one helix fits merged, slivers absorbed;
+    // again while the number of pieces drops. Slivers go first because a
+    // junction slide beside one (a walk stopped a vertex or two short of a
+    // corner) grows it, the slides going on while the best lies at the
+    // window's edge, into a piece across the corner that neither helix
+    // fits (measured 2026-11-29: on the benchmark's 480 drawings at 0.1 %
+    // and 0.3 % noise the count and the depth right on 394 against 389, 9
+    // gained and 4 lost, among the gains four curls of 3.3–5.6× the exact
+    // depth brought within 2×; the 320 at lower noise 311 against 312).
     absorb(points, &mut out, opts, probes);
     for _ in 0..POST_PASSES {
         polish_junctions(points, &mut out, opts);
