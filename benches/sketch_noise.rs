@@ -6,7 +6,14 @@
 //! σ, the noise the lift estimated, the `E_max` it chose, and the time.
 //!
 //! `cargo bench --bench sketch_noise` (under `cargo test` it lifts one
-//! drawing, to keep the harness compiling and running).
+//! drawing, to keep the harness compiling and running). After the rows, a
+//! summary per drawing and noise level: the lifts with the right helix
+//! count, with the depth within 2× of the exact drawing's, with both, and
+//! the mean time. Two runs' rows are compared lift by lift with
+//! `python3 benches/sketch_flips.py BEFORE AFTER` (the lift's outcome on
+//! about one noisy drawing in twenty is decided by last-bit rounding, so
+//! a change is judged by its flips each way over many seeds:
+//! `SKETCH_SEEDS=48 SKETCH_NOISES=1e-3,3e-3`).
 
 use std::time::Instant;
 
@@ -73,11 +80,22 @@ fn main() {
     if let (true, Ok(only)) = (full, std::env::var("SKETCH_DRAWING")) {
         drawings.retain(|(name, _)| *name == only);
     }
+    // (drawing, noise, lifts, right count, depth within 2×, both, ms).
+    let mut summary: Vec<(String, f64, usize, usize, usize, usize, f64)> = Vec::new();
     for (name, d) in &drawings {
+        let helices = if name == "two coils" {
+            2
+        } else {
+            name.split(' ')
+                .next()
+                .and_then(|k| k.parse().ok())
+                .unwrap_or(0)
+        };
         let l = length(d);
         let exact = lift_sketch(d, &SketchOptions::default()).expect("exact drawing");
         let exact_depth = depth(&exact);
         for &noise in noises {
+            let mut row = (name.clone(), noise, 0, 0, 0, 0, 0.0);
             // One seed only: SKETCH_SEED=7.
             let only_seed: Option<u64> = std::env::var("SKETCH_SEED")
                 .ok()
@@ -90,6 +108,15 @@ fn main() {
                 let t = Instant::now();
                 let r = lift_sketch(&input, &SketchOptions::default()).expect("noisy drawing");
                 let ms = t.elapsed().as_secs_f64() * 1e3;
+                let (count, within) = (
+                    r.helices.len() == helices,
+                    (0.5..=2.0).contains(&(depth(&r) / exact_depth)),
+                );
+                row.2 += 1;
+                row.3 += count as usize;
+                row.4 += within as usize;
+                row.5 += (count && within) as usize;
+                row.6 += ms;
                 println!(
                     "| {name} | {noise:.0e} | {seed} | {} | {:.2} | {:.1} | {:.1e} | {:.1e} | {ms:.0} |",
                     r.helices.len(),
@@ -110,6 +137,16 @@ fn main() {
                     }
                 }
             }
+            summary.push(row);
+        }
+    }
+    println!();
+    println!("| drawing | noise σ/L | lifts | right count | depth within 2× | both | mean ms |");
+    println!("|---|---|---|---|---|---|---|");
+    for (name, noise, n, count, within, both, ms) in summary {
+        if n > 0 {
+            let mean = ms / n as f64;
+            println!("| {name} | {noise:.0e} | {n} | {count} | {within} | {both} | {mean:.0} |");
         }
     }
 }
