@@ -813,6 +813,7 @@ impl AlongStep {
     /// The predicted halved residual `(d_m − b)/2` on [`AlongStep::axis`],
     /// given the residual's other two coordinates (`d[axis]` is not read)
     /// and its parity `b`.
+    #[inline(always)]
     pub fn half_prediction(&self, d: [i64; 3], b: i64) -> i64 {
         let m = self.axis;
         let sm = self.step[m];
