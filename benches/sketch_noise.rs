@@ -46,11 +46,26 @@ fn depth(r: &SketchLift) -> f64 {
     z.clone().fold(f64::MIN, f64::max) - z.fold(f64::MAX, f64::min)
 }
 
+/// One drawing's lifts at one noise level, for the summary.
+#[derive(Default)]
+struct Tally {
+    lifts: usize,
+    /// With the drawing's helix count.
+    count: usize,
+    /// With the depth within 2× of the exact drawing's.
+    within: usize,
+    /// With both.
+    both: usize,
+    ms: f64,
+}
+
 fn main() {
     let full = std::env::args().any(|a| a == "--bench");
-    let mut drawings: Vec<(String, Vec<DVec2>)> = vec![("two coils".into(), synthetic_sketch(500))];
+    // (name, helices drawn, vertices).
+    let mut drawings: Vec<(String, usize, Vec<DVec2>)> =
+        vec![("two coils".into(), 2, synthetic_sketch(500))];
     for k in 1..=4 {
-        drawings.push((format!("{k} curls"), synthetic_sketch_curls(500, k)));
+        drawings.push((format!("{k} curls"), k, synthetic_sketch_curls(500, k)));
     }
     let noises: &[f64] = if full {
         &[0.0, 1e-5, 1e-4, 3e-4, 1e-3, 2e-3, 3e-3]
@@ -78,24 +93,15 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|");
     // One drawing only: SKETCH_DRAWING="3 curls".
     if let (true, Ok(only)) = (full, std::env::var("SKETCH_DRAWING")) {
-        drawings.retain(|(name, _)| *name == only);
+        drawings.retain(|(name, ..)| *name == only);
     }
-    // (drawing, noise, lifts, right count, depth within 2×, both, ms).
-    let mut summary: Vec<(String, f64, usize, usize, usize, usize, f64)> = Vec::new();
-    for (name, d) in &drawings {
-        let helices = if name == "two coils" {
-            2
-        } else {
-            name.split(' ')
-                .next()
-                .and_then(|k| k.parse().ok())
-                .unwrap_or(0)
-        };
+    let mut summary: Vec<(&str, f64, Tally)> = Vec::new();
+    for (name, helices, d) in &drawings {
         let l = length(d);
         let exact = lift_sketch(d, &SketchOptions::default()).expect("exact drawing");
         let exact_depth = depth(&exact);
         for &noise in noises {
-            let mut row = (name.clone(), noise, 0, 0, 0, 0, 0.0);
+            let mut tally = Tally::default();
             // One seed only: SKETCH_SEED=7.
             let only_seed: Option<u64> = std::env::var("SKETCH_SEED")
                 .ok()
@@ -108,15 +114,13 @@ fn main() {
                 let t = Instant::now();
                 let r = lift_sketch(&input, &SketchOptions::default()).expect("noisy drawing");
                 let ms = t.elapsed().as_secs_f64() * 1e3;
-                let (count, within) = (
-                    r.helices.len() == helices,
-                    (0.5..=2.0).contains(&(depth(&r) / exact_depth)),
-                );
-                row.2 += 1;
-                row.3 += count as usize;
-                row.4 += within as usize;
-                row.5 += (count && within) as usize;
-                row.6 += ms;
+                let count = r.helices.len() == *helices;
+                let within = (0.5..=2.0).contains(&(depth(&r) / exact_depth));
+                tally.lifts += 1;
+                tally.count += count as usize;
+                tally.within += within as usize;
+                tally.both += (count && within) as usize;
+                tally.ms += ms;
                 println!(
                     "| {name} | {noise:.0e} | {seed} | {} | {:.2} | {:.1} | {:.1e} | {:.1e} | {ms:.0} |",
                     r.helices.len(),
@@ -137,16 +141,17 @@ fn main() {
                     }
                 }
             }
-            summary.push(row);
+            summary.push((name, noise, tally));
         }
     }
     println!();
     println!("| drawing | noise σ/L | lifts | right count | depth within 2× | both | mean ms |");
     println!("|---|---|---|---|---|---|---|");
-    for (name, noise, n, count, within, both, ms) in summary {
-        if n > 0 {
-            let mean = ms / n as f64;
-            println!("| {name} | {noise:.0e} | {n} | {count} | {within} | {both} | {mean:.0} |");
-        }
+    for (name, noise, t) in summary.iter().filter(|(.., t)| t.lifts > 0) {
+        let mean = t.ms / t.lifts as f64;
+        println!(
+            "| {name} | {noise:.0e} | {} | {} | {} | {} | {mean:.0} |",
+            t.lifts, t.count, t.within, t.both
+        );
     }
 }
