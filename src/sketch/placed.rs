@@ -377,6 +377,12 @@ pub struct Foot {
     pub cos_t: f64,
 }
 
+/// Newton iterations of [`Evaluator::project`] before it stops where it is.
+const MAX_NEWTON: usize = 30;
+
+/// Searches [`Evaluator::project_all`] interleaves.
+const LANES: usize = 2;
+
 /// A placed helix with `R S e_x`, `R S e_y`, `sin c` and `cos c`
 /// precomputed: `P`, `P′` and `P″` at one `t` then cost one `sin_cos(t)`
 /// (the closest-point searches and least-squares rows of every fit run
@@ -492,40 +498,131 @@ impl Evaluator {
     /// ```
     pub fn project(&self, v: DVec2, guess: f64) -> Foot {
         let mut t = guess;
-        for _ in 0..30 {
-            let (st, ct) = t.sin_cos();
-            let (p, d1, d2) = self.jet_trig(t, st, ct);
-            let d = p - v;
-            let speed2 = d1.length_squared();
-            if !(speed2 > 0.0) {
-                break;
+        for _ in 0..MAX_NEWTON {
+            match self.newton_step(v, t, guess) {
+                Ok(next) => t = next,
+                Err(foot) => return foot,
             }
-            let g = d.dot(d1);
-            let gp = speed2 + d.dot(d2);
-            let newton = gp > 0.25 * speed2;
-            let step = if newton { g / gp } else { g / speed2 };
-            let step = step.clamp(-0.5, 0.5);
-            let next = t - step;
-            if !next.is_finite() {
-                return self.foot(v, guess);
-            }
-            // A Newton step converges quadratically: after one of 1e-9 the
-            // error is of order 1e-18 (and below 1e-15 the step is
-            // rounding noise, which would keep the loop going).
-            let tol = if newton { 1e-9 } else { 1e-15 };
-            if step.abs() <= tol * (1.0 + next.abs()) {
-                let normal = d1.perp().normalize_or_zero();
-                return Foot {
-                    t: next,
-                    offset: (v - p).dot(normal),
-                    normal,
-                    sin_t: st,
-                    cos_t: ct,
-                };
-            }
-            t = next;
         }
         self.foot(v, t)
+    }
+
+    /// One iteration of [`project`](Self::project) from `t`: the next
+    /// parameter, or the foot where the search ends.
+    #[inline(always)]
+    fn newton_step(&self, v: DVec2, t: f64, guess: f64) -> Result<f64, Foot> {
+        let (st, ct) = t.sin_cos();
+        let (p, d1, d2) = self.jet_trig(t, st, ct);
+        let d = p - v;
+        let speed2 = d1.length_squared();
+        if !(speed2 > 0.0) {
+            return Err(self.foot(v, t));
+        }
+        let g = d.dot(d1);
+        let gp = speed2 + d.dot(d2);
+        let newton = gp > 0.25 * speed2;
+        let step = if newton { g / gp } else { g / speed2 };
+        let step = step.clamp(-0.5, 0.5);
+        let next = t - step;
+        if !next.is_finite() {
+            return Err(self.foot(v, guess));
+        }
+        // A Newton step converges quadratically: after one of 1e-9 the
+        // error is of order 1e-18 (and below 1e-15 the step is rounding
+        // noise, which would keep the loop going).
+        let tol = if newton { 1e-9 } else { 1e-15 };
+        if step.abs() <= tol * (1.0 + next.abs()) {
+            let normal = d1.perp().normalize_or_zero();
+            return Err(Foot {
+                t: next,
+                offset: (v - p).dot(normal),
+                normal,
+                sin_t: st,
+                cos_t: ct,
+            });
+        }
+        Ok(next)
+    }
+
+    /// [`project`](Self::project) of every `points[k]` from `ts[k]`,
+    /// which becomes the foot's parameter: the same feet, bit for bit, as
+    /// one call per vertex.
+    ///
+    /// Why: each search is a chain of dependent steps (a `sin_cos`, then a
+    /// division), so one vertex at a time leaves the core waiting on
+    /// latency. Here [`LANES`] searches advance in turn, a vertex joining
+    /// as another finishes, and their chains overlap.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use strandfit::sketch::PlacedHelix;
+    ///
+    /// let h = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], true);
+    /// let e = h.evaluator();
+    /// let points: Vec<DVec2> = (0..11).map(|k| DVec2::new(0.1 * k as f64, 0.05)).collect();
+    /// let mut ts: Vec<f64> = (0..11).map(|k| 0.2 * k as f64 - 1.0).collect();
+    /// let one_by_one: Vec<_> = points.iter().zip(&ts).map(|(&v, &t)| e.project(v, t)).collect();
+    /// assert_eq!(e.project_all(&points, &mut ts), one_by_one);
+    /// assert!(ts.iter().zip(&one_by_one).all(|(t, f)| *t == f.t));
+    /// ```
+    pub fn project_all(&self, points: &[DVec2], ts: &mut [f64]) -> Vec<Foot> {
+        assert_eq!(points.len(), ts.len(), "one guess per vertex");
+        let n = ts.len();
+        let mut feet = vec![
+            Foot {
+                t: 0.0,
+                offset: 0.0,
+                normal: DVec2::ZERO,
+                sin_t: 0.0,
+                cos_t: 1.0,
+            };
+            n
+        ];
+        // Per lane: the vertex searched (n when idle), its parameter and
+        // the steps taken.
+        let mut vertex = [n; LANES];
+        let mut t = [0.0; LANES];
+        let mut steps = [0usize; LANES];
+        let mut queued = 0;
+        for lane in 0..LANES.min(n) {
+            vertex[lane] = lane;
+            t[lane] = ts[lane];
+            queued += 1;
+        }
+        let mut busy = LANES.min(n);
+        while busy > 0 {
+            for lane in 0..LANES {
+                let k = vertex[lane];
+                if k == n {
+                    continue;
+                }
+                let (v, guess) = (points[k], ts[k]);
+                let found = if steps[lane] == MAX_NEWTON {
+                    self.foot(v, t[lane])
+                } else {
+                    match self.newton_step(v, t[lane], guess) {
+                        Ok(next) => {
+                            t[lane] = next;
+                            steps[lane] += 1;
+                            continue;
+                        }
+                        Err(foot) => foot,
+                    }
+                };
+                feet[k] = found;
+                ts[k] = found.t;
+                if queued < n {
+                    vertex[lane] = queued;
+                    t[lane] = ts[queued];
+                    steps[lane] = 0;
+                    queued += 1;
+                } else {
+                    vertex[lane] = n;
+                    busy -= 1;
+                }
+            }
+        }
+        feet
     }
 
     /// See [`PlacedHelix::normal_offset`].
@@ -703,6 +800,36 @@ mod tests {
             assert!((found - t).abs() < 1e-9, "{t}: {found}");
             let (d, _) = h.normal_offset(v, found);
             assert!((d - 0.01).abs() < 1e-12);
+        }
+    }
+
+    proptest::proptest! {
+        /// The interleaved searches give each vertex the foot its own
+        /// search gives, bit for bit: converged, capped at `MAX_NEWTON`
+        /// steps, or started from a guess that overflows.
+        #[test]
+        fn projecting_all_at_once_is_projecting_one_by_one(
+            params in proptest::array::uniform6(-2.0f64..2.0),
+            reflect in proptest::bool::ANY,
+            vertices in proptest::collection::vec(
+                (-3.0f64..3.0, -3.0f64..3.0, -20.0f64..20.0, 0u8..8), 0..12),
+        ) {
+            let e = PlacedHelix::from_params(&params, reflect).evaluator();
+            let points: Vec<DVec2> = vertices.iter().map(|&(x, y, ..)| DVec2::new(x, y)).collect();
+            // One guess in eight far out, where the search may not end.
+            let mut ts: Vec<f64> = vertices
+                .iter()
+                .map(|&(.., t, far)| if far == 0 { t * 1e300 } else { t })
+                .collect();
+            let one_by_one: Vec<Foot> = points.iter().zip(&ts).map(|(&v, &t)| e.project(v, t)).collect();
+            let all = e.project_all(&points, &mut ts);
+            for (k, (a, b)) in all.iter().zip(&one_by_one).enumerate() {
+                // Compared as bits: NaN feet must agree too.
+                let bits = |f: &Foot| [f.t, f.offset, f.normal.x, f.normal.y, f.sin_t, f.cos_t].map(f64::to_bits);
+                proptest::prop_assert_eq!(bits(a), bits(b), "vertex {}", k);
+                proptest::prop_assert_eq!(ts[k].to_bits(), b.t.to_bits());
+            }
+            proptest::prop_assert_eq!(all.len(), points.len());
         }
     }
 }

@@ -76,16 +76,8 @@ impl Piece {
     /// assert!(piece.ts.iter().zip(&ts).all(|(a, b)| (a - b).abs() < 1e-9));
     /// ```
     pub fn reproject_feet(&mut self, points: &[DVec2]) -> Vec<Foot> {
-        let e = self.helix.evaluator();
-        self.ts
-            .iter_mut()
-            .enumerate()
-            .map(|(k, t)| {
-                let f = e.project(points[self.first + k], *t);
-                *t = f.t;
-                f
-            })
-            .collect()
+        let vertices = &points[self.first..self.first + self.ts.len()];
+        self.helix.evaluator().project_all(vertices, &mut self.ts)
     }
 
     /// Every vertex measured at its parameter.
