@@ -229,7 +229,7 @@ fn piecewise_projections_are_split_at_their_junctions() {
                     let r = lift_sketch(&sketch, &o).unwrap();
                     assert!(
                         r.max_error <= 1e-3 * r.length,
-                        "{} noise {} denoised {} n {}",
+                        "{resampling:?} seed {start} k {k}: {} noise {} denoised {} n {}",
                         r.max_error / r.length,
                         r.noise / r.length,
                         r.denoised,
@@ -756,3 +756,4 @@ fn an_emax_given_overrides_the_noise() {
     let r = lift_sketch(&d, &SketchOptions::default()).unwrap();
     assert_eq!(r.emax, 1e-3 * r.length);
 }
+
