@@ -756,4 +756,3 @@ fn an_emax_given_overrides_the_noise() {
     let r = lift_sketch(&d, &SketchOptions::default()).unwrap();
     assert_eq!(r.emax, 1e-3 * r.length);
 }
-
