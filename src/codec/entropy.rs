@@ -476,10 +476,18 @@ impl<'a> Decoder<'a> {
     #[inline]
     fn decide(&mut self, bound: u32) -> bool {
         let bit = self.code >= bound;
-        // Without a branch on the bit (as in `Bit::update`).
-        let mask = (bit as u32).wrapping_neg();
-        self.code = self.code.wrapping_sub(bound & mask);
-        self.range = (self.range.wrapping_sub(bound) & mask) | (bound & !mask);
+        // Both outcomes computed, then selected (conditional moves): the
+        // next decision waits on one compare, not on a mask built from it.
+        let (code, range) = if bit {
+            (
+                self.code.wrapping_sub(bound),
+                self.range.wrapping_sub(bound),
+            )
+        } else {
+            (self.code, bound)
+        };
+        self.code = code;
+        self.range = range;
         self.normalise();
         bit
     }

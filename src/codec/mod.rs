@@ -859,16 +859,24 @@ fn plan_residuals(
 }
 
 /// The decoder's [`put_residuals`]: points `g.len()..n` of a points curve
-/// whose start `g` holds, each `predict(points so far, k)` plus its
-/// residual.
+/// whose start `g` holds, each `predict(points so far, k, recent)` plus
+/// its residual, where `recent` is `[g[k − 2], g[k − 1]]` (`g[0]` twice at
+/// `k = 1`), kept in registers: the point just decoded, read back from
+/// `g` as a whole, waits for its stores to reach the cache (measured:
+/// about 4 % of decoding the fornix replicas).
 fn get_residuals(
     dec: &mut Decoder,
     models: &mut ResidualModels,
     along: Option<bool>,
     g: &mut Vec<[i64; 3]>,
     n: usize,
-    predict: impl Fn(&[[i64; 3]], usize) -> [i64; 3],
+    predict: impl Fn(&[[i64; 3]], usize, [[i64; 3]; 2]) -> [i64; 3],
 ) {
+    let mut recent = match g.len() {
+        0 => [[0; 3]; 2],
+        1 => [g[0]; 2],
+        l => [g[l - 2], g[l - 1]],
+    };
     let mut ctx = RESIDUAL_CONTEXTS - 1;
     let mut window = 0u64;
     // The squared step lengths in the window, step `i` at `i % WINDOW`:
@@ -880,7 +888,7 @@ fn get_residuals(
     }
     let mut before = [0i64; 3];
     for k in g.len()..n {
-        let pred = predict(g, k);
+        let pred = predict(g, k, recent);
         if along == Some(true) && k >= 2 {
             let step = predict::step_length2(g, k - 1);
             window = window.saturating_add(step);
@@ -894,23 +902,34 @@ fn get_residuals(
                 let b = dec.bit(&mut models.parity[ctx]) as i64;
                 let step = flag.then(|| AlongStep::at(g, k, pred, window));
                 let m = step.map_or_else(|| along_axis(g, k, pred), |s| s.axis());
-                let mut d = [0i64; 3];
-                for a in OTHER_AXES[m] {
+                let [o0, o1] = OTHER_AXES[m].map(|a| {
                     let v = if models.sign_after {
                         let (model, sign) = models.across(ctx, a, before[a]);
                         model.get_signed_in(dec, sign)
                     } else {
                         models.axes[ctx][a].get(dec)
                     };
-                    d[a] = v.wrapping_mul(2).wrapping_add(b);
-                }
-                let h = step.map_or(0, |s| s.half_prediction(d, b));
-                d[m] = models.along[ctx]
-                    .get_after(dec, before[m])
-                    .wrapping_add(h)
-                    .wrapping_mul(2)
-                    .wrapping_add(b);
-                d
+                    v.wrapping_mul(2).wrapping_add(b)
+                });
+                // The point assembled by selects, not by stores at the
+                // axes' indices: a whole-array read right after stores to
+                // parts of it waits for them to reach the cache (measured:
+                // about 4 % of the decoder's time).
+                let with = |along: i64| -> [i64; 3] {
+                    match m {
+                        0 => [along, o0, o1],
+                        1 => [o0, along, o1],
+                        _ => [o0, o1, along],
+                    }
+                };
+                let h = step.map_or(0, |s| s.half_prediction(with(0), b));
+                with(
+                    models.along[ctx]
+                        .get_after(dec, before[m])
+                        .wrapping_add(h)
+                        .wrapping_mul(2)
+                        .wrapping_add(b),
+                )
             }
             None => get_lattice(dec, &mut models.parity[ctx], &mut models.axes[ctx]),
         };
@@ -918,7 +937,9 @@ fn get_residuals(
         if models.sign_after {
             before = halves(d);
         }
-        g.push([0, 1, 2].map(|a| pred[a].wrapping_add(d[a])));
+        let point = [0, 1, 2].map(|a| pred[a].wrapping_add(d[a]));
+        g.push(point);
+        recent = [recent[1], point];
     }
 }
 
@@ -1035,6 +1056,16 @@ fn second_order(g: &[[i64; 3]], k: usize) -> [i64; 3] {
         [0, 1, 2].map(|a| g[k - 1][a].wrapping_mul(2).wrapping_sub(g[k - 2][a]))
     } else {
         g[k - 1]
+    }
+}
+
+/// [`second_order`] from `[g[k − 2], g[k − 1]]` (`g[0]` twice at `k = 1`).
+#[inline]
+fn second_order_of(k: usize, [before, last]: [[i64; 3]; 2]) -> [i64; 3] {
+    if k >= 2 {
+        [0, 1, 2].map(|a| last[a].wrapping_mul(2).wrapping_sub(before[a]))
+    } else {
+        last
     }
 }
 
@@ -2773,9 +2804,14 @@ pub fn decode_block(
                     let d = get_lattice(&mut dec, &mut m.parity[0], &mut m.ref_start);
                     g.push([0, 1, 2].map(|a| start[a].wrapping_add(d[a])));
                     let foot = reference::PredictionCache::default();
-                    get_residuals(&mut dec, &mut m.ref_residual, along, &mut g, n, |g, k| {
-                        res.predict_next(g, k, n, &foot)
-                    });
+                    get_residuals(
+                        &mut dec,
+                        &mut m.ref_residual,
+                        along,
+                        &mut g,
+                        n,
+                        |g, k, _| res.predict_next(g, k, n, &foot),
+                    );
                 } else {
                     let own = if dec.bit(&mut m.helix) {
                         OwnPrediction::Screw
@@ -2790,12 +2826,12 @@ pub fn decode_block(
                     // prediction inlined: a call per point was 3 % of
                     // decoding the fornix replicas).
                     if own == OwnPrediction::SecondOrder {
-                        get_residuals(&mut dec, &mut m.residual, along, &mut g, n, |g, k| {
-                            second_order(g, k)
+                        get_residuals(&mut dec, &mut m.residual, along, &mut g, n, |_, k, r| {
+                            second_order_of(k, r)
                         });
                     } else {
                         let screw = screw(params.model);
-                        get_residuals(&mut dec, &mut m.residual, along, &mut g, n, |g, k| {
+                        get_residuals(&mut dec, &mut m.residual, along, &mut g, n, |g, k, _| {
                             own_prediction(g, k, own, screw)
                         });
                     }
