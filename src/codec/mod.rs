@@ -902,7 +902,7 @@ fn get_residuals(
                 let b = dec.bit(&mut models.parity[ctx]) as i64;
                 let step = flag.then(|| AlongStep::at(g, k, pred, window));
                 let m = step.map_or_else(|| along_axis(g, k, pred), |s| s.axis());
-                let [o0, o1] = OTHER_AXES[m].map(|a| {
+                let mut across = |a: usize| {
                     let v = if models.sign_after {
                         let (model, sign) = models.across(ctx, a, before[a]);
                         model.get_signed_in(dec, sign)
@@ -910,7 +910,10 @@ fn get_residuals(
                         models.axes[ctx][a].get(dec)
                     };
                     v.wrapping_mul(2).wrapping_add(b)
-                });
+                };
+                let [a0, a1] = OTHER_AXES[m];
+                let o0 = across(a0);
+                let o1 = across(a1);
                 // The point assembled by selects, not by stores at the
                 // axes' indices: a whole-array read right after stores to
                 // parts of it waits for them to reach the cache (measured:

@@ -132,7 +132,7 @@ pub fn scale_exponent(scale: f64) -> i32 {
 /// within `a√5/4` of it, so at covering radius `T` it has 1.86 times fewer
 /// points per volume than the cubic grid of step `2T/√3`, about 0.9 bits
 /// less per coded point. `None` when not codable.
-#[inline]
+#[inline(always)]
 pub fn bcc_nearest(p: glam::DVec3, half: f64) -> Option<[i64; 3]> {
     let x = [p.x / half, p.y / half, p.z / half];
     let limit = (1u64 << super::entropy::MAX_BITS) as f64;
