@@ -902,18 +902,9 @@ fn get_residuals(
                 let b = dec.bit(&mut models.parity[ctx]) as i64;
                 let step = flag.then(|| AlongStep::at(g, k, pred, window));
                 let m = step.map_or_else(|| along_axis(g, k, pred), |s| s.axis());
-                let mut across = |a: usize| {
-                    let v = if models.sign_after {
-                        let (model, sign) = models.across(ctx, a, before[a]);
-                        model.get_signed_in(dec, sign)
-                    } else {
-                        models.axes[ctx][a].get(dec)
-                    };
-                    v.wrapping_mul(2).wrapping_add(b)
-                };
                 let [a0, a1] = OTHER_AXES[m];
-                let o0 = across(a0);
-                let o1 = across(a1);
+                let o0 = across_residual(dec, models, ctx, a0, before[a0], b);
+                let o1 = across_residual(dec, models, ctx, a1, before[a1], b);
                 // The point assembled by selects, not by stores at the
                 // axes' indices: a whole-array read right after stores to
                 // parts of it waits for them to reach the cache (measured:
@@ -944,6 +935,28 @@ fn get_residuals(
         g.push(point);
         recent = [recent[1], point];
     }
+}
+
+/// One across-axis coordinate of an along-coded residual (axis `a`, the
+/// residual before's half `before` on it, parity `b`). Forced inline: a
+/// call on the chain from one point to the next costs more than its
+/// instructions.
+#[inline(always)]
+fn across_residual(
+    dec: &mut Decoder,
+    models: &mut ResidualModels,
+    ctx: usize,
+    a: usize,
+    before: i64,
+    b: i64,
+) -> i64 {
+    let v = if models.sign_after {
+        let (model, sign) = models.across(ctx, a, before);
+        model.get_signed_in(dec, sign)
+    } else {
+        models.axes[ctx][a].get(dec)
+    };
+    v.wrapping_mul(2).wrapping_add(b)
 }
 
 /// Whether codec `model` codes the along-step coordinate last, in a model
