@@ -862,8 +862,9 @@ fn plan_residuals(
 /// whose start `g` holds, each `predict(points so far, k, recent)` plus
 /// its residual, where `recent` is `[g[k − 2], g[k − 1]]` (`g[0]` twice at
 /// `k = 1`), kept in registers: the point just decoded, read back from
-/// `g` as a whole, waits for its stores to reach the cache (measured:
-/// about 4 % of decoding the fornix replicas).
+/// `g` as a whole, waits for its stores to reach the cache (a stall of
+/// about 2 % in the profile of decoding the fornix replicas; the time
+/// moved within the spread).
 fn get_residuals(
     dec: &mut Decoder,
     models: &mut ResidualModels,
@@ -907,8 +908,8 @@ fn get_residuals(
                 let o1 = across_residual(dec, models, ctx, a1, before[a1], b);
                 // The point assembled by selects, not by stores at the
                 // axes' indices: a whole-array read right after stores to
-                // parts of it waits for them to reach the cache (measured:
-                // about 4 % of the decoder's time).
+                // parts of it waits for them to reach the cache (the
+                // profile's largest stall; 8 % less decoder CPU without it).
                 let with = |along: i64| -> [i64; 3] {
                     match m {
                         0 => [along, o0, o1],
@@ -1068,11 +1069,7 @@ fn own_prediction(g: &[[i64; 3]], k: usize, own: OwnPrediction, screw: Screw) ->
 /// (`g[0]` for the second point).
 #[inline]
 fn second_order(g: &[[i64; 3]], k: usize) -> [i64; 3] {
-    if k >= 2 {
-        [0, 1, 2].map(|a| g[k - 1][a].wrapping_mul(2).wrapping_sub(g[k - 2][a]))
-    } else {
-        g[k - 1]
-    }
+    second_order_of(k, [g[k.saturating_sub(2)], g[k - 1]])
 }
 
 /// [`second_order`] from `[g[k − 2], g[k − 1]]` (`g[0]` twice at `k = 1`).
