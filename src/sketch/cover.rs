@@ -108,8 +108,9 @@ const MERGE_PROBE_LIMIT: f64 = 8.0;
 /// Beyond the paper, the bounds of a plausible helix on a drawing of unit
 /// length: its radius at most `MAX_RADIUS` lengths, its depth slope
 /// ([`Piece::depth_slope`]) at most `MAX_DEPTH_SLOPE` (the depth at most
-/// three times the length drawn: 72° out of the plane on average, the
-/// curve in space at least 3.2 times as long as its drawing). On a noisy
+/// three times the length drawn: 72° out of the plane on average; a curve
+/// rising steadily at that slope is √10 ≈ 3.2 times as long in space as
+/// drawn). On a noisy
 /// drawing, where `E_max` is set above the noise, stretches are fitted
 /// within `E_max` by helices of any size seen almost end-on (measured at
 /// 0.1 % noise: radii to 175 lengths, depths to 4000 times the drawn
