@@ -133,13 +133,14 @@ pub(super) fn plausible(piece: &Piece) -> bool {
     piece.helix.helix.a.abs() <= MAX_RADIUS && piece.depth_slope() <= MAX_DEPTH_SLOPE
 }
 
-/// Whether `after`, a refit of `before`, is [`plausible`] where `before`
-/// was: a step of the covering (a junction slide, an absorption) may not
-/// make a plausible piece implausible. (A slide that did left a piece the
-/// next take-over grew its neighbour over, beyond `E_max`: three curls at
-/// 0.1 %, seed 9, came back as two helices with a drawn vertex 18 σ off.)
-fn stays_plausible(before: &Piece, after: &Piece) -> bool {
-    plausible(after) || !plausible(before)
+/// Whether `after`, a refit of a piece that `was` [`plausible`], is
+/// plausible where that was: a step of the covering (a junction slide, an
+/// absorption) may not make a plausible piece implausible. (A slide that
+/// did left a piece the next take-over grew its neighbour over, beyond
+/// `E_max`: three curls at 0.1 %, seed 9, came back as two helices with a
+/// drawn vertex 18 σ off.)
+fn stays_plausible(was: bool, after: &Piece) -> bool {
+    !was || plausible(after)
 }
 
 /// Starting tilts `c` of the two-vertex fits.
@@ -850,10 +851,15 @@ fn polish_junctions(points: &[DVec2], pieces: &mut [Piece], opts: &CoverOptions)
                     (score, j, l, r)
                 })
                 .collect();
+            // The least score (ties to the earlier junction) whose pieces
+            // stay plausible: plausibility, which measures every vertex,
+            // asked best first, only until one passes.
+            let was = (plausible(left), plausible(right));
+            let mut trials = trials;
+            trials.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
             let best = trials
                 .into_iter()
-                .filter(|(_, _, l, r)| stays_plausible(left, l) && stays_plausible(right, r))
-                .min_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+                .find(|(_, _, l, r)| stays_plausible(was.0, l) && stays_plausible(was.1, r));
             let Some((_, j, l, r)) = best else { break };
             let edge = j != j0 && (j == lo || j == hi);
             pieces[i - 1] = l;
@@ -1094,7 +1100,9 @@ fn absorb_while(
         let trio = &pieces[i - 1..=i + 1];
         let fitted = probes.absorbed(trio, || absorb_fit(points, trio, opts, &obj));
         let best = fitted
-            .filter(|(l, r)| stays_plausible(&trio[0], l) && stays_plausible(&trio[2], r))
+            .filter(|(l, r)| {
+                stays_plausible(plausible(&trio[0]), l) && stays_plausible(plausible(&trio[2]), r)
+            })
             .and_then(|(l, r)| accept(trio, &l, &r).map(|score| (score, l, r)));
         match best {
             Some((_, l, r)) => {
