@@ -80,6 +80,15 @@ impl Piece {
         self.helix.evaluator().project_all(vertices, &mut self.ts)
     }
 
+    /// [`reproject_feet`](Self::reproject_feet) to a least-squares step's
+    /// precision ([`Evaluator::project_all_coarse`](super::Evaluator::project_all_coarse)).
+    fn reproject_feet_coarse(&mut self, points: &[DVec2]) -> Vec<Foot> {
+        let vertices = &points[self.first..self.first + self.ts.len()];
+        self.helix
+            .evaluator()
+            .project_all_coarse(vertices, &mut self.ts)
+    }
+
     /// Every vertex measured at its parameter.
     ///
     /// ```
@@ -575,7 +584,7 @@ pub fn refine_to(
                     finite &= v.is_finite();
                 }
                 p.helix = PlacedHelix::from_params(&params, p.helix.reflect);
-                trial_feet.push(p.reproject_feet(points));
+                trial_feet.push(p.reproject_feet_coarse(points));
             }
             let new_cost = if finite {
                 objective_with(&trial, &trial_feet, obj)
