@@ -876,6 +876,37 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// The coarse searches keep parameters within 1e-8 of the exact
+        /// feet (Halley's step after a Newton step under 1e-3 leaves
+        /// O(step³)) and offsets within 1e-6 (stationary: O(step²)), each
+        /// foot measured at its own parameter.
+        #[test]
+        fn coarse_projections_are_close_to_the_exact_ones(
+            vertices in proptest::collection::vec(
+                (-2.5f64..2.5, -0.01f64..0.01, -0.1f64..0.1), 1..16),
+        ) {
+            // Radius of curvature of the projection ≥ 0.085 (at t = 0).
+            let e = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.3, 0.3, 0.4], true).evaluator();
+            let points: Vec<DVec2> = vertices
+                .iter()
+                .map(|&(t, off, _)| {
+                    let f = e.foot(DVec2::ZERO, t);
+                    e.jet(t).0 + off * f.normal
+                })
+                .collect();
+            let start: Vec<f64> = vertices.iter().map(|&(t, _, miss)| t + miss).collect();
+            let (mut exact, mut coarse) = (start.clone(), start);
+            let feet = e.project_all(&points, &mut exact);
+            let rough = e.project_all_coarse(&points, &mut coarse);
+            for k in 0..points.len() {
+                proptest::prop_assert!((coarse[k] - exact[k]).abs() < 1e-8, "vertex {}", k);
+                proptest::prop_assert!((rough[k].offset - feet[k].offset).abs() < 1e-6);
+                proptest::prop_assert_eq!((rough[k].sin_t, rough[k].cos_t), rough[k].t.sin_cos());
+                let measured = e.foot(points[k], rough[k].t);
+                proptest::prop_assert_eq!(measured.offset, rough[k].offset);
+            }
+        }
+
         /// The interleaved searches give each vertex the foot its own
         /// search gives, bit for bit: converged, capped at `MAX_NEWTON`
         /// steps, or started from a guess that overflows.
