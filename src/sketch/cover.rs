@@ -492,9 +492,17 @@ fn fit_one(
         })
         .max_by(|&a, &b| curvature(a).total_cmp(&curvature(b)));
     // (plausible, confident, vertices covered), measured once a piece.
+    // (and the RMS distance it rests on, kept for the grid's comparison).
     let rank = |p: &Piece| {
-        let confident = p.rms_distance(points) <= CONFIDENT_RMS * opts.emax;
-        (plausible(p), confident, p.last - p.first)
+        let rms = p.rms_distance(points);
+        (
+            (
+                plausible(p),
+                rms <= CONFIDENT_RMS * opts.emax,
+                p.last - p.first,
+            ),
+            rms,
+        )
     };
     let settled = |r: &(bool, bool, usize)| r.0 && r.1;
     let grid = (hi - lo > 4 * MIN_VERTICES)
@@ -502,12 +510,12 @@ fn fit_one(
         .into_iter()
         .flatten();
     let mut best = fit_at(points, geometry, (lo, hi), opts, s, fits);
-    let mut best_rank = rank(&best);
+    let (mut best_rank, mut best_rms) = rank(&best);
     if let (Some(second), false) = (second, settled(&best_rank)) {
         let other = fit_at(points, geometry, (lo, hi), opts, second, fits);
-        let other_rank = rank(&other);
+        let (other_rank, other_rms) = rank(&other);
         if other_rank > best_rank {
-            (best, best_rank) = (other, other_rank);
+            (best, best_rank, best_rms) = (other, other_rank, other_rms);
         }
     }
     for seed in grid {
@@ -515,14 +523,12 @@ fn fit_one(
             break;
         }
         let other = fit_at(points, geometry, (lo, hi), opts, seed, fits);
-        let other_rank = rank(&other);
+        let (other_rank, other_rms) = rank(&other);
         // A plausible grid piece that covers at least as much as the best
         // and fits it closer (in RMS) replaces it, confident or not.
-        let dominates = other_rank.0
-            && other_rank.2 >= best_rank.2
-            && other.rms_distance(points) < best.rms_distance(points);
+        let dominates = other_rank.0 && other_rank.2 >= best_rank.2 && other_rms < best_rms;
         if settled(&other_rank) || (other_rank.0 && !best_rank.0) || dominates {
-            (best, best_rank) = (other, other_rank);
+            (best, best_rank, best_rms) = (other, other_rank, other_rms);
         }
     }
     best
@@ -758,12 +764,14 @@ fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective, gain: f64, pitch: b
     if piece.max_distance(points) <= below * obj.emax {
         return;
     }
-    // `from_params` takes [θ, oₓ, o_y, a, b, c]. Both from where the
-    // refinement stopped.
+    // Indices in `from_params`' [θ, oₓ, o_y, a, b, c]. Both restarts
+    // from where the refinement stopped.
+    const RADIUS: usize = 3;
+    const PITCH: usize = 4;
     let start = piece.clone();
-    restart(points, &start, piece, obj, gain, 3);
+    restart(points, &start, piece, obj, gain, RADIUS);
     if pitch && !noisy && piece.max_distance(points) > PITCH_HOP_ABOVE * obj.emax {
-        restart(points, &start, piece, obj, gain, 4);
+        restart(points, &start, piece, obj, gain, PITCH);
     }
 }
 

@@ -389,6 +389,20 @@ const MAX_NEWTON: usize = 30;
 /// 3e-3 made the same time within the runs' spread.
 const COARSE_STEP: f64 = 1e-3;
 
+/// `v` measured against the curve through `p` with derivative `d1` (the
+/// point and derivative at parameter `t`, `sin t` and `cos t` kept).
+#[inline(always)]
+fn measured(v: DVec2, t: f64, (sin_t, cos_t): (f64, f64), p: DVec2, d1: DVec2) -> Foot {
+    let normal = d1.perp().normalize_or_zero();
+    Foot {
+        t,
+        offset: (v - p).dot(normal),
+        normal,
+        sin_t,
+        cos_t,
+    }
+}
+
 /// Searches [`Evaluator::project_all`] interleaves.
 const LANES: usize = 2;
 
@@ -550,14 +564,7 @@ impl Evaluator {
             let (a, sc) = (self.a, self.sc);
             let d3 = self.sketch_vector(DVec2::new(a * st, a * sc * ct));
             let gpp = 3.0 * d1.dot(d2) + d.dot(d3);
-            let normal = d1.perp().normalize_or_zero();
-            let foot = Foot {
-                t,
-                offset: (v - p).dot(normal),
-                normal,
-                sin_t: st,
-                cos_t: ct,
-            };
+            let foot = measured(v, t, (st, ct), p, d1);
             return Err((foot, next - 0.5 * gpp * step * step / gp));
         }
         // A Newton step converges quadratically: after one of 1e-9 the
@@ -565,15 +572,7 @@ impl Evaluator {
         // noise, which would keep the loop going).
         let tol = if newton { 1e-9 } else { 1e-15 };
         if step.abs() <= tol * (1.0 + next.abs()) {
-            let normal = d1.perp().normalize_or_zero();
-            let foot = Foot {
-                t: next,
-                offset: (v - p).dot(normal),
-                normal,
-                sin_t: st,
-                cos_t: ct,
-            };
-            return Err((foot, next));
+            return Err((measured(v, next, (st, ct), p, d1), next));
         }
         Ok(next)
     }
@@ -604,7 +603,7 @@ impl Evaluator {
     }
 
     /// [`project_all`](Self::project_all) to the precision a least-squares
-    /// step of the covering needs, in a fifth less time: each search ends
+    /// step of the covering needs, in fewer steps: each search ends
     /// at the first Newton step under [`COARSE_STEP`] (a warm start from
     /// the previous step's feet is mostly that close), and the vertex is
     /// measured where that step starts. Its offset, stationary at the
@@ -733,14 +732,7 @@ impl Evaluator {
     pub fn foot(&self, v: DVec2, t: f64) -> Foot {
         let (st, ct) = t.sin_cos();
         let (p, d1, _) = self.jet_trig(t, st, ct);
-        let normal = d1.perp().normalize_or_zero();
-        Foot {
-            t,
-            offset: (v - p).dot(normal),
-            normal,
-            sin_t: st,
-            cos_t: ct,
-        }
+        measured(v, t, (st, ct), p, d1)
     }
 
     /// [`param_jacobian`](Self::param_jacobian) at a foot's parameter.
