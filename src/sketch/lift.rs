@@ -612,6 +612,22 @@ fn check(points: &[DVec2]) -> Result<Vec<DVec2>, SketchError> {
     Ok(clean)
 }
 
+/// How much steeper than its covering fit ([`Piece::depth_slope`]) the
+/// fine fit may make a piece before the piece keeps the covering fit. The
+/// fine fit's tangent term (`α_T E_T`) is there to close the junctions'
+/// tangent gaps, not to choose another helix; on a noisy drawing it can
+/// pull a piece whose covering fit is the helix drawn (depth slope 0.3) to
+/// a much deeper one that meets its neighbours' tangents (2.4–2.8), and
+/// the lift comes out 2–4× too deep. Measured on the 480 noisy drawings of
+/// `benches/sketch_noise.rs`: 458 → 464 right (three curls at 0.3 % 41 →
+/// 46, four curls at 0.3 % 37 → 38; none lost; 1.5 gave the same, 3 one
+/// fewer); the 320 at 0–0.03 % unchanged (no piece deepened so).
+pub const DEEPENED: f64 = 2.0;
+
+/// The least depth slope [`DEEPENED`] is taken of (a nearly flat
+/// covering fit may steepen a little without being another helix).
+pub const DEEPENED_FROM: f64 = 0.2;
+
 /// Lift a 2D polyline to a 3D piecewise helix.
 ///
 /// ```
@@ -767,10 +783,12 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
     let covered = pieces.clone();
     let mut fine_fit = refine(&unit, &mut pieces, &obj, opts.fine_iterations);
     // Tangent continuity can pull a short piece of a noisy drawing to a
-    // helix seen end-on; such a piece keeps its covering fit.
+    // helix seen end-on, or to one much deeper than the covering's; such a
+    // piece keeps its covering fit (see DEEPENED).
     let mut kept = false;
     for (p, c) in pieces.iter_mut().zip(&covered) {
-        if !plausible(p) && plausible(c) {
+        let deepened = p.depth_slope() > DEEPENED * c.depth_slope().max(DEEPENED_FROM);
+        if (!plausible(p) || deepened) && plausible(c) {
             *p = c.clone();
             kept = true;
         }

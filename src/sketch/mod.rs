@@ -59,7 +59,8 @@ pub use estimate::{
 pub use g1::{refit_g1, G1Refit};
 pub use lift::{
     lift_sketch, Junction, LiftedHelix, Resampling, SketchError, SketchLift, SketchOptions,
-    DENOISE_ABOVE, EMAX_FRACTION, NOISE_FACTOR, NOISY_GAIN_ABOVE, UNIFORM_RATIO, WHITE_BELOW,
+    DEEPENED, DEEPENED_FROM, DENOISE_ABOVE, EMAX_FRACTION, NOISE_FACTOR, NOISY_GAIN_ABOVE,
+    UNIFORM_RATIO, WHITE_BELOW,
 };
 pub use nelder_mead::{minimize, Minimum, NelderMeadOptions};
 pub use placed::{Evaluator, Foot, PlacedHelix, PARAMS};
