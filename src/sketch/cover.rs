@@ -1067,25 +1067,49 @@ pub(super) fn cover_probed(
     // gained and 4 lost, among the gains four curls of 3.3–5.6× the exact
     // depth brought within 2×; the 320 at lower noise 311 against 312).
     absorb(points, &mut out, opts, probes);
-    for _ in 0..POST_PASSES {
-        polish_junctions(points, &mut out, opts);
-        let before = out.len();
-        merge(points, &mut out, opts, probes);
-        absorb(points, &mut out, opts, probes);
-        take_over_implausible(points, &mut out, opts);
-        if out.len() == before {
-            break;
-        }
-    }
-    if opts.gain > COVER_GAIN {
-        refit_unconfident(points, &mut out, opts, &probes.fits);
+    post_passes(points, &mut out, opts, probes);
+    // A piece that fits its vertices worse than the drawn helix would is
+    // fitted again (see `refit_unconfident`); on a clean drawing from
+    // fresh seeds too, and the passes run again where one changed.
+    let noisy = opts.gain > COVER_GAIN;
+    let fresh = (!noisy).then_some(geometry);
+    if refit_unconfident(points, &mut out, opts, &probes.fits, fresh) && !noisy {
+        post_passes(points, &mut out, opts, probes);
     }
     out
 }
 
-/// Beyond the paper, on a denoised drawing: a piece whose RMS distance is
-/// over [`CONFIDENT_RMS`] `· E_max` stays within `E_max` but need not be
-/// the helix drawn. Across the near-cusp of a curl seen nearly edge-on,
+/// The covering's passes after its first pieces (see [`cover_probed`]):
+/// junctions put where the two helices fit best, neighbours one helix
+/// fits merged, slivers absorbed, implausible pieces taken over; again
+/// while the number of pieces drops, at most [`POST_PASSES`] times.
+fn post_passes(points: &[DVec2], out: &mut Vec<Piece>, opts: &CoverOptions, probes: &Probes) {
+    for _ in 0..POST_PASSES {
+        polish_junctions(points, out, opts);
+        let before = out.len();
+        merge(points, out, opts, probes);
+        absorb(points, out, opts, probes);
+        take_over_implausible(points, out, opts);
+        if out.len() == before {
+            break;
+        }
+    }
+}
+
+/// [`refit_unconfident`]'s bar on a clean drawing, a fraction of `E_max`
+/// (RMS distance): there the helix drawn fits its vertices to rounding.
+/// On exact drawings turned (24 angles), coarsely sampled: the two coils
+/// at 100 vertices 0 → 24 lifted right, at 120 9 → 24, three curls at 60
+/// 18 → 24, at 80 3 → 21; the 320 benchmark lifts at 0–0.03 % noise 313 →
+/// 317 (the two coils at 1e-5, denoised but fitted as clean, 12 → 16 of
+/// 16). 0.001 also set the two coils at 60 vertices right (19 → 24), but
+/// refitted every piece of the drawings at 1e-5 noise (their noise left
+/// is over it): 4–8× the time there.
+const CLEAN_REFIT_RMS: f64 = 0.01;
+
+/// Beyond the paper: a piece whose RMS distance is over [`CONFIDENT_RMS`]
+/// `· E_max` on a denoised drawing ([`CLEAN_REFIT_RMS`] on a clean one)
+/// stays within `E_max` but need not be the helix drawn. Across the near-cusp of a curl seen nearly edge-on,
 /// a deeper helix than drawn (depth slope 1.1–1.8 against 0.4) fits the
 /// curl's vertices within `E_max` at 0.15–0.19 `E_max` RMS; the covering
 /// took it when it grew from the curl's largest curvature, and no later
@@ -1104,7 +1128,25 @@ pub(super) fn cover_probed(
 /// 312 → 313 (none lost); 5 % more CPU. Fresh fits from four seeds spread
 /// over the piece instead ([`fit_at`] each) gained 13 and lost 4, at 19 %
 /// more CPU; refitting again after [`merge_noisy`] changed no lift.
-fn refit_unconfident(points: &[DVec2], pieces: &mut [Piece], opts: &CoverOptions, fits: &SeedFits) {
+///
+/// On a clean drawing (`fresh`, its geometry) the covering grew one seed
+/// per stretch, so few fits are kept: the piece is also fitted afresh
+/// ([`fit_at`]) from [`SEED_GRID`] seeds spread over it (the kept fits
+/// alone set the two coils at 100 vertices right at 13 angles of 24, not
+/// 24). Returns whether a piece changed.
+fn refit_unconfident(
+    points: &[DVec2],
+    pieces: &mut [Piece],
+    opts: &CoverOptions,
+    fits: &SeedFits,
+    fresh: Option<&[(DVec2, f64)]>,
+) -> bool {
+    let bar = if fresh.is_some() {
+        CLEAN_REFIT_RMS
+    } else {
+        CONFIDENT_RMS
+    };
+    let mut changed = false;
     let obj = Objective {
         alpha_t: 0.0,
         emax: opts.emax,
@@ -1112,7 +1154,7 @@ fn refit_unconfident(points: &[DVec2], pieces: &mut [Piece], opts: &CoverOptions
     for piece in pieces.iter_mut() {
         let rms = piece.rms_distance(points);
         let (first, last) = (piece.first, piece.last);
-        if rms <= CONFIDENT_RMS * opts.emax {
+        if rms <= bar * opts.emax {
             continue;
         }
         // The kept fits seeded inside the piece, each helix once.
@@ -1125,6 +1167,16 @@ fn refit_unconfident(points: &[DVec2], pieces: &mut [Piece], opts: &CoverOptions
                     f.piece.helix != piece.helix && starts.iter().all(|s| s.helix != f.piece.helix);
                 if inside && new {
                     starts.push(f.piece.clone());
+                }
+            }
+        }
+        // On a clean drawing the covering fitted one seed per stretch, so
+        // few fits are kept: fresh ones from the seed grid as well.
+        if let Some(geometry) = fresh {
+            if last - first > 4 * MIN_VERTICES {
+                for k in 1..=SEED_GRID {
+                    let seed = first + (last - first) * k / (SEED_GRID + 1);
+                    starts.push(fit_at(points, geometry, (first, last), opts, seed, fits));
                 }
             }
         }
@@ -1145,9 +1197,11 @@ fn refit_unconfident(points: &[DVec2], pieces: &mut [Piece], opts: &CoverOptions
             if r < best {
                 best = r;
                 *piece = trial;
+                changed = true;
             }
         }
     }
+    changed
 }
 
 /// Passes of junction polishing, merging and absorption.
