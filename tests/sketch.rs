@@ -475,6 +475,30 @@ fn depth(r: &strandfit::sketch::SketchLift) -> f64 {
     spread(r.points_3d.iter().map(|p| p.z))
 }
 
+/// The benchmark's lifts of the `curls` drawing (500 vertices) with
+/// `noise` (of its length) at each of `seeds`: per seed, the helices
+/// found, the depth over the exact drawing's and the worst drawn vertex's
+/// distance over σ.
+fn noisy_curls(curls: usize, noise: f64, seeds: &[u64]) -> Vec<(u64, usize, f64, f64)> {
+    use rayon::prelude::*;
+    use strandfit::synthetic::synthetic_sketch_curls;
+    let d = synthetic_sketch_curls(500, curls);
+    let exact = depth(&lift_sketch(&d, &SketchOptions::default()).unwrap());
+    let sigma = noise * polyline_length(&d);
+    seeds
+        .par_iter()
+        .map(|&seed| {
+            let r = lift_sketch(&with_noise(&d, sigma, seed), &SketchOptions::default()).unwrap();
+            (
+                seed,
+                r.helices.len(),
+                depth(&r) / exact,
+                r.drawn_error / sigma,
+            )
+        })
+        .collect()
+}
+
 #[test]
 fn the_noise_of_a_drawing_is_estimated() {
     use strandfit::sketch::estimate_noise;
@@ -626,23 +650,7 @@ fn a_curl_taken_by_a_flat_arc_is_found_from_a_confident_seed() {
     // 10 of benches/sketch_noise.rs). A piece is now taken for the helix
     // drawn only where its vertices' RMS distance is within the noise left
     // (CONFIDENT_RMS); until one is, more seeds are tried.
-    use rayon::prelude::*;
-    use strandfit::synthetic::synthetic_sketch_curls;
-    let d = synthetic_sketch_curls(500, 3);
-    let exact = depth(&lift_sketch(&d, &SketchOptions::default()).unwrap());
-    let sigma = 1e-3 * polyline_length(&d);
-    let runs: Vec<(u64, usize, f64, f64)> = [3u64, 7, 9, 10]
-        .into_par_iter()
-        .map(|seed| {
-            let r = lift_sketch(&with_noise(&d, sigma, seed), &SketchOptions::default()).unwrap();
-            (
-                seed,
-                r.helices.len(),
-                depth(&r) / exact,
-                r.drawn_error / sigma,
-            )
-        })
-        .collect();
+    let runs = noisy_curls(3, 1e-3, &[3, 7, 9, 10]);
     for (seed, count, ratio, drawn) in &runs {
         assert_eq!(*count, 3, "seed {seed}: {runs:?}");
         assert!((0.5..=2.0).contains(ratio), "seed {seed}: {runs:?}");
@@ -689,33 +697,17 @@ fn a_deeper_helix_across_a_curl_is_refitted_from_the_seeds_fits() {
     // deep. A piece over CONFIDENT_RMS is now refitted over its vertices
     // from the fits the covering made from seeds inside it, and the
     // closest kept.
-    use rayon::prelude::*;
-    use strandfit::synthetic::synthetic_sketch_curls;
-    let cases: [(usize, u64); 4] = [(4, 12), (4, 16), (4, 32), (3, 46)];
-    let runs: Vec<(usize, u64, usize, f64, f64)> = cases
-        .into_par_iter()
-        .map(|(curls, seed)| {
-            let d = synthetic_sketch_curls(500, curls);
-            let exact = depth(&lift_sketch(&d, &SketchOptions::default()).unwrap());
-            let sigma = 1e-3 * polyline_length(&d);
-            let r = lift_sketch(&with_noise(&d, sigma, seed), &SketchOptions::default()).unwrap();
-            (
-                curls,
-                seed,
-                r.helices.len(),
-                depth(&r) / exact,
-                r.drawn_error / sigma,
-            )
-        })
-        .collect();
-    for (curls, seed, count, ratio, drawn) in &runs {
-        assert_eq!(count, curls, "{curls} curls, seed {seed}: {runs:?}");
-        assert!(
-            (0.5..=2.0).contains(ratio),
-            "{curls} curls, seed {seed}: {runs:?}"
-        );
-        // Every drawn vertex within a few σ.
-        assert!(*drawn < 8.0, "{curls} curls, seed {seed}: {runs:?}");
+    for (curls, seeds) in [(4, &[12u64, 16, 32][..]), (3, &[46][..])] {
+        let runs = noisy_curls(curls, 1e-3, seeds);
+        for (seed, count, ratio, drawn) in &runs {
+            assert_eq!(*count, curls, "{curls} curls, seed {seed}: {runs:?}");
+            assert!(
+                (0.5..=2.0).contains(ratio),
+                "{curls} curls, seed {seed}: {runs:?}"
+            );
+            // Every drawn vertex within a few σ.
+            assert!(*drawn < 8.0, "{curls} curls, seed {seed}: {runs:?}");
+        }
     }
 }
 
@@ -727,23 +719,7 @@ fn the_fine_fit_does_not_deepen_a_piece_into_another_helix() {
     // neighbours' tangents: seeds 5, 9, 11, 18 and 40 of
     // benches/sketch_noise.rs came back 2.0–3.7× too deep. A piece the
     // fine fit makes over DEEPENED times steeper keeps its covering fit.
-    use rayon::prelude::*;
-    use strandfit::synthetic::synthetic_sketch_curls;
-    let d = synthetic_sketch_curls(500, 3);
-    let exact = depth(&lift_sketch(&d, &SketchOptions::default()).unwrap());
-    let sigma = 3e-3 * polyline_length(&d);
-    let runs: Vec<(u64, usize, f64, f64)> = [5u64, 9, 11, 18, 40]
-        .into_par_iter()
-        .map(|seed| {
-            let r = lift_sketch(&with_noise(&d, sigma, seed), &SketchOptions::default()).unwrap();
-            (
-                seed,
-                r.helices.len(),
-                depth(&r) / exact,
-                r.drawn_error / sigma,
-            )
-        })
-        .collect();
+    let runs = noisy_curls(3, 3e-3, &[5, 9, 11, 18, 40]);
     for (seed, count, ratio, drawn) in &runs {
         assert_eq!(*count, 3, "seed {seed}: {runs:?}");
         assert!((0.5..=2.0).contains(ratio), "seed {seed}: {runs:?}");
