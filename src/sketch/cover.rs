@@ -732,6 +732,20 @@ impl SeedFits {
             .map(|f| f.piece.clone())
     }
 
+    /// The fits kept from seeds strictly inside `(first, last)`, in the
+    /// order made, each helix once and none that is `except`.
+    fn seeded_inside(&self, (first, last): (usize, usize), except: &PlacedHelix) -> Vec<Piece> {
+        let fits = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let mut found: Vec<Piece> = Vec::new();
+        for f in fits.iter().filter(|f| f.seed > first && f.seed < last) {
+            let new = f.piece.helix != *except && found.iter().all(|p| p.helix != f.piece.helix);
+            if new {
+                found.push(f.piece.clone());
+            }
+        }
+        found
+    }
+
     fn keep(
         &self,
         seed: usize,
@@ -1109,8 +1123,8 @@ const CLEAN_REFIT_RMS: f64 = 0.01;
 
 /// Beyond the paper: a piece whose RMS distance is over [`CONFIDENT_RMS`]
 /// `· E_max` on a denoised drawing ([`CLEAN_REFIT_RMS`] on a clean one)
-/// stays within `E_max` but need not be the helix drawn. Across the near-cusp of a curl seen nearly edge-on,
-/// a deeper helix than drawn (depth slope 1.1–1.8 against 0.4) fits the
+/// stays within `E_max` but need not be the helix drawn. Across the
+/// near-cusp of a curl seen nearly edge-on, a deeper helix than drawn (depth slope 1.1–1.8 against 0.4) fits the
 /// curl's vertices within `E_max` at 0.15–0.19 `E_max` RMS; the covering
 /// took it when it grew from the curl's largest curvature, and no later
 /// pass moved it (the merges and junction slides refit from the pieces'
@@ -1157,19 +1171,7 @@ fn refit_unconfident(
         if rms <= bar * opts.emax {
             continue;
         }
-        // The kept fits seeded inside the piece, each helix once.
-        let mut starts: Vec<Piece> = Vec::new();
-        {
-            let kept = fits.0.lock().unwrap_or_else(|e| e.into_inner());
-            for f in kept.iter() {
-                let inside = f.seed > first && f.seed < last;
-                let new =
-                    f.piece.helix != piece.helix && starts.iter().all(|s| s.helix != f.piece.helix);
-                if inside && new {
-                    starts.push(f.piece.clone());
-                }
-            }
-        }
+        let mut starts = fits.seeded_inside((first, last), &piece.helix);
         // On a clean drawing the covering fitted one seed per stretch, so
         // few fits are kept: fresh ones from the seed grid as well.
         if let Some(geometry) = fresh {
