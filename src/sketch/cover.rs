@@ -10,6 +10,7 @@ use super::estimate::is_corner;
 use super::nelder_mead::{minimize, NelderMeadOptions};
 use super::placed::{Evaluator, PlacedHelix};
 use super::refine::{refine_to, Objective, Piece};
+use super::trig::sin_cos;
 
 /// The refinements of the covering stop once an iteration gains less than
 /// this (relative): on a short stretch the fit crawls along a valley of
@@ -583,7 +584,7 @@ fn fit_at(
                 (0f64.sin_cos(), alpha.sin_cos(), (-alpha).sin_cos());
             let e = move |x: &[f64; 3]| {
                 let h = ProjectedHelix::new(x[0].abs(), x[1].abs(), x[2]);
-                let tilt = h.c.sin_cos();
+                let tilt = sin_cos(h.c);
                 // Along the sketch, t runs one way or the other: compare
                 // tangents up to that sign (fixed at t = 0 by T̂_H(0) = ±y).
                 let lead = h.derivative_trig(at_0, tilt).y.signum();

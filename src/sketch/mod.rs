@@ -50,6 +50,7 @@ mod nelder_mead;
 mod placed;
 mod projected;
 mod refine;
+mod trig;
 
 pub use cover::{cover, CoverOptions, COVER_GAIN, MIN_VERTICES, NOISY_COVER_GAIN};
 pub use estimate::{
