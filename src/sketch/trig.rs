@@ -15,8 +15,8 @@
 //! (measured on 2·10⁷ random arguments in ±8·10⁵ and ±4, and at every
 //! multiple of π/2 there and its neighbours; tested below within 2).
 
-/// 2/π.
-const FRAC_2_PI: f64 = 6.366_197_723_675_813_824_33e-1;
+use std::f64::consts::FRAC_2_PI;
+
 /// π/2 in three parts (fdlibm's `pio2_1`, `pio2_2`, `pio2_2t`): the
 /// first two of 33 bits, so `k · PIO2_1` and `k · PIO2_2` are exact for
 /// `|k| < 2²⁰`, and the rest.
