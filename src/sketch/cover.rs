@@ -26,6 +26,27 @@ pub const COVER_GAIN: f64 = 1e-6;
 /// as with 1e-6, in half the time.
 pub const NOISY_COVER_GAIN: f64 = 1e-3;
 
+/// [`COVER_GAIN`] for a drawing denoised but fitted as clean (its noise
+/// left under `NOISY_GAIN_ABOVE` of `E_max`, see `lift_sketch`): its fits
+/// stop on the noise left, not on rounding, and at 1e-6 a fresh fit of a
+/// piece crawled to its 100-iteration cap (a sixth of the refinements
+/// of the two coils at 1e-5, two fifths of their time). Measured
+/// 2026-11-30 (`benches/sketch_noise.rs`, 48 seeds, noise 1e-5 and 3e-5
+/// of the length, 480 lifts): all 480 right before and after; mean time
+/// a lift 11–32 % less (two coils 154 → 109 and 286 → 196 ms, four curls
+/// 76 → 63 and 317 → 250 ms). Which lifts split a coil and need the
+/// costly refit changes: of the first 16 seeds of the two coils at 1e-5,
+/// four before and four others after, 140 → 164 ms there. The 320 at
+/// 0–0.03 % noise: the same lifts.
+pub const DENOISED_COVER_GAIN: f64 = 1e-4;
+
+/// Whether a covering refined to `gain` is of a noisy drawing (its
+/// several seeds, early restarts and no fresh refits): from
+/// [`NOISY_COVER_GAIN`] up.
+fn noisy_gain(gain: f64) -> bool {
+    gain >= NOISY_COVER_GAIN
+}
+
 /// Refine one piece of the covering (see [`COVER_GAIN`]).
 fn refine(points: &[DVec2], piece: &mut Piece, obj: &Objective, gain: f64, max_iterations: usize) {
     refine_to(
@@ -245,8 +266,10 @@ pub struct CoverOptions {
     /// Vertices at either end of the sketch not taken as seeds.
     pub end_guard: usize,
     /// The covering's refinements stop once an iteration gains less than
-    /// this, relative: [`COVER_GAIN`], or [`NOISY_COVER_GAIN`] for a
-    /// denoised drawing.
+    /// this, relative: [`COVER_GAIN`], [`DENOISED_COVER_GAIN`] for a
+    /// drawing denoised but fitted as clean, or [`NOISY_COVER_GAIN`] for a
+    /// noisy one (from this gain up the covering treats the drawing as
+    /// noisy).
     pub gain: f64,
 }
 
@@ -455,7 +478,7 @@ fn fit_one(
     fits: &SeedFits,
 ) -> Piece {
     let s = seed_vertex(points, geometry, (lo, hi), opts.end_guard);
-    if opts.gain <= COVER_GAIN {
+    if !noisy_gain(opts.gain) {
         return fit_at(points, geometry, (lo, hi), opts, s, fits);
     }
     // A denoised drawing: its largest curvature can be a near-cusp blurred
@@ -649,7 +672,7 @@ fn fit_at(
     let mut reach = candidates
         .iter()
         .fold((s, s), |(f, l), (_, c)| (f.min(c.2.first), l.max(c.2.last)));
-    let refined = if opts.gain > COVER_GAIN {
+    let refined = if noisy_gain(opts.gain) {
         NOISY_REFINED_CANDIDATES
     } else {
         REFINED_CANDIDATES
@@ -784,7 +807,7 @@ impl SeedFits {
 /// [`PITCH_HOP_ABOVE`] `· E_max` is restarted from its pitch `b` scaled
 /// the same ways too.
 fn hop(points: &[DVec2], piece: &mut Piece, obj: &Objective, gain: f64, pitch: bool) {
-    let noisy = gain > COVER_GAIN;
+    let noisy = noisy_gain(gain);
     let below = if noisy { NOISY_HOP_BELOW } else { HOP_BELOW };
     if piece.max_distance(points) <= below * obj.emax {
         return;
@@ -1123,7 +1146,7 @@ pub(super) fn cover_probed(
     // A piece that fits its vertices worse than the drawn helix would is
     // fitted again (see `refit_unconfident`); on a clean drawing from
     // fresh seeds too, and the passes run again where one changed.
-    let noisy = opts.gain > COVER_GAIN;
+    let noisy = noisy_gain(opts.gain);
     let fresh = (!noisy).then_some(geometry);
     if refit_unconfident(points, &mut out, opts, &probes.fits, fresh) && !noisy {
         post_passes(points, &mut out, opts, probes);

@@ -4,7 +4,8 @@
 use glam::{DVec2, DVec3};
 
 use super::cover::{
-    cover_probed, merge_noisy, plausible, CoverOptions, Drawn, Probes, COVER_GAIN, NOISY_COVER_GAIN,
+    cover_probed, merge_noisy, plausible, CoverOptions, Drawn, Probes, COVER_GAIN,
+    DENOISED_COVER_GAIN, NOISY_COVER_GAIN,
 };
 use super::estimate::{
     denoise, densify, estimate_noise, resample, residual_agreement, smoothed,
@@ -753,6 +754,8 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
         end_guard: opts.window,
         gain: if white && noise > NOISY_GAIN_ABOVE * emax * length {
             NOISY_COVER_GAIN
+        } else if denoised {
+            DENOISED_COVER_GAIN
         } else {
             COVER_GAIN
         },

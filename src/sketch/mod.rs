@@ -52,7 +52,9 @@ mod projected;
 mod refine;
 mod trig;
 
-pub use cover::{cover, CoverOptions, COVER_GAIN, MIN_VERTICES, NOISY_COVER_GAIN};
+pub use cover::{
+    cover, CoverOptions, COVER_GAIN, DENOISED_COVER_GAIN, MIN_VERTICES, NOISY_COVER_GAIN,
+};
 pub use estimate::{
     denoise, densify, estimate_noise, is_corner, resample, residual_agreement, smoothed,
     tangents_and_curvatures,
