@@ -268,8 +268,8 @@ pub struct CoverOptions {
     /// The covering's refinements stop once an iteration gains less than
     /// this, relative: [`COVER_GAIN`], [`DENOISED_COVER_GAIN`] for a
     /// drawing denoised but fitted as clean, or [`NOISY_COVER_GAIN`] for a
-    /// noisy one (from this gain up the covering treats the drawing as
-    /// noisy).
+    /// noisy one (the covering treats the drawing as noisy from
+    /// [`NOISY_COVER_GAIN`] up).
     pub gain: f64,
 }
 
@@ -914,7 +914,7 @@ fn meet_all(
     gain: f64,
     iterations: usize,
 ) -> Vec<(f64, Piece, Piece)> {
-    let mut sides: Vec<(f64, Piece)> = (0..2 * meetings.len())
+    let sides: Vec<(f64, Piece)> = (0..2 * meetings.len())
         .into_par_iter()
         .map(|k| {
             let j = meetings[k / 2];
@@ -931,12 +931,11 @@ fn meet_all(
             (distance_cost(points, &p, obj), p)
         })
         .collect();
-    let mut out = Vec::with_capacity(meetings.len());
-    while let (Some((cr, r)), Some((cl, l))) = (sides.pop(), sides.pop()) {
-        out.push((cl + cr, l, r));
-    }
-    out.reverse();
-    out
+    // In pairs again: each meeting's left side, then its right.
+    let mut sides = sides.into_iter();
+    std::iter::from_fn(|| Some((sides.next()?, sides.next()?)))
+        .map(|((cl, l), (cr, r))| (cl + cr, l, r))
+        .collect()
 }
 
 /// `E_D` of one piece: `Σ (d / E_max)²` over its vertices.
