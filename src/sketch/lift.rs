@@ -759,6 +759,7 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
         } else {
             COVER_GAIN
         },
+        noise: if denoised { noise / length } else { 0.0 },
     };
     // The covering's merge probes, reused by the noisy merges.
     let probes = Probes::default();
