@@ -160,14 +160,40 @@ impl Piece {
     /// assert!((piece.max_distance(&off) - 0.03).abs() < 1e-12);
     /// ```
     pub fn rms_distance(&self, points: &[DVec2]) -> f64 {
+        self.inner_rms_distance(points, 0)
+    }
+
+    /// [`rms_distance`](Self::rms_distance) over the vertices but `skip` at
+    /// each end (over all of them where that would leave fewer than
+    /// `skip`): a denoised drawing's corners are rounded over a few
+    /// vertices, so a piece that ends at one may leave its end vertices off
+    /// however well the helix follows the rest.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use strandfit::sketch::{Piece, PlacedHelix};
+    /// # let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+    /// # let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+    /// # let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+    /// # let piece = Piece { helix, first: 0, last: 19, ts: ts.clone(), mirror: false };
+    /// // `piece` fits 20 `points` of its own helix exactly; the last moved off.
+    /// let mut off = points.clone();
+    /// off[19] += DVec2::new(0.0, 0.5);
+    /// assert!(piece.rms_distance(&off) > 0.1);
+    /// assert!(piece.inner_rms_distance(&off, 2) < 1e-12);
+    /// // Too short to skip so many: all of them.
+    /// assert_eq!(piece.inner_rms_distance(&off, 8), piece.rms_distance(&off));
+    /// ```
+    pub fn inner_rms_distance(&self, points: &[DVec2], skip: usize) -> f64 {
+        let m = self.ts.len();
+        let skip = if m >= 3 * skip { skip } else { 0 };
         let e = self.helix.evaluator();
-        let sum: f64 = self
-            .ts
+        let sum: f64 = self.ts[skip..m - skip]
             .iter()
             .enumerate()
-            .map(|(k, &t)| (points[self.first + k] - e.jet(t).0).length_squared())
+            .map(|(k, &t)| (points[self.first + skip + k] - e.jet(t).0).length_squared())
             .sum();
-        (sum / self.ts.len().max(1) as f64).sqrt()
+        (sum / (m - 2 * skip).max(1) as f64).sqrt()
     }
 
     /// How steeply the lift leaves the sketch plane: the range of `z` over
