@@ -227,6 +227,11 @@ const CONFIDENT_RMS: f64 = 0.12;
 /// confident piece ([`CONFIDENT_RMS`]).
 const SEED_GRID: usize = 3;
 
+/// The [`SEED_GRID`] seeds spread evenly inside vertices `[lo, hi]`.
+fn grid_seeds((lo, hi): (usize, usize)) -> impl Iterator<Item = usize> {
+    (1..=SEED_GRID).map(move |k| lo + (hi - lo) * k / (SEED_GRID + 1))
+}
+
 /// Options of the covering.
 ///
 /// ```
@@ -545,7 +550,7 @@ fn fit_one(
     };
     let settled = |r: &(bool, bool, usize)| r.0 && r.1;
     let grid = (hi - lo > 4 * MIN_VERTICES)
-        .then(|| (1..=SEED_GRID).map(move |k| lo + (hi - lo) * k / (SEED_GRID + 1)))
+        .then(|| grid_seeds((lo, hi)))
         .into_iter()
         .flatten();
     let mut best = fit_at(points, geometry, (lo, hi), opts, s, fits);
@@ -1225,6 +1230,53 @@ fn post_passes(points: &[DVec2], out: &mut Vec<Piece>, opts: &CoverOptions, prob
 /// it) at 1e-5, and it was refitted to the same helix every time.
 const CLEAN_REFIT_RMS: f64 = 0.01;
 
+/// `trial` refitted over vertices `[first, last]` ([`refit_unconfident`]'s
+/// trials): refined and restarted where stuck ([`hop`]); with its RMS
+/// distance where it is plausible and within `E_max`, else `None`.
+fn refit_over(
+    points: &[DVec2],
+    mut trial: Piece,
+    (first, last): (usize, usize),
+    opts: &CoverOptions,
+    obj: &Objective,
+) -> Option<(f64, Piece)> {
+    set_range(&mut trial, points, first, last);
+    refine(points, &mut trial, obj, opts.gain, GROW_ITERATIONS);
+    hop(points, &mut trial, obj, opts.gain, false);
+    let fits = plausible(&trial) && trial.max_distance(points) <= opts.emax;
+    fits.then(|| (trial.rms_distance(points), trial))
+}
+
+/// Fresh fits ([`fit_at`]) over `range` from [`SEED_GRID`] seeds spread
+/// over it, each refitted over it ([`refit_over`]), one after the other
+/// until one is `settled` (each fit is parallel within): the trials made,
+/// in seed order, a settled one last.
+fn grid_trials(
+    points: &[DVec2],
+    geometry: &[(DVec2, f64)],
+    (first, last): (usize, usize),
+    opts: &CoverOptions,
+    fits: &SeedFits,
+    settled: impl Fn(&Piece) -> bool,
+) -> Vec<(f64, Piece)> {
+    let obj = Objective {
+        alpha_t: 0.0,
+        emax: opts.emax,
+    };
+    let mut trials = Vec::new();
+    for seed in grid_seeds((first, last)) {
+        let fresh = fit_at(points, geometry, (first, last), opts, seed, fits);
+        if let Some(trial) = refit_over(points, fresh, (first, last), opts, &obj) {
+            let done = settled(&trial.1);
+            trials.push(trial);
+            if done {
+                break;
+            }
+        }
+    }
+    trials
+}
+
 /// Beyond the paper: a piece whose RMS distance is over [`CONFIDENT_RMS`]
 /// `· E_max` on a denoised drawing ([`CLEAN_REFIT_RMS`] on a clean one)
 /// stays within `E_max` but need not be the helix drawn. Across the
@@ -1273,7 +1325,9 @@ fn refit_unconfident(
     } else {
         0
     };
-    let unconfident = |p: &Piece| p.inner_rms_distance(points, skip) > bar;
+    // On a denoised drawing, judged without the vertices a rounded corner
+    // at either end may have moved (see CLEAN_REFIT_RMS).
+    let settled = |p: &Piece| p.inner_rms_distance(points, skip) <= bar;
     // Two unconfident neighbours on a denoised drawing fitted as clean are
     // first fitted as one from fresh seeds over both, one after the other
     // until one is under the bar (then it replaces them). Where the
@@ -1289,27 +1343,15 @@ fn refit_unconfident(
         let mut i = 1;
         while i < pieces.len() {
             let (l, r) = (&pieces[i - 1], &pieces[i]);
-            if l.last != r.first || !unconfident(l) || !unconfident(r) {
+            if l.last != r.first || settled(l) || settled(r) {
                 i += 1;
                 continue;
             }
-            let (first, last) = (l.first, r.last);
-            let mut found = None;
-            for k in 1..=SEED_GRID {
-                let seed = first + (last - first) * k / (SEED_GRID + 1);
-                let mut trial = fit_at(points, geometry, (first, last), opts, seed, fits);
-                set_range(&mut trial, points, first, last);
-                refine(points, &mut trial, &obj, opts.gain, GROW_ITERATIONS);
-                hop(points, &mut trial, &obj, opts.gain, false);
-                if plausible(&trial)
-                    && trial.max_distance(points) <= opts.emax
-                    && !unconfident(&trial)
-                {
-                    found = Some(trial);
-                    break;
-                }
-            }
-            if let Some(trial) = found {
+            let range = (l.first, r.last);
+            let found = grid_trials(points, geometry, range, opts, fits, settled)
+                .pop()
+                .filter(|(_, trial)| settled(trial));
+            if let Some((_, trial)) = found {
                 pieces.splice(i - 1..=i, [trial]);
                 united = true;
             }
@@ -1326,42 +1368,26 @@ fn refit_unconfident(
     let changed: Vec<bool> = pieces
         .par_iter_mut()
         .map(|piece| {
-            // On a denoised drawing, judged without the vertices a rounded
-            // corner at either end may have moved (see CLEAN_REFIT_RMS).
-            if !unconfident(piece) {
+            if settled(piece) {
                 return false;
             }
             let rms = piece.rms_distance(points);
             let (first, last) = (piece.first, piece.last);
             let starts = fits.seeded_inside((first, last), &piece.helix);
-            let refit = |mut trial: Piece| {
-                set_range(&mut trial, points, first, last);
-                refine(points, &mut trial, &obj, opts.gain, GROW_ITERATIONS);
-                hop(points, &mut trial, &obj, opts.gain, false);
-                let fits = plausible(&trial) && trial.max_distance(points) <= opts.emax;
-                fits.then(|| (trial.rms_distance(points), trial))
-            };
             // Kept in start order.
-            let mut trials: Vec<(f64, Piece)> = starts.into_par_iter().filter_map(refit).collect();
+            let mut trials: Vec<(f64, Piece)> = starts
+                .into_par_iter()
+                .filter_map(|trial| refit_over(points, trial, (first, last), opts, &obj))
+                .collect();
             // On a clean drawing the covering fitted one seed per stretch,
             // so few fits are kept: fresh ones from the seed grid as well,
             // one after the other until a trial is under the bar (each fit
             // is parallel within; the first grid seed's was under it in
             // most of the two coils' split coils at 1e-5–4.5e-5 noise).
-            let settled = |(_, trial): &(f64, Piece)| trial.inner_rms_distance(points, skip) <= bar;
             if let Some(geometry) = fresh {
-                if last - first > 4 * MIN_VERTICES && !trials.iter().any(settled) {
-                    for k in 1..=SEED_GRID {
-                        let seed = first + (last - first) * k / (SEED_GRID + 1);
-                        let fresh_fit = fit_at(points, geometry, (first, last), opts, seed, fits);
-                        if let Some(trial) = refit(fresh_fit) {
-                            let done = settled(&trial);
-                            trials.push(trial);
-                            if done {
-                                break;
-                            }
-                        }
-                    }
+                if last - first > 4 * MIN_VERTICES && !trials.iter().any(|(_, t)| settled(t)) {
+                    let range = (first, last);
+                    trials.extend(grid_trials(points, geometry, range, opts, fits, settled));
                 }
             }
             let mut best = rms;
