@@ -600,7 +600,9 @@ impl Evaluator {
     /// assert!(ts.iter().zip(&one_by_one).all(|(t, f)| *t == f.t));
     /// ```
     pub fn project_all(&self, points: &[DVec2], ts: &mut [f64]) -> Vec<Foot> {
-        self.project_lanes::<false>(points, ts)
+        let mut feet = Vec::new();
+        self.project_lanes::<false>(points, ts, &mut feet);
+        feet
     }
 
     /// [`project_all`](Self::project_all) to the precision a least-squares
@@ -634,23 +636,44 @@ impl Evaluator {
     /// }
     /// ```
     pub fn project_all_coarse(&self, points: &[DVec2], ts: &mut [f64]) -> Vec<Foot> {
-        self.project_lanes::<true>(points, ts)
+        let mut feet = Vec::new();
+        self.project_lanes::<true>(points, ts, &mut feet);
+        feet
+    }
+
+    /// [`project_all_coarse`](Self::project_all_coarse) into `feet`
+    /// (replacing what it held), reusing its allocation: a least-squares
+    /// fit projects every vertex at each trial step.
+    pub(super) fn project_all_coarse_into(
+        &self,
+        points: &[DVec2],
+        ts: &mut [f64],
+        feet: &mut Vec<Foot>,
+    ) {
+        self.project_lanes::<true>(points, ts, feet);
     }
 
     #[inline(always)]
-    fn project_lanes<const COARSE: bool>(&self, points: &[DVec2], ts: &mut [f64]) -> Vec<Foot> {
+    fn project_lanes<const COARSE: bool>(
+        &self,
+        points: &[DVec2],
+        ts: &mut [f64],
+        feet: &mut Vec<Foot>,
+    ) {
         assert_eq!(points.len(), ts.len(), "one guess per vertex");
         let n = ts.len();
-        let mut feet = vec![
+        // Every entry is written below (each vertex's search ends in one).
+        feet.clear();
+        feet.resize(
+            n,
             Foot {
                 t: 0.0,
                 offset: 0.0,
                 normal: DVec2::ZERO,
                 sin_t: 0.0,
                 cos_t: 1.0,
-            };
-            n
-        ];
+            },
+        );
         // Per lane: the vertex searched (n when idle), its parameter and
         // the steps taken.
         let mut vertex = [n; LANES];
@@ -695,7 +718,6 @@ impl Evaluator {
                 }
             }
         }
-        feet
     }
 
     /// See [`PlacedHelix::normal_offset`].

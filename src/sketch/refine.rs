@@ -82,11 +82,20 @@ impl Piece {
 
     /// [`reproject_feet`](Self::reproject_feet) to a least-squares step's
     /// precision ([`Evaluator::project_all_coarse`](super::Evaluator::project_all_coarse)).
-    fn reproject_feet_coarse(&mut self, points: &[DVec2]) -> Vec<Foot> {
+    fn reproject_feet_coarse(&mut self, points: &[DVec2], feet: &mut Vec<Foot>) {
         let vertices = &points[self.first..self.first + self.ts.len()];
         self.helix
             .evaluator()
-            .project_all_coarse(vertices, &mut self.ts)
+            .project_all_coarse_into(vertices, &mut self.ts, feet)
+    }
+
+    /// `self` made equal to `other`, reusing the parameters' allocation.
+    fn set_from(&mut self, other: &Piece) {
+        self.helix = other.helix;
+        self.first = other.first;
+        self.last = other.last;
+        self.ts.clone_from(&other.ts);
+        self.mirror = other.mirror;
     }
 
     /// Every vertex measured at its parameter.
@@ -415,6 +424,76 @@ fn perturbed_tangent(piece: &Piece, params: &[f64; PARAMS], v: DVec2, at_end: bo
     piece.orientation() * h.tangent_3d(t, piece.mirror).unwrap_or(DVec3::ZERO)
 }
 
+/// The Levenberg–Marquardt step `δ` of `(JᵀJ + λ·D) δ = −Jᵀr`, `D` the
+/// diagonal of `JᵀJ` (each at least `10⁻¹²` of its largest, `max_diag`):
+/// a symmetric positive definite system, solved by Cholesky in `scratch`
+/// (`n² + n` values; no allocation: a covering solves thousands of these
+/// 6 × 6 systems a lift, where a general LU's set-up cost more than the
+/// solve); by partial-pivoting LU where rounding leaves it not positive
+/// definite.
+fn damped_step<'a>(
+    jtj: &[f64],
+    jtr: &[f64],
+    n: usize,
+    lambda: f64,
+    max_diag: f64,
+    scratch: &'a mut [f64],
+) -> &'a [f64] {
+    let (l, x) = scratch.split_at_mut(n * n);
+    let damped = |r: usize, c: usize| {
+        let v = jtj[r * n + c];
+        if r == c {
+            v + lambda * v.max(1e-12 * max_diag)
+        } else {
+            v
+        }
+    };
+    // L Lᵀ = A, row by row (L in the lower triangle of `l`).
+    let mut definite = true;
+    'rows: for r in 0..n {
+        for c in 0..=r {
+            let mut s = damped(r, c);
+            for k in 0..c {
+                s -= l[r * n + k] * l[c * n + k];
+            }
+            if r == c {
+                if !(s > 0.0) {
+                    definite = false;
+                    break 'rows;
+                }
+                l[r * n + r] = s.sqrt();
+            } else {
+                l[r * n + c] = s / l[c * n + c];
+            }
+        }
+    }
+    if definite {
+        // L y = −Jᵀr, then Lᵀ δ = y.
+        for r in 0..n {
+            let mut s = -jtr[r];
+            for k in 0..r {
+                s -= l[r * n + k] * x[k];
+            }
+            x[r] = s / l[r * n + r];
+        }
+        for r in (0..n).rev() {
+            let mut s = x[r];
+            for k in r + 1..n {
+                s -= l[k * n + r] * x[k];
+            }
+            x[r] = s / l[r * n + r];
+        }
+    } else {
+        let a = Mat::<f64>::from_fn(n, n, damped);
+        let rhs = Mat::<f64>::from_fn(n, 1, |r, _| -jtr[r]);
+        let delta = a.partial_piv_lu().solve(&rhs);
+        for (r, v) in x.iter_mut().enumerate() {
+            *v = delta[(r, 0)];
+        }
+    }
+    x
+}
+
 /// Levenberg–Marquardt on `E` over all pieces' parameters (mirrors and
 /// vertex ranges fixed). Stops after `max_iterations`, when a step no
 /// longer lowers `E` by a relative `1e-13`, or when `E` reaches zero to
@@ -520,6 +599,10 @@ pub fn refine_to(
     let mut iterations = 0;
     let mut jtj = vec![0.0; n * n];
     let mut jtr = vec![0.0; n];
+    let mut scratch = vec![0.0; n * n + n];
+    // Each trial step's pieces and feet, allocated once.
+    let mut trial: Vec<Piece> = pieces.to_vec();
+    let mut trial_feet: Vec<Vec<Foot>> = vec![Vec::new(); pieces.len()];
     while iterations < max_iterations && cost > 1e-30 {
         iterations += 1;
         jtj.iter_mut().for_each(|v| *v = 0.0);
@@ -590,27 +673,22 @@ pub fn refine_to(
         // Try steps with growing damping until one lowers E.
         let mut improved = false;
         while lambda < 1e12 {
-            let a = Mat::<f64>::from_fn(n, n, |r, c| {
-                let v = jtj[r * n + c];
-                if r == c {
-                    v + lambda * v.max(1e-12 * max_diag)
-                } else {
-                    v
-                }
-            });
-            let rhs = Mat::<f64>::from_fn(n, 1, |r, _| -jtr[r]);
-            let delta = a.partial_piv_lu().solve(&rhs);
-            let mut trial: Vec<Piece> = pieces.to_vec();
+            let delta = damped_step(&jtj, &jtr, n, lambda, max_diag, &mut scratch);
             let mut finite = true;
-            let mut trial_feet: Vec<Vec<Foot>> = Vec::with_capacity(trial.len());
-            for (i, p) in trial.iter_mut().enumerate() {
+            for (i, ((p, from), f)) in trial
+                .iter_mut()
+                .zip(pieces.iter())
+                .zip(&mut trial_feet)
+                .enumerate()
+            {
+                p.set_from(from);
                 let mut params = p.helix.params();
                 for (q, v) in params.iter_mut().enumerate() {
-                    *v += delta[(i * PARAMS + q, 0)];
+                    *v += delta[i * PARAMS + q];
                     finite &= v.is_finite();
                 }
                 p.helix = PlacedHelix::from_params(&params, p.helix.reflect);
-                trial_feet.push(p.reproject_feet_coarse(points));
+                p.reproject_feet_coarse(points, f);
             }
             let new_cost = if finite {
                 objective_with(&trial, &trial_feet, obj)
@@ -619,8 +697,10 @@ pub fn refine_to(
             };
             if new_cost < cost {
                 let gain = (cost - new_cost) / cost;
-                pieces.clone_from_slice(&trial);
-                feet = trial_feet;
+                // The trial's pieces and feet become the fit's (the old
+                // ones the next trial's buffers).
+                pieces.swap_with_slice(&mut trial);
+                std::mem::swap(&mut feet, &mut trial_feet);
                 cost = new_cost;
                 lambda = (lambda / 3.0).max(1e-12);
                 improved = gain > gain_tol;
@@ -642,6 +722,77 @@ pub fn refine_to(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// `damped_step` against faer's LU of the same damped system, on
+    /// random normal equations (`JᵀJ` of a random `J`, from well- to
+    /// badly conditioned), and through its fallback where the system is
+    /// not positive definite.
+    #[test]
+    fn damped_step_solves_the_damped_normal_equations() {
+        let mut rng = ChaCha8Rng::seed_from_u64(46);
+        let lu = |jtj: &[f64], jtr: &[f64], n: usize, lambda: f64, max_diag: f64| {
+            let a = Mat::<f64>::from_fn(n, n, |r, c| {
+                let v = jtj[r * n + c];
+                if r == c {
+                    v + lambda * v.max(1e-12 * max_diag)
+                } else {
+                    v
+                }
+            });
+            let rhs = Mat::<f64>::from_fn(n, 1, |r, _| -jtr[r]);
+            let d = a.partial_piv_lu().solve(&rhs);
+            (0..n).map(|r| d[(r, 0)]).collect::<Vec<f64>>()
+        };
+        for case in 0..300 {
+            let n = [6, 12, 18][case % 3];
+            let rows = n + rng.gen_range(0..2 * n);
+            // Columns scaled over up to six decades (as a helix's
+            // placement and shape parameters are).
+            let scale: Vec<f64> = (0..n)
+                .map(|_| 10f64.powf(rng.gen_range(-3.0..3.0)))
+                .collect();
+            let j: Vec<f64> = (0..rows * n)
+                .map(|k| rng.gen_range(-1.0..1.0) * scale[k % n])
+                .collect();
+            let r: Vec<f64> = (0..rows).map(|_| rng.gen_range(-1.0..1.0)).collect();
+            let mut jtj = vec![0.0; n * n];
+            let mut jtr = vec![0.0; n];
+            for row in 0..rows {
+                for a in 0..n {
+                    jtr[a] += j[row * n + a] * r[row];
+                    for b in 0..n {
+                        jtj[a * n + b] += j[row * n + a] * j[row * n + b];
+                    }
+                }
+            }
+            let max_diag = (0..n).map(|k| jtj[k * n + k]).fold(0.0, f64::max);
+            let lambda = 10f64.powf(rng.gen_range(-12.0..3.0));
+            let mut scratch = vec![0.0; n * n + n];
+            let got = damped_step(&jtj, &jtr, n, lambda, max_diag, &mut scratch).to_vec();
+            let want = lu(&jtj, &jtr, n, lambda, max_diag);
+            // Both solve the same system: compare residuals' size with the
+            // right-hand side, in the damped matrix's norm.
+            for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+                let tol = 1e-6 * (w.abs() + want.iter().map(|v| v.abs()).fold(0.0, f64::max));
+                assert!((g - w).abs() <= tol, "case {case} n {n} k {k}: {g} vs {w}");
+            }
+        }
+        // Not positive definite (a negative eigenvalue): the LU's answer.
+        let n = 6;
+        let mut jtj = vec![0.0; n * n];
+        for k in 0..n {
+            jtj[k * n + k] = if k == 2 { -1.0 } else { 1.0 + k as f64 };
+        }
+        jtj[1] = 0.5;
+        jtj[n] = 0.5;
+        let jtr: Vec<f64> = (0..n).map(|k| 1.0 - 0.3 * k as f64).collect();
+        let mut scratch = vec![0.0; n * n + n];
+        let got = damped_step(&jtj, &jtr, n, 0.0, 6.0, &mut scratch).to_vec();
+        assert_eq!(got, lu(&jtj, &jtr, n, 0.0, 6.0));
+        assert!(got[2] < 0.0 || got[2] > 0.0, "{got:?}");
+    }
 
     fn exact_piece(truth: &PlacedHelix, n: usize) -> (Vec<DVec2>, Piece) {
         let ts: Vec<f64> = (0..n)
