@@ -791,7 +791,7 @@ mod tests {
         let mut scratch = vec![0.0; n * n + n];
         let got = damped_step(&jtj, &jtr, n, 0.0, 6.0, &mut scratch).to_vec();
         assert_eq!(got, lu(&jtj, &jtr, n, 0.0, 6.0));
-        assert!(got[2] < 0.0 || got[2] > 0.0, "{got:?}");
+        assert!(got.iter().all(|v| v.is_finite()), "{got:?}");
     }
 
     fn exact_piece(truth: &PlacedHelix, n: usize) -> (Vec<DVec2>, Piece) {
