@@ -7,7 +7,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::estimate::is_corner;
-use super::nelder_mead::{minimize, NelderMeadOptions};
+use super::least_squares::{least_squares, LeastSquaresOptions};
 use super::placed::{Evaluator, PlacedHelix};
 use super::refine::{refine_to, Objective, Piece};
 use super::trig::sin_cos;
@@ -190,6 +190,24 @@ pub(super) fn plausible(piece: &Piece) -> bool {
 fn stays_plausible(was: bool, after: &Piece) -> bool {
     !was || plausible(after)
 }
+
+/// Evaluations of a two-vertex fit's residuals ([`least_squares`]: a
+/// Jacobian costs three, so about six steps). The paper fits these by
+/// Nelder–Mead ([`minimize`](super::minimize)), which took up to 400
+/// evaluations (85 % of the fits ran into that cap: where the two vertices
+/// have no exact helix, the simplex creeps along a flat valley) and was a
+/// fifth of a noisy lift. By Levenberg–Marquardt on the four residuals
+/// (the position's two and the tangent's two), capped at 16, 30, 60, 100
+/// or 200 evaluations, the benchmark's 480 lifts at 0.1 % and 0.3 % noise
+/// (48 seeds, `benches/sketch_noise.rs`) were 463, 464, 464, 456 and 452
+/// right against Nelder–Mead's 461, in 80, 77, 82, 86 and 89 % of its CPU
+/// time. The fits only rank the candidates, which are then refined and
+/// grown (`fit_at`); a few steps place them as well as a converged fit,
+/// and the lifts that differ are the ones decided by last-bit rounding.
+/// With 30: four curls on 144 seeds, 139 → 143 right at 0.1 % (86 → 69 ms
+/// a lift) and 112 → 118 at 0.3 % (117 → 104 ms); the 400 lifts at 0 to
+/// 0.03 % 398 → 398, the 960 at 1e-5 to 4.5e-5 all right as before.
+const TWO_VERTEX_EVALS: usize = 30;
 
 /// Starting tilts `c` of the two-vertex fits.
 const START_TILTS: [f64; 3] = [0.0, 0.9, -0.9];
@@ -600,10 +618,9 @@ fn fit_at(
         origin: points[s],
         reflect: kappa < 0.0,
     };
-    let nm = NelderMeadOptions {
-        max_evals: 400,
-        ftol: 1e-12,
-        xtol: 1e-9,
+    let fit_options = LeastSquaresOptions {
+        max_evals: TWO_VERTEX_EVALS,
+        ..Default::default()
     };
     // The neighbours' fits are independent: in parallel, collected in
     // neighbour order.
@@ -645,14 +662,15 @@ fn fit_at(
                     t.sin_cos()
                 };
                 let p = h.point_3d_trig(t, at_t, tilt);
-                BETA_D * (v - DVec2::new(p.x, p.y)).length_squared() / scale2
-                    + (1.0 - BETA_D) * (tn - tangent).length_squared()
+                let (wp, wt) = ((BETA_D / scale2).sqrt(), (1.0 - BETA_D).sqrt());
+                let (dp, dt) = (v - DVec2::new(p.x, p.y), tn - tangent);
+                [wp * dp.x, wp * dp.y, wt * dt.x, wt * dt.y]
             };
             // Several starting tilts: the two-vertex problem has several
             // minima (a loop or not at the seed, the axis towards or away).
             let tilts = if scale2 > 0.0 { &START_TILTS[..] } else { &[] };
             tilts.iter().map(move |&c0| {
-                let m = minimize(e, [a0, b0, c0], [0.3 * a0, 0.3 * b0, 0.3], &nm);
+                let m = least_squares(e, [a0, b0, c0], &fit_options);
                 let mut h = base;
                 h.helix = ProjectedHelix::new(m.x[0].abs(), m.x[1].abs(), m.x[2]);
                 let piece = coverage(&h, points, s, 0.0, (lo, hi), opts.emax);
@@ -1105,7 +1123,9 @@ const POLISH_ITERATIONS: usize = 30;
 /// 2. **Two-vertex fit (6.2).** For each of the `2·NMAX` neighbours `v_n`,
 ///    `(a, b, c)` minimising
 ///    `E = β_D ‖v_n − H(α)‖²/‖v_n‖² + (1 − β_D) ‖T̂_{v_n} − T̂_H(α)‖²`
-///    by Nelder–Mead, `α = ±π/4` (the sign of the side of `v_n`). The paper
+///    (the paper by Nelder–Mead; here by Levenberg–Marquardt on its four
+///    residuals, see [`TWO_VERTEX_EVALS`]), `α = ±π/4` (the sign of the
+///    side of `v_n`). The paper
 ///    leaves `β_D` open and its point term has units; dividing by `‖v_n‖²`
 ///    makes the fit scale-free, `β_D = ½`. Helices whose tangent at `t = 0`
 ///    points along `−y` are rejected (a penalty), as are `a, b < 0` (the
