@@ -1847,6 +1847,20 @@ pub(super) fn merge_noisy(
 /// neighbour is tried as the same helix ([`merge_short`]).
 const SHORT_RATIO: usize = 2;
 
+/// Unions [`merge_short`] fits afresh in one covering; the later ones
+/// start from the stretched pieces only. The fresh fit is a whole noisy
+/// covering fit of the union (grid seeds and all), about 23 ms at 0.3 %
+/// noise, and most unions are refused whatever the start (43 of the 58
+/// the benchmark's 480 noisy lifts try). Measured with
+/// `benches/sketch_noise.rs` (four curls at 0.3 %, 48 seeds): 27 lifts
+/// try no union, 7 one, 8 two, 2 three and 3 four, and `merge_short` then
+/// takes 27, 59, 84 and 106 ms. With one fresh fit a covering, one of the
+/// 480 noisy lifts changed (two coils at 0.3 %, seed 27: three helices
+/// instead of two), one of 288 four-curl lifts (144 seeds, 0.1 % and
+/// 0.3 %) changed the other way, and the 400 and 960 lifts at lower noise
+/// were the same row for row; with two, none of those changed.
+const FRESH_UNIONS: usize = 1;
+
 /// Rounds of [`nearest_feet`] and refinement in [`merge_short`].
 const FOOT_ROUNDS: usize = 3;
 
@@ -1857,7 +1871,8 @@ const FOOT_ROUNDS: usize = 3;
 /// by, and the helix stops there; the stretch after it becomes a piece of
 /// its own, and [`merge_while`]'s probes, grown with the same feet, fail
 /// as the walk did. Here the union is fitted from three starts (a fresh
-/// covering fit of the union, and either piece stretched over it), each
+/// covering fit of the union, for the first [`FRESH_UNIONS`] unions of a
+/// covering, and either piece stretched over it), each
 /// refined [`FOOT_ROUNDS`] times with the feet moved to the curve's
 /// nearest points ([`nearest_feet`]); the best that `accept` scores
 /// replaces the pair. Measured on the noisy drawings of
@@ -1876,13 +1891,23 @@ fn merge_short(
         emax: opts.emax,
     };
     let near = 0.5 * opts.emax;
+    let budget = std::cell::Cell::new(FRESH_UNIONS);
     merge_pairs(pieces, |pair| {
         let (first, last) = (pair[0].first, pair[1].last);
         let lengths = [&pair[0], &pair[1]].map(|p| p.last - p.first);
         if SHORT_RATIO * lengths[0].min(lengths[1]) > lengths[0].max(lengths[1]) {
             return Vec::new();
         }
-        [None, Some(&pair[0]), Some(&pair[1])]
+        let fresh = budget.get() > 0;
+        if fresh {
+            budget.set(budget.get() - 1);
+        }
+        let starts: Vec<Option<&Piece>> = if fresh {
+            vec![None, Some(&pair[0]), Some(&pair[1])]
+        } else {
+            vec![Some(&pair[0]), Some(&pair[1])]
+        };
+        starts
             .into_par_iter()
             .filter_map(|start| {
                 let mut trial = match start {
