@@ -103,12 +103,19 @@ impl Piece {
     }
 
     /// [`reproject_feet`](Self::reproject_feet) to a least-squares step's
-    /// precision ([`Evaluator::project_all_coarse`](super::Evaluator::project_all_coarse)).
-    fn reproject_feet_coarse(&mut self, points: &[DVec2], feet: &mut Vec<Foot>) {
+    /// precision ([`Evaluator::project_all_coarse`](super::Evaluator::project_all_coarse)),
+    /// returning the sum of the squared offsets, or `None` (and the feet
+    /// part done) once that passes `limit`.
+    fn reproject_feet_coarse(
+        &mut self,
+        points: &[DVec2],
+        feet: &mut Vec<Foot>,
+        limit: f64,
+    ) -> Option<f64> {
         let vertices = &points[self.first..self.first + self.ts.len()];
         self.helix
             .evaluator()
-            .project_all_coarse_into(vertices, &mut self.ts, feet)
+            .project_all_coarse_into(vertices, &mut self.ts, feet, limit)
     }
 
     /// Every vertex measured at its parameter.
@@ -688,6 +695,11 @@ pub fn refine_to(
         while lambda < 1e12 {
             let delta = damped_step(&jtj, &jtr, n, lambda, max_diag, &mut scratch);
             let mut finite = true;
+            // The squared offsets a trial may reach before its distance
+            // term alone makes `E` no lower (`E_T ≥ 0`); the margin keeps
+            // the projections' sums, added in another order than
+            // `objective_with`'s, from refusing a step it would take.
+            let mut room = cost * (1.0 + 1e-9) / (wd * wd);
             for (i, ((p, from), f)) in trial
                 .iter_mut()
                 .zip(pieces.iter())
@@ -701,7 +713,16 @@ pub fn refine_to(
                     finite &= v.is_finite();
                 }
                 p.helix = PlacedHelix::from_params(&params, p.helix.reflect);
-                p.reproject_feet_coarse(points, f);
+                if !finite {
+                    break;
+                }
+                match p.reproject_feet_coarse(points, f, room) {
+                    Some(squares) => room -= squares,
+                    None => {
+                        finite = false;
+                        break;
+                    }
+                }
             }
             let new_cost = if finite {
                 objective_with(&trial, &trial_feet, obj)
