@@ -600,18 +600,94 @@ fn noisy_drawings_are_lifted_to_few_plausible_helices() {
         assert!((0.1..=10.0).contains(ratio), "{runs:?}");
         assert!(*drawn < 8.0, "{runs:?}");
     }
-    // 0.3 %: fewer good answers, never a wild one.
-    let wild: Vec<(usize, f64)> = [(0usize, 0u64), (3, 1), (4, 2)]
+    // 0.3 %: a few depths off, never a wild lift. Measured on these 15:
+    // the count right on 15, the depth within 2× on 13 (the four curls,
+    // seeds 1 and 2, at 2.9× and 2.0×), every drawn vertex within 6σ; on
+    // 192 lifts of the four curls (benches/sketch_noise.rs) the depth
+    // within 2× on 165, never beyond 5.3×, and within 7.1σ.
+    let heavy: Vec<(usize, usize, f64, f64)> = (0..drawings.len() * seeds)
         .into_par_iter()
-        .map(|(i, seed)| {
-            let d = &drawings[i].1;
-            let r = lift_sketch(&with_noise(d, 3e-3 * polyline_length(d), seed), &o).unwrap();
-            (r.helices.len(), depth(&r) / exact_depth[i])
+        .map(|n| {
+            let (i, seed) = (n / seeds, (n % seeds) as u64);
+            let (helices, d) = &drawings[i];
+            let sigma = 3e-3 * polyline_length(d);
+            let r = lift_sketch(&with_noise(d, sigma, seed), &o).unwrap();
+            for h in &r.helices {
+                assert!(h.helix.a.abs() < 10.0 * r.length, "{h:?}");
+            }
+            let ratio = depth(&r) / exact_depth[i];
+            (*helices, r.helices.len(), ratio, r.drawn_error / sigma)
         })
         .collect();
-    eprintln!("{wild:?}");
-    for (count, ratio) in &wild {
-        assert!(*count <= 6 && *ratio < 20.0, "{wild:?}");
+    let exact_count = heavy.iter().filter(|r| r.0 == r.1).count();
+    let near_depth = heavy.iter().filter(|r| (0.5..=2.0).contains(&r.2)).count();
+    assert!(
+        exact_count >= 14,
+        "{exact_count}/15 right at 0.3 %: {heavy:?}"
+    );
+    assert!(
+        near_depth >= 13,
+        "{near_depth}/15 within 2× at 0.3 %: {heavy:?}"
+    );
+    for (want, got, ratio, drawn) in &heavy {
+        assert!(*got <= want + 1, "{heavy:?}");
+        assert!((0.25..=6.0).contains(ratio), "{heavy:?}");
+        assert!(*drawn < 8.0, "{heavy:?}");
+    }
+}
+
+#[test]
+fn lightly_noisy_drawings_keep_their_helices_and_depth() {
+    // Issue 22: from no noise to 0.03 % of the length, each drawing comes
+    // back as the helices drawn, at the exact drawing's depth, every drawn
+    // vertex within a few σ of the lift (or within a tenth of E_max, which
+    // stays at its floor of 0.1 % of the length up to 0.02 % of noise).
+    // Measured (benches/sketch_noise.rs, 16 seeds at each level, 400
+    // lifts): all 400 with the right count, depth 0.98–1.03× but one lift
+    // at 2.6× (three curls at 0.03 %, seed 1); drawn vertices within 9.9σ,
+    // 0.1 E_max at most. These are seed 0: 0.95–1.03×, within 4.4σ.
+    use rayon::prelude::*;
+    use strandfit::synthetic::{synthetic_sketch, synthetic_sketch_curls};
+    let drawings: Vec<(usize, Vec<DVec2>)> = vec![
+        (2, synthetic_sketch(500)),
+        (1, synthetic_sketch_curls(500, 1)),
+        (2, synthetic_sketch_curls(500, 2)),
+        (3, synthetic_sketch_curls(500, 3)),
+        (4, synthetic_sketch_curls(500, 4)),
+    ];
+    let o = SketchOptions::default();
+    let exact: Vec<(usize, f64)> = drawings
+        .par_iter()
+        .map(|(_, d)| {
+            let r = lift_sketch(d, &o).unwrap();
+            (r.helices.len(), depth(&r))
+        })
+        .collect();
+    for ((want, _), (got, _)) in drawings.iter().zip(&exact) {
+        assert_eq!(want, got, "the exact drawings");
+    }
+    let noises = [1e-5, 1e-4, 3e-4];
+    let runs: Vec<(usize, f64, usize, f64, f64)> = (0..drawings.len() * noises.len())
+        .into_par_iter()
+        .map(|n| {
+            let (i, noise) = (n / noises.len(), noises[n % noises.len()]);
+            let (helices, d) = &drawings[i];
+            let sigma = noise * polyline_length(d);
+            let r = lift_sketch(&with_noise(d, sigma, 0), &o).unwrap();
+            let drawn = r.drawn_error / sigma.max(r.emax / 80.0);
+            (
+                *helices,
+                noise,
+                r.helices.len(),
+                depth(&r) / exact[i].1,
+                drawn,
+            )
+        })
+        .collect();
+    for (want, noise, got, ratio, drawn) in &runs {
+        assert_eq!(want, got, "{noise}: {runs:?}");
+        assert!((0.8..=1.25).contains(ratio), "{noise}: {runs:?}");
+        assert!(*drawn < 8.0, "{noise}: {runs:?}");
     }
 }
 

@@ -714,14 +714,22 @@ mod tests {
         // 0.94118 and 0.94116 against the reference: (5.4) takes the first.
         let (p, r, frame) = example_5_5();
         let reference = r[2].normalize();
-        // c = 1/8: the admissible arc's ends score 0.9411777 and 0.9411615.
-        for (c, at_least) in [(0.125, 0.94117), (0.25, 0.0)] {
+        // c = 1/8: the admissible arc's ends score 0.9411777 and 0.9411615;
+        // c = 1/4: the choice scores 0.485084. In both the unconstrained
+        // maximiser is not admissible: the rule's constraint is active.
+        for (c, at_least) in [(0.125, 0.94117), (0.25, 0.48508)] {
             let s = RrmfSpline::build(&p, &r, frame, c).unwrap();
             let last = s.segments.last().unwrap();
             let u_i = s.segments[s.segments.len() - 2].curve.frame(1.0)[0];
             let du = (p[2] - last.curve.curve.start).normalize();
             let u_end = last.curve.curve.tangent(1.0);
             let (score, u_best) = scanned_best(u_i, du, reference);
+            let perp = u_i - u_i.dot(du) * du;
+            let free = (du.cross(perp).dot(reference)).atan2(perp.dot(reference));
+            assert!(
+                !admissible(u_i, du, DQuat::from_axis_angle(du, free) * u_i),
+                "c = {c}: the constraint is not active"
+            );
             // At least the best scanned admissible turn (the supremum is on
             // the boundary; the choice is NUDGE inside it).
             assert!(
@@ -767,14 +775,38 @@ mod tests {
             if !admissible(u_i, du, DQuat::from_axis_angle(du, best) * u_i) {
                 constrained += 1;
             }
-            // The nudge costs at most |A|·1e-4 of the score.
+            // At least the best of the scan: the choice is NUDGE (1e-8 rad)
+            // inside the supremum, which costs at most 1e-8 of the score;
+            // the other end of an admissible arc scores lower by far more
+            // (1.6e-5 in Example 5.5).
             assert!(
-                u.dot(reference) > score - 1.1e-4,
+                u.dot(reference) > score - 1e-7,
                 "{} < {score}",
                 u.dot(reference)
             );
         }
         assert!(constrained > 20, "only {constrained} constrained cases");
+    }
+
+    #[test]
+    fn an_exact_tie_goes_to_the_positive_turn() {
+        // The reference is `u_i` itself, in the plane of `u_i` and `Δu`:
+        // the unconstrained maximiser (no turn) is not admissible, and the
+        // admissible set is symmetric about it (mirrored in that plane), so
+        // its two nearest ends score the same.
+        let du = DVec3::Z;
+        for phi in [0.6f64, 1.0, 1.5, 2.2] {
+            let u_i = DVec3::new(phi.sin(), 0.0, phi.cos());
+            assert!(!admissible(u_i, du, u_i));
+            let u = select_tangent(u_i, du, u_i).expect("an admissible turn");
+            assert!(admissible(u_i, du, u));
+            // The mirror turn scores the same (to rounding)...
+            let mirror = DVec3::new(u.x, -u.y, u.z);
+            assert!(admissible(u_i, du, mirror));
+            assert!((mirror.dot(u_i) - u.dot(u_i)).abs() < 1e-12, "φ = {phi}");
+            // ...and the positive turn about Δu is taken.
+            assert!(u_i.cross(u).dot(du) > 0.0, "φ = {phi}: {u}");
+        }
     }
 
     #[test]
