@@ -773,6 +773,67 @@ fn two_helix_drawing(dir: &std::path::Path) -> (std::path::PathBuf, Vec<[f64; 2]
 }
 
 #[test]
+fn sketch_reports_the_noise_of_a_noisy_drawing_and_its_emax() {
+    // Issue 22: a drawing with Gaussian noise of 0.1 % of its length (half
+    // a pixel on a 500-pixel stroke). The command reports the noise it
+    // estimates and the E_max it chose above it (5 times the noise), and
+    // lifts two helices; `--emax` overrides the choice.
+    use rand::{Rng, SeedableRng};
+    let dir = tempfile::tempdir().unwrap();
+    let d = strandfit::synthetic::synthetic_sketch(500);
+    let length: f64 = d.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+    let sigma = 1e-3 * length;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let mut gauss = move || {
+        let u: f64 = rng.gen_range(f64::MIN_POSITIVE..1.0);
+        let v: f64 = rng.gen();
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    };
+    let pts: Vec<[f64; 2]> = d
+        .iter()
+        .map(|p| [p.x + sigma * gauss(), p.y + sigma * gauss()])
+        .collect();
+    let input = dir.path().join("noisy.json");
+    std::fs::write(&input, serde_json::to_string(&pts).unwrap()).unwrap();
+    let run = |extra: &[&str]| {
+        let out_json = dir.path().join("out.json");
+        let mut args = vec![
+            "sketch",
+            input.to_str().unwrap(),
+            "-o",
+            out_json.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        strandfit_ok(&args, "");
+        json(&std::fs::read(&out_json).unwrap())
+    };
+    let doc = run(&[]);
+    let noise = doc["noise_distance"].as_f64().unwrap();
+    let emax = doc["emax_distance"].as_f64().unwrap();
+    let l = doc["length"].as_f64().unwrap();
+    assert!(
+        (noise / sigma - 1.0).abs() < 0.15,
+        "noise {noise} against {sigma}"
+    );
+    assert!((emax / (5.0 * noise) - 1.0).abs() < 1e-9, "{emax} {noise}");
+    assert_eq!(doc["denoised"], true);
+    assert_eq!(
+        doc["helices"].as_array().unwrap().len(),
+        2,
+        "{}",
+        doc["helices"]
+    );
+    // Every drawn vertex within a few times the noise of the lift.
+    let drawn = doc["projection"]["drawn_max_distance"].as_f64().unwrap();
+    assert!(drawn < 8.0 * sigma, "{drawn} against σ {sigma}");
+    // Given, E_max is that fraction of the length; the noise is still told.
+    let given = run(&["--emax", "0.02"]);
+    let emax = given["emax_distance"].as_f64().unwrap();
+    assert!((emax / (0.02 * l) - 1.0).abs() < 1e-9, "{emax} {l}");
+    assert_eq!(given["noise_distance"].as_f64().unwrap(), noise);
+}
+
+#[test]
 fn sketch_evens_out_an_uneven_drawing_keeping_its_vertices() {
     // The benchmark's two-helix drawing at 200 vertices, sampled evenly in
     // the helix parameter (edges up to ~5x apart). Densified (default):
