@@ -2,7 +2,7 @@
 //! back to them; piecewise projections are segmented at their junctions;
 //! invariance to similarity transforms of the drawing; noise; bad input.
 
-use std::f64::consts::TAU;
+use std::f64::consts::{PI, TAU};
 
 use glam::{DQuat, DVec2, DVec3};
 use strandfit::sketch::{lift_sketch, refit_g1, Resampling, SketchError, SketchOptions};
@@ -634,6 +634,42 @@ fn noisy_drawings_are_lifted_to_few_plausible_helices() {
         assert!((0.25..=6.0).contains(ratio), "{heavy:?}");
         assert!(*drawn < 8.0, "{heavy:?}");
     }
+}
+
+#[test]
+fn lifted_angles_are_reported_within_a_turn() {
+    // A circle arc drawn with a little noise: the helix seen along its
+    // axis, where the fit's tilt wandered as far as 29.8 rad (the same
+    // helix as 29.8 − 10π, but not what a reader of the output expects),
+    // and a straight stroke (−5.2 rad). Every tilt and rotation comes back
+    // in (−π, π]. (Before: 5 of the 8 noisy lifts here out of it.)
+    let arc: Vec<DVec2> = (0..500)
+        .map(|k| 100.0 * DVec2::from_angle(0.01 * k as f64))
+        .collect();
+    let line: Vec<DVec2> = (0..500).map(|k| DVec2::new(k as f64, 0.0)).collect();
+    let o = SketchOptions::default();
+    let mut lifts = 0;
+    for (d, seed, sigma) in [
+        (&arc, 0, 0.0),
+        (&arc, 1, 0.002),
+        (&arc, 3, 0.005),
+        (&arc, 5, 0.02),
+        (&arc, 11, 0.002),
+        (&arc, 2, 0.5),
+        (&line, 0, 0.0),
+        (&line, 10, 0.1),
+        (&line, 3, 0.5),
+    ] {
+        {
+            let r = lift_sketch(&with_noise(d, sigma, seed), &o).unwrap();
+            for h in &r.helices {
+                assert!(h.helix.c > -PI && h.helix.c <= PI, "σ {sigma}: {h:?}");
+                assert!(h.theta > -PI && h.theta <= PI, "σ {sigma}: {h:?}");
+            }
+            lifts += 1;
+        }
+    }
+    assert_eq!(lifts, 9);
 }
 
 #[test]

@@ -807,12 +807,14 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
         .iter()
         .zip(&z0)
         .map(|(p, &z)| LiftedHelix {
+            // The angles within a turn: the fits move them freely, and
+            // a tilt seen along the axis can wander by several turns.
             helix: ProjectedHelix::new(
                 p.helix.helix.a * length,
                 p.helix.helix.b * length,
-                p.helix.helix.c,
+                within_a_turn(p.helix.helix.c),
             ),
-            theta: p.helix.theta,
+            theta: within_a_turn(p.helix.theta),
             origin: centre + p.helix.origin * length,
             reflect: p.helix.reflect,
             mirror: p.mirror,
@@ -957,4 +959,41 @@ fn z_offsets(pieces: &[Piece]) -> Vec<f64> {
         out.push(target - z_start);
     }
     out
+}
+
+/// `angle` less whole turns, in `(−π, π]` (the same sine and cosine, to
+/// rounding).
+fn within_a_turn(angle: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let a = angle - TAU * (angle / TAU).round();
+    if a <= -PI {
+        a + TAU
+    } else if a > PI {
+        a - TAU
+    } else {
+        a
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::within_a_turn;
+    use std::f64::consts::{PI, TAU};
+
+    #[test]
+    fn angles_are_brought_within_a_turn_keeping_their_direction() {
+        for k in -2000..=2000 {
+            let angle = 0.0173 * k as f64;
+            let a = within_a_turn(angle);
+            assert!(a > -PI && a <= PI, "{angle} -> {a}");
+            assert!((a.sin() - angle.sin()).abs() < 1e-13, "{angle} -> {a}");
+            assert!((a.cos() - angle.cos()).abs() < 1e-13, "{angle} -> {a}");
+            // Whole turns only.
+            let turns = (angle - a) / TAU;
+            assert!((turns - turns.round()).abs() < 1e-12, "{angle} -> {a}");
+        }
+        assert_eq!(within_a_turn(PI), PI);
+        assert_eq!(within_a_turn(-PI), PI);
+        assert_eq!(within_a_turn(0.5), 0.5);
+    }
 }
