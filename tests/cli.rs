@@ -772,6 +772,21 @@ fn two_helix_drawing(dir: &std::path::Path) -> (std::path::PathBuf, Vec<[f64; 2]
     (input, pts)
 }
 
+/// `strandfit sketch INPUT EXTRA… -o DIR/out.json`, which must succeed;
+/// the JSON written.
+fn sketch_json(dir: &Path, input: &Path, extra: &[&str]) -> serde_json::Value {
+    let out_json = dir.join("out.json");
+    let mut args = vec![
+        "sketch",
+        input.to_str().unwrap(),
+        "-o",
+        out_json.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    strandfit_ok(&args, "");
+    json(&std::fs::read(&out_json).unwrap())
+}
+
 #[test]
 fn sketch_reports_the_noise_of_a_noisy_drawing_and_its_emax() {
     // Issue 22: a drawing with Gaussian noise of 0.1 % of its length (half
@@ -795,18 +810,7 @@ fn sketch_reports_the_noise_of_a_noisy_drawing_and_its_emax() {
         .collect();
     let input = dir.path().join("noisy.json");
     std::fs::write(&input, serde_json::to_string(&pts).unwrap()).unwrap();
-    let run = |extra: &[&str]| {
-        let out_json = dir.path().join("out.json");
-        let mut args = vec![
-            "sketch",
-            input.to_str().unwrap(),
-            "-o",
-            out_json.to_str().unwrap(),
-        ];
-        args.extend(extra);
-        strandfit_ok(&args, "");
-        json(&std::fs::read(&out_json).unwrap())
-    };
+    let run = |extra: &[&str]| sketch_json(dir.path(), &input, extra);
     let doc = run(&[]);
     let noise = doc["noise_distance"].as_f64().unwrap();
     let emax = doc["emax_distance"].as_f64().unwrap();
@@ -841,18 +845,7 @@ fn sketch_evens_out_an_uneven_drawing_keeping_its_vertices() {
     // a drawn vertex; uniform (the paper's): as many points as drawn.
     let dir = tempfile::tempdir().unwrap();
     let (input, pts) = two_helix_drawing(dir.path());
-    let run = |extra: &[&str]| {
-        let out_json = dir.path().join("out.json");
-        let mut args = vec![
-            "sketch",
-            input.to_str().unwrap(),
-            "-o",
-            out_json.to_str().unwrap(),
-        ];
-        args.extend(extra);
-        strandfit_ok(&args, "");
-        json(&std::fs::read(&out_json).unwrap())
-    };
+    let run = |extra: &[&str]| sketch_json(dir.path(), &input, extra);
     let dense = run(&[]);
     assert_eq!(dense["resampled"], true);
     assert_eq!(dense["resampling"], "densify");

@@ -520,6 +520,20 @@ fn the_noise_of_a_drawing_is_estimated() {
     }
 }
 
+/// The benchmark's five drawings (`benches/sketch_noise.rs`, 500
+/// vertices) with the number of helices each is drawn from: two coils and
+/// one to four curls.
+fn benchmark_drawings() -> Vec<(usize, Vec<DVec2>)> {
+    use strandfit::synthetic::{synthetic_sketch, synthetic_sketch_curls};
+    vec![
+        (2, synthetic_sketch(500)),
+        (1, synthetic_sketch_curls(500, 1)),
+        (2, synthetic_sketch_curls(500, 2)),
+        (3, synthetic_sketch_curls(500, 3)),
+        (4, synthetic_sketch_curls(500, 4)),
+    ]
+}
+
 #[test]
 fn noisy_drawings_are_lifted_to_few_plausible_helices() {
     // Issue 22: at 0.1 % noise (half a pixel on a 500-pixel stroke) the
@@ -536,14 +550,7 @@ fn noisy_drawings_are_lifted_to_few_plausible_helices() {
     // 13×. The misses are near-cusps (helices tilted 1.2 rad) blurred by
     // the noise.
     use rayon::prelude::*;
-    use strandfit::synthetic::{synthetic_sketch, synthetic_sketch_curls};
-    let drawings: Vec<(usize, Vec<DVec2>)> = vec![
-        (2, synthetic_sketch(500)),
-        (1, synthetic_sketch_curls(500, 1)),
-        (2, synthetic_sketch_curls(500, 2)),
-        (3, synthetic_sketch_curls(500, 3)),
-        (4, synthetic_sketch_curls(500, 4)),
-    ];
+    let drawings = benchmark_drawings();
     let o = SketchOptions::default();
     let exact_depth: Vec<f64> = drawings
         .iter()
@@ -683,14 +690,7 @@ fn lightly_noisy_drawings_keep_their_helices_and_depth() {
     // at 2.6× (three curls at 0.03 %, seed 1); drawn vertices within 9.9σ,
     // 0.1 E_max at most. These are seed 0: 0.95–1.03×, within 4.4σ.
     use rayon::prelude::*;
-    use strandfit::synthetic::{synthetic_sketch, synthetic_sketch_curls};
-    let drawings: Vec<(usize, Vec<DVec2>)> = vec![
-        (2, synthetic_sketch(500)),
-        (1, synthetic_sketch_curls(500, 1)),
-        (2, synthetic_sketch_curls(500, 2)),
-        (3, synthetic_sketch_curls(500, 3)),
-        (4, synthetic_sketch_curls(500, 4)),
-    ];
+    let drawings = benchmark_drawings();
     let o = SketchOptions::default();
     let exact: Vec<(usize, f64)> = drawings
         .par_iter()
