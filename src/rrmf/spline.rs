@@ -793,19 +793,27 @@ mod tests {
         // The reference is `u_i` itself, in the plane of `u_i` and `Δu`:
         // the unconstrained maximiser (no turn) is not admissible, and the
         // admissible set is symmetric about it (mirrored in that plane), so
-        // its two nearest ends score the same.
-        let du = DVec3::Z;
-        for phi in [0.6f64, 1.0, 1.5, 2.2] {
+        // its two nearest ends score the same: the positive turn about `Δu`
+        // is taken. With `Δu` reversed that is the other physical side, and
+        // a reference tipped a little towards the negative side makes that
+        // side win: the choice is the tie rule's, not a side that happens
+        // to score higher.
+        let cases = [0.6f64, 1.0, 1.5, 2.2]
+            .into_iter()
+            .flat_map(|phi| [(DVec3::Z, phi), (-DVec3::Z, PI - phi)]);
+        for (du, phi) in cases {
             let u_i = DVec3::new(phi.sin(), 0.0, phi.cos());
             assert!(!admissible(u_i, du, u_i));
             let u = select_tangent(u_i, du, u_i).expect("an admissible turn");
             assert!(admissible(u_i, du, u));
-            // The mirror turn scores the same (to rounding)...
-            let mirror = DVec3::new(u.x, -u.y, u.z);
-            assert!(admissible(u_i, du, mirror));
-            assert!((mirror.dot(u_i) - u.dot(u_i)).abs() < 1e-12, "φ = {phi}");
-            // ...and the positive turn about Δu is taken.
-            assert!(u_i.cross(u).dot(du) > 0.0, "φ = {phi}: {u}");
+            assert!(u_i.cross(u).dot(du) > 0.0, "φ = {phi}, Δu = {du}: {u}");
+            // The negative side, favoured by a tipped reference.
+            let side = du.cross(u_i).normalize();
+            let tipped = (u_i - 1e-6 * side).normalize();
+            let v = select_tangent(u_i, du, tipped).expect("an admissible turn");
+            assert!(u_i.cross(v).dot(du) < 0.0, "φ = {phi}, Δu = {du}: {v}");
+            // The two ends mirror each other in the plane of u_i and Δu.
+            assert!((v - DVec3::new(u.x, -u.y, u.z)).length() < 1e-6, "{u} {v}");
         }
     }
 

@@ -799,7 +799,8 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
     }
     // A lone helix the drawing does not show the depth of is made flat.
     if let [piece] = pieces.as_mut_slice() {
-        if let Some(flat) = flattened(&unit, piece, noise / length, emax) {
+        let sigma = if denoised { noise / length } else { 0.0 };
+        if let Some(flat) = flattened(&unit, piece, sigma, emax) {
             *piece = flat;
             kept = true;
         }
@@ -970,20 +971,22 @@ fn z_offsets(pieces: &[Piece]) -> Vec<f64> {
 
 /// Least depth (beyond the paper): a flatter helix that draws `piece`'s
 /// vertices as well, where the drawing does not show its depth; `sigma`
-/// and `emax` in the units of `points`.
+/// (the noise, 0 where the drawing was not denoised: its residuals are
+/// then its bends) and `emax` in the units of `points`.
 ///
 /// Why: a projection shows `b cos c` (the pitch across the page) and
 /// `a sin c`, not always the depth. A straight stroke (`a → 0`) is drawn by
 /// a line at any tilt, and a circle arc (`c → ±π/2`, the helix seen along
-/// its axis) by a helix of any pitch; an exact drawing's fit stays where
-/// it starts, flat, but on a noisy one the fit's steps wander along that
-/// valley (a 500-vertex stroke came back 0.65–1.6 times its length deep
-/// at 0.001–0.1 % noise, a 5-rad arc 0.2–4 %). Tried: the pitch dropped
-/// (`b → 0`, the arc's valley) and the tilt (`c → 0` keeping `b cos c`, the
-/// stroke's), each refined; the flattest that leaves the vertices' sum of
-/// squared distances at most `σ̂² ln n` above the piece's (fixing the depth
-/// frees one parameter: the information criterion of the merges) and at
-/// most half as deep is taken. The strokes come back flat (under 0.005 of
+/// its axis) by a helix of any pitch; the fit's steps wander along that
+/// valley (a 500-vertex stroke came back 0.03 of its length deep without
+/// noise, 0.08–1.6 at 0.001–0.1 %; a 5-rad arc flat without noise,
+/// 0.2–4 % with). Tried: the pitch dropped (`b → 0`, the arc's valley) and
+/// the tilt (`c → 0` keeping `b cos c`, the stroke's), each refined; the
+/// flattest is taken that leaves the vertices' sum of squared distances at
+/// most `max(σ, E_max/1000)² ln n` above the piece's (fixing the depth
+/// frees one parameter: the information criterion of the merges), no
+/// vertex farther than the piece's farthest or `E_max`, and is at most
+/// half as deep. The strokes come back flat (under 0.005 of
 /// their length deep); on the noisy arcs tried the refit finds the pitch
 /// again (their fits' tilt is off `π/2` by 0.01–0.1 rad, and there the
 /// pitch shows), so they keep it. On the benchmark's drawings
@@ -997,6 +1000,7 @@ fn flattened(points: &[DVec2], piece: &Piece, sigma: f64, emax: f64) -> Option<P
     let squares = |p: &Piece| p.rms_distance(points).powi(2) * n as f64;
     let room = squares(piece) + sigma.max(1e-3 * emax).powi(2) * (n as f64).ln();
     let slope = piece.depth_slope();
+    let farthest = piece.max_distance(points).max(emax);
     let h = piece.helix.helix;
     let obj = Objective { alpha_t: 0.0, emax };
     let mut best: Option<(f64, Piece)> = None;
@@ -1007,7 +1011,8 @@ fn flattened(points: &[DVec2], piece: &Piece, sigma: f64, emax: f64) -> Option<P
         refine_to(points, std::slice::from_mut(&mut p), &obj, 50, 1e-6);
         let s = p.depth_slope();
         let flatter = s < 0.5 * slope && best.as_ref().is_none_or(|(least, _)| s < *least);
-        if flatter && squares(&p) <= room && plausible(&p) {
+        let within = p.max_distance(points) <= farthest;
+        if flatter && within && squares(&p) <= room && plausible(&p) {
             best = Some((s, p));
         }
     }
