@@ -11,8 +11,8 @@ use super::estimate::{
     denoise, densify, estimate_noise, resample, residual_agreement, smoothed,
     tangents_and_curvatures,
 };
-use super::placed::PlacedHelix;
-use super::refine::{objective, refine, refine_to, Objective, Piece, RefineReport};
+use super::placed::{PlacedHelix, PARAMS};
+use super::refine::{objective, refine, refine_holding, Objective, Piece, RefineReport};
 use super::ProjectedHelix;
 
 /// Inputs whose longest edge is within this factor of the shortest are
@@ -981,15 +981,17 @@ fn z_offsets(pieces: &[Piece]) -> Vec<f64> {
 /// valley (a 500-vertex stroke came back 0.03 of its length deep without
 /// noise, 0.08–1.6 at 0.001–0.1 %; a 5-rad arc flat without noise,
 /// 0.2–4 % with). Tried: the pitch dropped (`b → 0`, the arc's valley) and
-/// the tilt (`c → 0` keeping `b cos c`, the stroke's), each refined; the
-/// flattest is taken that leaves the vertices' sum of squared distances at
-/// most `max(σ, E_max/1000)² ln n` above the piece's (fixing the depth
-/// frees one parameter: the information criterion of the merges), no
-/// vertex farther than the piece's farthest or `E_max`, and is at most
-/// half as deep. The strokes come back flat (under 0.005 of
-/// their length deep); on the noisy arcs tried the refit finds the pitch
-/// again (their fits' tilt is off `π/2` by 0.01–0.1 rad, and there the
-/// pitch shows), so they keep it. On the benchmark's drawings
+/// the tilt (`c → 0` keeping `b cos c`, the stroke's), each refined with
+/// the dropped parameter held; the flattest is taken that leaves the
+/// vertices' sum of squared distances at most `max(σ, E_max/1000)² ln n`
+/// above the piece's (the flat fit has one parameter fewer: the
+/// information criterion of the merges), no vertex farther than the
+/// piece's farthest or `E_max`, and is at most half as deep. The strokes
+/// come back flat (under 1e-4 of their length deep). The noisy arcs tried
+/// keep their pitch but at the heaviest noise (0.3 % of the length): held
+/// flat, their denoised vertices sit further off than the criterion
+/// allows (their fits' tilt is off `π/2` by 0.01–0.1 rad, where the pitch
+/// shows; the denoising's bias, perhaps). On the benchmark's drawings
 /// (`benches/sketch_noise.rs`, 1,840 lifts from no noise to 0.3 %, the one
 /// curl among them) every lift came back the same.
 fn flattened(points: &[DVec2], piece: &Piece, sigma: f64, emax: f64) -> Option<Piece> {
@@ -1004,11 +1006,14 @@ fn flattened(points: &[DVec2], piece: &Piece, sigma: f64, emax: f64) -> Option<P
     let h = piece.helix.helix;
     let obj = Objective { alpha_t: 0.0, emax };
     let mut best: Option<(f64, Piece)> = None;
-    for (b, c) in [(0.0, h.c), (h.b * h.c.cos(), 0.0)] {
+    // (`[θ, o_x, o_y, a, b, c]`: the pitch, then the tilt, held.)
+    for (b, c, q) in [(0.0, h.c, 4), (h.b * h.c.cos(), 0.0, 5)] {
         let mut p = piece.clone();
         p.helix.helix = ProjectedHelix::new(h.a, b, c);
         p.reproject(points);
-        refine_to(points, std::slice::from_mut(&mut p), &obj, 50, 1e-6);
+        let mut held = [false; PARAMS];
+        held[q] = true;
+        refine_holding(points, std::slice::from_mut(&mut p), &obj, 50, 1e-6, held);
         let s = p.depth_slope();
         let flatter = s < 0.5 * slope && best.as_ref().is_none_or(|(least, _)| s < *least);
         let within = p.max_distance(points) <= farthest;

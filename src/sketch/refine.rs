@@ -607,6 +607,27 @@ pub fn refine_to(
     max_iterations: usize,
     gain_tol: f64,
 ) -> RefineReport {
+    refine_holding(
+        points,
+        pieces,
+        obj,
+        max_iterations,
+        gain_tol,
+        [false; PARAMS],
+    )
+}
+
+/// [`refine_to`] with each parameter `q` where `held[q]` kept as it is
+/// (in every piece): its Jacobian column is zero, so the damped step
+/// leaves it (`δ_q = 0`: the damped system's row for it is `λ·ε·δ_q = 0`).
+pub(crate) fn refine_holding(
+    points: &[DVec2],
+    pieces: &mut [Piece],
+    obj: &Objective,
+    max_iterations: usize,
+    gain_tol: f64,
+    held: [bool; PARAMS],
+) -> RefineReport {
     let n = pieces.len() * PARAMS;
     let wd = (1.0 - obj.alpha_t).sqrt() / obj.emax;
     let wt = obj.alpha_t.sqrt();
@@ -633,7 +654,13 @@ pub fn refine_to(
             let e = p.helix.evaluator();
             for f in pf {
                 let jac = e.param_jacobian_at(f);
-                let row: [f64; PARAMS] = std::array::from_fn(|q| -wd * f.normal.dot(jac[q]));
+                let row: [f64; PARAMS] = std::array::from_fn(|q| {
+                    if held[q] {
+                        0.0
+                    } else {
+                        -wd * f.normal.dot(jac[q])
+                    }
+                });
                 let r = wd * f.offset;
                 // The block's upper triangle only: it is symmetric (and
                 // `x·y` is `y·x` in floating point too), mirrored below.
@@ -664,7 +691,7 @@ pub fn refine_to(
                     [(i - 1, left, true, 1.0), (i, right, false, -1.0)]
                 {
                     let p0 = piece.helix.params();
-                    for q in 0..PARAMS {
+                    for q in (0..PARAMS).filter(|&q| !held[q]) {
                         let h = 1e-6 * (1.0 + p0[q].abs());
                         let mut pp = p0;
                         pp[q] += h;
@@ -758,6 +785,52 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// A held parameter is left as it was, bit for bit, while the others
+    /// fit: a helix with its radius and rotation off and its pitch held
+    /// right comes back onto its vertices; with the pitch held wrong, the
+    /// fit does what it can without it.
+    #[test]
+    fn held_parameters_stay_as_they_are() {
+        let helix = PlacedHelix::from_params(&[0.7, 0.3, -0.2, 0.4, 0.15, 0.5], false);
+        let ts: Vec<f64> = (0..20).map(|k| 0.5 + 0.1 * k as f64).collect();
+        let points: Vec<DVec2> = ts.iter().map(|&t| helix.point(t)).collect();
+        let obj = Objective {
+            alpha_t: 0.0,
+            emax: 0.01,
+        };
+        let mut held = [false; PARAMS];
+        held[4] = true;
+        for (pitch, exact) in [(0.15, true), (0.05, false)] {
+            let mut piece = Piece {
+                helix,
+                first: 0,
+                last: 19,
+                ts: ts.clone(),
+                mirror: false,
+            };
+            piece.helix.helix.a += 0.02;
+            piece.helix.helix.b = pitch;
+            piece.helix.theta += 0.02;
+            piece.reproject(&points);
+            let report = refine_holding(
+                &points,
+                std::slice::from_mut(&mut piece),
+                &obj,
+                100,
+                1e-13,
+                held,
+            );
+            assert_eq!(piece.helix.helix.b.to_bits(), pitch.to_bits());
+            assert!(report.after < report.before, "{report:?}");
+            let far = piece.max_distance(&points);
+            if exact {
+                assert!(far < 1e-7, "{far}");
+            } else {
+                assert!(far > 1e-4, "{far}");
+            }
+        }
+    }
 
     /// `damped_step` against faer's LU of the same damped system, on
     /// random normal equations (`JᵀJ` of a random `J`, from well- to
