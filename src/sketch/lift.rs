@@ -14,6 +14,7 @@ use super::estimate::{
 use super::placed::{PlacedHelix, PARAMS};
 use super::refine::{objective, refine, refine_holding, Objective, Piece, RefineReport};
 use super::ProjectedHelix;
+use crate::euler::normalize_angle;
 
 /// Inputs whose longest edge is within this factor of the shortest are
 /// used as they are; others are resampled ([`Resampling`]).
@@ -820,9 +821,9 @@ pub fn lift_sketch(points: &[DVec2], opts: &SketchOptions) -> Result<SketchLift,
             helix: ProjectedHelix::new(
                 p.helix.helix.a * length,
                 p.helix.helix.b * length,
-                within_a_turn(p.helix.helix.c),
+                normalize_angle(p.helix.helix.c),
             ),
-            theta: within_a_turn(p.helix.theta),
+            theta: normalize_angle(p.helix.theta),
             origin: centre + p.helix.origin * length,
             reflect: p.helix.reflect,
             mirror: p.mirror,
@@ -1024,30 +1025,18 @@ fn flattened(points: &[DVec2], piece: &Piece, sigma: f64, emax: f64) -> Option<P
     best.map(|(_, p)| p)
 }
 
-/// `angle` less whole turns, in `(−π, π]` (the same sine and cosine, to
-/// rounding).
-fn within_a_turn(angle: f64) -> f64 {
-    use std::f64::consts::{PI, TAU};
-    let a = angle - TAU * (angle / TAU).round();
-    if a <= -PI {
-        a + TAU
-    } else if a > PI {
-        a - TAU
-    } else {
-        a
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    use super::within_a_turn;
+    use crate::euler::normalize_angle;
     use std::f64::consts::{PI, TAU};
 
+    /// The lift reports its angles through `euler::normalize_angle`:
+    /// within a turn, the same direction, whole turns taken off.
     #[test]
     fn angles_are_brought_within_a_turn_keeping_their_direction() {
         for k in -2000..=2000 {
             let angle = 0.0173 * k as f64;
-            let a = within_a_turn(angle);
+            let a = normalize_angle(angle);
             assert!(a > -PI && a <= PI, "{angle} -> {a}");
             assert!((a.sin() - angle.sin()).abs() < 1e-13, "{angle} -> {a}");
             assert!((a.cos() - angle.cos()).abs() < 1e-13, "{angle} -> {a}");
@@ -1055,8 +1044,8 @@ mod tests {
             let turns = (angle - a) / TAU;
             assert!((turns - turns.round()).abs() < 1e-12, "{angle} -> {a}");
         }
-        assert_eq!(within_a_turn(PI), PI);
-        assert_eq!(within_a_turn(-PI), PI);
-        assert_eq!(within_a_turn(0.5), 0.5);
+        assert_eq!(normalize_angle(PI), PI);
+        assert_eq!(normalize_angle(-PI), PI);
+        assert_eq!(normalize_angle(0.5), 0.5);
     }
 }
