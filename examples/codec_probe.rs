@@ -45,6 +45,10 @@ fn run(args: &[String]) -> anyhow::Result<()> {
     let path = std::path::Path::new(&args[0]);
     let tol = number("the tolerance", &args[1])?;
     let mut params = CodecParams::new(tol);
+    // `STRANDFIT_EFFORT=best`: the encoder's look-ahead (`--effort best`).
+    if std::env::var("STRANDFIT_EFFORT").is_ok_and(|v| v == "best") {
+        params.effort = strandfit::codec::Effort::Best;
+    }
     if args.len() == 7 {
         let names = ["offset", "length", "start", "first", "sagitta"];
         let v = names

@@ -13,10 +13,10 @@ use serde::Serialize;
 use super::inspect_cmd::parse_format;
 use super::io_util::{check_losses, report_skipped, write_failed, DelayedBar};
 use super::usage;
-use super::{CompressArgs, DistanceArg, StorageArg};
+use super::{CompressArgs, DistanceArg, EffortArg, StorageArg};
 use crate::adaptive::{Distance, ElementCount};
 use crate::backend::Backend;
-use crate::codec::ArcChecker;
+use crate::codec::{ArcChecker, Effort};
 use crate::compress::{compress_curve, CompressOptions};
 use crate::io::{
     data_losses, open_reader_with, source_losses, BadCurves, ContainerHeader, ContainerWriter,
@@ -132,6 +132,9 @@ pub fn run(args: &CompressArgs, backend: &Backend) -> Result<()> {
             );
         }
         return run_codec(args, backend);
+    }
+    if args.effort != EffortArg::Default {
+        usage!("--effort is the arc codec's (--distance hausdorff), not the version-1 helix container's");
     }
     let count = match (args.tolerance, args.elements, args.element_length) {
         (Some(t), None, None) => ElementCount::Tolerance(t),
@@ -363,11 +366,15 @@ fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
     let (mut reader, meta, dropped) = open_input(args, true)?;
     // The input's name is not stored: the output's name says what it was,
     // and in a farm the name is bytes in every file.
-    let header = CodecHeader::new(
+    let mut header = CodecHeader::new(
         tolerance,
         SourceMeta::from_metadata(&meta, None),
         meta.point_data_names.clone(),
     );
+    header.effort = match args.effort {
+        EffortArg::Default => Effort::Default,
+        EffortArg::Best => Effort::Best,
+    };
     let mut bar = DelayedBar::new(meta.count);
     let checker = backend.arc_checker()?;
     let checker = checker.as_ref().map(|c| c as &dyn ArcChecker);

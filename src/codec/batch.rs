@@ -259,6 +259,7 @@ pub fn search_block(
                     grid: e.grid,
                     mailbox: Some(m),
                     give_up: e.give_up.clone(),
+                    look_ahead: e.look_ahead,
                 })
         })
         .collect();
@@ -397,6 +398,7 @@ mod tests {
                 grid: tol,
                 mailbox: None,
                 give_up: None,
+                look_ahead: false,
             };
             let o = pts[0];
             let radius = pts

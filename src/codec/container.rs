@@ -157,6 +157,10 @@ pub struct CodecHeader {
     pub point_data_names: Vec<String>,
     /// The version of strandfit that wrote the file.
     pub written_by: String,
+    /// How hard the writer searches ([`super::Effort`]): a setting of the
+    /// encoder, not stored (a header read back has the default).
+    #[serde(skip)]
+    pub effort: super::Effort,
 }
 
 impl CodecHeader {
@@ -201,6 +205,7 @@ impl CodecHeader {
             source,
             point_data_names,
             written_by: env!("CARGO_PKG_VERSION").into(),
+            effort: super::Effort::Default,
         }
     }
 
@@ -225,6 +230,7 @@ impl CodecHeader {
             tolerance: self.tolerance,
             steps: self.steps,
             model: self.model,
+            effort: self.effort,
         }
     }
 
@@ -381,6 +387,7 @@ impl CodecHeader {
             },
             point_data_names,
             written_by,
+            effort: super::Effort::Default,
         })
     }
 }
