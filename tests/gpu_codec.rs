@@ -1,7 +1,8 @@
 //! `compress --backend gpu` against the CPU path: the candidate elements of
 //! a block checked by `arc_check.wgsl` (in f64 and f32) give containers
 //! byte-identical to the CPU's, on real tractography, hair and field lines
-//! at both tolerances; the GPU decides nearly all checks in f64; and the
+//! at both tolerances (and with the look-ahead, `Effort::Best`); the GPU
+//! decides nearly all checks in f64; and the
 //! command line writes the same file with either backend.
 
 mod common;
@@ -11,7 +12,7 @@ use std::process::Command;
 
 use glam::DVec3;
 use strandfit::codec::ArcChecker;
-use strandfit::codec::{encode_block, encode_block_on, CodecParams};
+use strandfit::codec::{encode_block, encode_block_on, CodecParams, Effort};
 use strandfit::gpu::GpuContext;
 use strandfit::{Backend, GpuEngine, PrecisionChoice};
 
@@ -77,8 +78,18 @@ fn parity(ctx: GpuContext, precision: PrecisionChoice, max_unsure: f64) {
     let backend = Backend::Gpu(Box::new(GpuEngine::new(ctx, precision).unwrap()));
     let checker = backend.arc_checker().unwrap().unwrap();
     for (name, cs, tolerances) in data() {
-        for tol in tolerances {
-            let params = CodecParams::new(tol);
+        // Every set at both tolerances, and at the looser also with the
+        // look-ahead (`Effort::Best`, whose extra checks go through the
+        // same mailboxes).
+        let runs = tolerances
+            .iter()
+            .map(|&t| (t, Effort::Default))
+            .chain([(tolerances[1], Effort::Best)]);
+        for (tol, effort) in runs {
+            let params = CodecParams {
+                effort,
+                ..CodecParams::new(tol)
+            };
             let cpu = encode_block(&cs, &params).unwrap();
             let gpu =
                 encode_block_on(&cs, &params, false, Some(&checker as &dyn ArcChecker)).unwrap();
@@ -94,7 +105,10 @@ fn parity(ctx: GpuContext, precision: PrecisionChoice, max_unsure: f64) {
                 "{name} at {tol}: {:.3} % of the checks left to the CPU",
                 100.0 * unsure
             );
-            assert_eq!(gpu.bytes, cpu.bytes, "{name} at {tol} ({precision:?})");
+            assert_eq!(
+                gpu.bytes, cpu.bytes,
+                "{name} at {tol} ({precision:?}, {effort:?})"
+            );
             assert_eq!(gpu.output_points, cpu.output_points);
         }
     }

@@ -14,7 +14,7 @@ use pyo3::types::{PyBytes, PyDict};
 
 use strandfit::codec::{
     compress_stream, compress_to_bytes, decompress_stream, output_curve, read_range, CodecHeader,
-    CodecReader, DecodedCurve,
+    CodecReader, DecodedCurve, Effort,
 };
 use strandfit::io::{
     create_writer, curve_problem, data_losses, open_reader_with, source_losses, BadCurves, Curve,
@@ -42,6 +42,17 @@ fn check_tolerance(tolerance: f64) -> PyResult<()> {
         Err(PyValueError::new_err(format!(
             "tolerance must be positive and finite, got {tolerance}"
         )))
+    }
+}
+
+/// `"default"` or `"best"`, as the command line's `--effort`.
+fn effort_from(effort: &str) -> PyResult<Effort> {
+    match effort {
+        "default" => Ok(Effort::Default),
+        "best" => Ok(Effort::Best),
+        other => Err(PyValueError::new_err(format!(
+            "effort must be \"default\" or \"best\", got {other:?}"
+        ))),
     }
 }
 
@@ -101,23 +112,27 @@ fn to_arrays<'py>(py: Python<'py>, curves: &[DecodedCurve]) -> Arrays<'py> {
     (positions.into_pyarray(py), offsets.into_pyarray(py))
 }
 
-/// compress_arrays(positions, offsets, tolerance) -> bytes (see the
-/// Python package's docstring).
+/// compress_arrays(positions, offsets, tolerance, effort="default") ->
+/// bytes (see the Python package's docstring).
 #[pyfunction]
+#[pyo3(signature = (positions, offsets, tolerance, effort="default"))]
 fn compress_arrays<'py>(
     py: Python<'py>,
     positions: PyReadonlyArray2<'py, f64>,
     offsets: PyReadonlyArray1<'py, i64>,
     tolerance: f64,
+    effort: &str,
 ) -> PyResult<Bound<'py, PyBytes>> {
     check_tolerance(tolerance)?;
+    let effort = effort_from(effort)?;
     let curves = curves_from(&positions, offsets.as_slice()?)?;
     let bytes = py
         .allow_threads(|| -> Result<Vec<u8>, IoError> {
             let meta = Metadata::new(Format::Json);
             let mut source = SourceMeta::from_metadata(&meta, None);
             source.format = "numpy".into();
-            let header = CodecHeader::new(tolerance, source, Vec::new());
+            let mut header = CodecHeader::new(tolerance, source, Vec::new());
+            header.effort = effort;
             let mut reader = VecReader::new(meta, curves);
             compress_to_bytes(&mut reader, Path::new(ARRAYS), &header, None)
         })
@@ -205,11 +220,11 @@ fn decompress_arrays<'py>(
     Ok(to_arrays(py, &curves))
 }
 
-/// compress_file(src, dst, tolerance, strict=False, skip_bad=False) ->
-/// dict: what `strandfit compress SRC --tolerance T -o DST --json` does
-/// (the same bytes, the same report).
+/// compress_file(src, dst, tolerance, strict=False, skip_bad=False,
+/// effort="default") -> dict: what `strandfit compress SRC --tolerance T
+/// -o DST --json` does (the same bytes, the same report).
 #[pyfunction]
-#[pyo3(signature = (src, dst, tolerance, strict=false, skip_bad=false))]
+#[pyo3(signature = (src, dst, tolerance, strict=false, skip_bad=false, effort="default"))]
 fn compress_file<'py>(
     py: Python<'py>,
     src: PathBuf,
@@ -217,8 +232,10 @@ fn compress_file<'py>(
     tolerance: f64,
     strict: bool,
     skip_bad: bool,
+    effort: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     check_tolerance(tolerance)?;
+    let effort = effort_from(effort)?;
     let started = std::time::Instant::now();
     let bad = if skip_bad {
         BadCurves::Skip
@@ -232,11 +249,12 @@ fn compress_file<'py>(
             let mut dropped = source_losses(&meta);
             dropped.extend(data_losses(&meta, |_| true, true, "sfh"));
             refuse_losses(&src, &dst, &dropped, strict)?;
-            let header = CodecHeader::new(
+            let mut header = CodecHeader::new(
                 tolerance,
                 SourceMeta::from_metadata(&meta, None),
                 meta.point_data_names.clone(),
             );
+            header.effort = effort;
             let summary = compress_stream(&mut *reader, &src, &dst, &header, None, &mut |_| {})
                 .map_err(|mut e| {
                     // As counted in the input, skipped curves included.

@@ -75,7 +75,13 @@ def _tolerance(tolerance) -> float:
     return t
 
 
-def compress_arrays(positions, offsets, tolerance: float = 0.5) -> bytes:
+def _effort(effort) -> str:
+    if effort not in ("default", "best"):
+        raise ValueError(f'effort must be "default" or "best", got {effort!r}')
+    return effort
+
+
+def compress_arrays(positions, offsets, tolerance: float = 0.5, effort: str = "default") -> bytes:
     """Compress curves given as ``positions`` and ``offsets`` into container bytes.
 
     Parameters
@@ -88,6 +94,10 @@ def compress_arrays(positions, offsets, tolerance: float = 0.5) -> bytes:
     tolerance : float
         The two-sided Hausdorff distance every decompressed curve keeps to
         its input, in the units of ``positions``.
+    effort : {"default", "best"}
+        ``"best"`` chooses each arc looking one arc ahead (the command
+        line's ``--effort best``): the same format and guarantee, smooth
+        curves (field lines, hair) 3-8 % smaller, about twice the time.
 
     Returns
     -------
@@ -103,7 +113,7 @@ def compress_arrays(positions, offsets, tolerance: float = 0.5) -> bytes:
         decreasing, a point that is NaN, infinite or beyond float32, or a
         tolerance that is not positive; the message names the curve and point.
     """
-    return _strandfit.compress_arrays(_positions(positions), _offsets(offsets), _tolerance(tolerance))
+    return _strandfit.compress_arrays(_positions(positions), _offsets(offsets), _tolerance(tolerance), _effort(effort))
 
 
 def _resampling(points, step):
@@ -151,7 +161,9 @@ def _warn_dropped(report: dict) -> dict:
     return report
 
 
-def compress_file(src: PathLike, dst: PathLike, tolerance: float = 0.5, strict: bool = False, skip_bad: bool = False) -> dict:
+def compress_file(
+    src: PathLike, dst: PathLike, tolerance: float = 0.5, strict: bool = False, skip_bad: bool = False, effort: str = "default"
+) -> dict:
     """Compress a curve file (.tck .trk .trx .vtk .hair .json .csv) to a container.
 
     The same as ``strandfit compress SRC --tolerance T -o DST --json``: the
@@ -162,10 +174,13 @@ def compress_file(src: PathLike, dst: PathLike, tolerance: float = 0.5, strict: 
     ``verbatim_count``, ``skipped``, ``dropped``, ``seconds``, ...). What the container cannot hold is listed in
     ``dropped`` and warned about (``strict=True``: an error); ``skip_bad=True``
     leaves out curves with unusable points (listed in ``skipped``) instead of
-    failing. ``OSError`` when a file cannot be read or written, ``ValueError``
-    for bad data, naming the file and curve.
+    failing; ``effort="best"`` is ``--effort best``. ``OSError`` when a file
+    cannot be read or written, ``ValueError`` for bad data, naming the file
+    and curve.
     """
-    report = _strandfit.compress_file(os.fspath(src), os.fspath(dst), _tolerance(tolerance), bool(strict), bool(skip_bad))
+    report = _strandfit.compress_file(
+        os.fspath(src), os.fspath(dst), _tolerance(tolerance), bool(strict), bool(skip_bad), _effort(effort)
+    )
     return _warn_dropped(report)
 
 
@@ -185,7 +200,7 @@ def _split(positions: np.ndarray, offsets: np.ndarray) -> List[np.ndarray]:
     return [positions[a:b] for a, b in zip(offsets[:-1], offsets[1:])]
 
 
-def compress_streamlines(streamlines, tolerance: float = 0.5) -> bytes:
+def compress_streamlines(streamlines, tolerance: float = 0.5, effort: str = "default") -> bytes:
     """:func:`compress_arrays` for a sequence of ``(n_i, 3)`` arrays.
 
     Takes a list of arrays, a nibabel ``ArraySequence`` or a nibabel
@@ -201,7 +216,7 @@ def compress_streamlines(streamlines, tolerance: float = 0.5) -> bytes:
         lengths = np.asarray(lengths, dtype=np.int64)
         if len(offs) == 0 or np.array_equal(offs, np.concatenate([[0], np.cumsum(lengths)[:-1]])):
             end = int(lengths.sum())
-            return compress_arrays(np.asarray(data)[:end], np.concatenate([[0], np.cumsum(lengths)]), tolerance)
+            return compress_arrays(np.asarray(data)[:end], np.concatenate([[0], np.cumsum(lengths)]), tolerance, effort)
     arrays = [np.asarray(s) for s in streamlines]
     for i, a in enumerate(arrays):
         if a.ndim != 2 or (a.size and a.shape[1] != 3):
@@ -215,7 +230,7 @@ def compress_streamlines(streamlines, tolerance: float = 0.5) -> bytes:
         if arrays
         else np.zeros((0, 3))
     )
-    return compress_arrays(positions, offsets, tolerance)
+    return compress_arrays(positions, offsets, tolerance, effort)
 
 
 def decompress_streamlines(data: bytes) -> List[np.ndarray]:

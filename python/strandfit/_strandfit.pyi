@@ -8,12 +8,14 @@ import numpy.typing as npt
 __version__: str
 
 def compress_arrays(
-    positions: npt.NDArray[np.float64], offsets: npt.NDArray[np.int64], tolerance: float
+    positions: npt.NDArray[np.float64], offsets: npt.NDArray[np.int64], tolerance: float, effort: str = "default"
 ) -> bytes: ...
 def decompress_arrays(
     data: bytes, points: Optional[int] = None, step: Optional[float] = None
 ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int64]]: ...
-def compress_file(src: str, dst: str, tolerance: float, strict: bool = False, skip_bad: bool = False) -> dict: ...
+def compress_file(
+    src: str, dst: str, tolerance: float, strict: bool = False, skip_bad: bool = False, effort: str = "default"
+) -> dict: ...
 def decompress_file(
     src: str, dst: str, points: Optional[int] = None, step: Optional[float] = None, strict: bool = False
 ) -> dict: ...

@@ -117,6 +117,32 @@ def test_compress_file_writes_the_bytes_of_the_command_line(tmp_path):
     assert len(offsets) == 301 and offsets[-1] == report["output_point_count"]
 
 
+def test_best_effort_is_the_command_lines_and_keeps_the_guarantee(tmp_path):
+    # effort="best" is `--effort best`: the same bytes as the command line,
+    # smaller than the default on the fornix at 0.5 mm, and every curve
+    # within the tolerance both ways; an unknown effort is a ValueError.
+    report = strandfit.compress_file(FORNIX, tmp_path / "best.sfh", tolerance=0.5, effort="best")
+    default = strandfit.compress_file(FORNIX, tmp_path / "default.sfh", tolerance=0.5)
+    subprocess.run(
+        [BIN, "compress", str(FORNIX), "--tolerance", "0.5", "--effort", "best", "-o", str(tmp_path / "cli.sfh")],
+        check=True,
+        capture_output=True,
+    )
+    best = (tmp_path / "best.sfh").read_bytes()
+    assert best == (tmp_path / "cli.sfh").read_bytes()
+    assert report["bytes_out"] < 0.99 * default["bytes_out"]
+    rng = np.random.default_rng(8)
+    curves = random_curves(rng, 30)
+    positions, offsets = pack(curves)
+    data = strandfit.compress_arrays(positions, offsets, tolerance=0.1, effort="best")
+    back, back_offsets = strandfit.decompress_arrays(data)
+    for i, c in enumerate(curves):
+        assert two_sided(c, back[back_offsets[i] : back_offsets[i + 1]]) <= 0.1, i
+    assert strandfit.compress_streamlines(curves, tolerance=0.1, effort="best") == data
+    with pytest.raises(ValueError, match="effort"):
+        strandfit.compress_arrays(positions, offsets, tolerance=0.1, effort="fast")
+
+
 def test_lazy_slices_equal_the_full_decode(tmp_path):
     rng = np.random.default_rng(9)
     curves = random_curves(rng, 9000)  # three blocks of up to 4,096 curves

@@ -445,7 +445,7 @@ mod tests {
                     let rel = 10f64.powf(rng.gen_range(-16.0..-4.0)) * rng.gen_range(-1.0..1.0);
                     enc.tol2 = d2 * (1.0 + rel);
                 }
-                let reference = enc.accept_now(&arc, from, to).is_some();
+                let reference = enc.accept_now(&arc, from, to);
                 passes += reference as usize;
                 let c = candidate(&enc, &req, 0, (o, radius, o.abs().max_element()));
                 match verdicts_twin::<R>(&flat, &[c])[0] {

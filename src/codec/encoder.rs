@@ -114,7 +114,6 @@ impl GiveUp {
 struct Candidate {
     code: ElementCode,
     arc: Arc,
-    samples: Vec<DVec3>,
     /// Last input vertex it covers.
     reach: usize,
 }
@@ -155,7 +154,7 @@ impl<'a> CurveEncoder<'a> {
     }
 
     /// Accepts `arc` for input vertices `(from, to]` if the two-sided test
-    /// passes; returns its decoder samples. With a mailbox the test is
+    /// passes (on the samples the decoder draws). With a mailbox the test is
     /// asked there first: a sure verdict is the reference's
     /// ([`crate::twin::arc_check`]), an unsure one is decided here.
     /// The arc from `start` along `tangent` to `end` as a candidate for
@@ -188,7 +187,7 @@ impl<'a> CurveEncoder<'a> {
         circle.arc().map(Some)
     }
 
-    async fn accept(&self, arc: &Arc, from: usize, to: usize) -> Option<Vec<DVec3>> {
+    async fn accept(&self, arc: &Arc, from: usize, to: usize) -> bool {
         if let Some(mailbox) = self.mailbox {
             // Boxed: the question's future is large, and every search
             // future above this one would carry (and move) it on the CPU
@@ -202,12 +201,8 @@ impl<'a> CurveEncoder<'a> {
             }))
             .await;
             match verdict {
-                super::batch::Verdict::Fail => return None,
-                super::batch::Verdict::Pass => {
-                    let mut samples = Vec::with_capacity(8);
-                    arc.sample_into(self.q.sagitta, &mut samples);
-                    return Some(samples);
-                }
+                super::batch::Verdict::Fail => return false,
+                super::batch::Verdict::Pass => return true,
                 super::batch::Verdict::Unsure => {}
             }
         }
@@ -216,23 +211,27 @@ impl<'a> CurveEncoder<'a> {
 
     /// The reference acceptance test ([`accept`](Self::accept)), here and
     /// now.
-    pub fn accept_now(&self, arc: &Arc, from: usize, to: usize) -> Option<Vec<DVec3>> {
-        let mut samples = Vec::with_capacity(8);
-        samples.push(arc.start);
-        arc.sample_into(self.q.sagitta, &mut samples);
-        let n = self.points.len();
-        // Input vertices covered by this element are near its samples.
-        if !all_within(&self.points[from + 1..=to], &samples, self.tol2) {
-            return None;
+    pub fn accept_now(&self, arc: &Arc, from: usize, to: usize) -> bool {
+        // The samples in a buffer of this thread's: most candidates are
+        // checked and dropped, and the chosen one's are drawn again
+        // (`Arc::sample_into` is deterministic).
+        thread_local! {
+            static SAMPLES: std::cell::RefCell<Vec<DVec3>> = const { std::cell::RefCell::new(Vec::new()) };
         }
-        // Samples are near the input window around the element.
-        let lo = from.saturating_sub(1);
-        let hi = (to + 1).min(n - 1);
-        if !all_within(&samples[1..], &self.points[lo..=hi], self.tol2) {
-            return None;
-        }
-        samples.remove(0);
-        Some(samples)
+        SAMPLES.with_borrow_mut(|samples| {
+            samples.clear();
+            samples.push(arc.start);
+            arc.sample_into(self.q.sagitta, samples);
+            let n = self.points.len();
+            // Input vertices covered by this element are near its samples.
+            if !all_within(&self.points[from + 1..=to], samples, self.tol2) {
+                return false;
+            }
+            // Samples are near the input window around the element.
+            let lo = from.saturating_sub(1);
+            let hi = (to + 1).min(n - 1);
+            all_within(&samples[1..], &self.points[lo..=hi], self.tol2)
+        })
     }
 
     /// The G1 element from `state` towards input vertex `j` (or a corner,
@@ -311,12 +310,11 @@ impl<'a> CurveEncoder<'a> {
                     Ok(None) => continue,
                     Ok(Some(arc)) => arc,
                 };
-                if let Some(samples) = self.accept(&arc, from, j).await {
+                if self.accept(&arc, from, j).await {
                     code.bulge = b;
                     return Some(Candidate {
                         code,
                         arc,
-                        samples,
                         reach: j,
                     });
                 }
@@ -330,11 +328,9 @@ impl<'a> CurveEncoder<'a> {
         let arc = self
             .candidate_arc(state.point, tangent, end, from, j)
             .ok()??;
-        let samples = self.accept(&arc, from, j).await?;
-        Some(Candidate {
+        self.accept(&arc, from, j).await.then_some(Candidate {
             code,
             arc,
-            samples,
             reach: j,
         })
     }
@@ -467,7 +463,7 @@ impl<'a> CurveEncoder<'a> {
         let mut decoded = vec![q0];
         // First element: its end on the start grid, and a bulge.
         let first = self.first_element(q0).await?;
-        decoded.extend_from_slice(&first.samples);
+        first.arc.sample_into(self.q.sagitta, &mut decoded);
         let mut state = first.arc.next_state(self.q.length);
         let mut from = first.reach;
         let mut span = first.reach;
@@ -517,9 +513,17 @@ impl<'a> CurveEncoder<'a> {
                 },
             };
             let chosen = if self.look_ahead && chosen.code.kind != ElementKind::Jump {
+                // (Cheapened first: the search ahead from it is then kept
+                // unless a shorter element wins.)
+                let chosen = self.cheapen(&state, frame, from, chosen).await;
+                let reach = chosen.reach;
                 let (chosen, next) = self.look_ahead(&state, frame, from, chosen).await;
                 let code = chosen.code;
-                let chosen = self.cheapen(&state, frame, from, chosen).await;
+                let chosen = if chosen.reach == reach {
+                    chosen
+                } else {
+                    self.cheapen(&state, frame, from, chosen).await
+                };
                 // (The search ahead was from the element before `cheapen`.)
                 if chosen.code == code {
                     ahead = next;
@@ -528,7 +532,7 @@ impl<'a> CurveEncoder<'a> {
             } else {
                 self.cheapen(&state, frame, from, chosen).await
             };
-            decoded.extend_from_slice(&chosen.samples);
+            chosen.arc.sample_into(self.q.sagitta, &mut decoded);
             state = next_state(&chosen.arc, &state, chosen.code.kind, self.q.length);
             span = chosen.reach - from;
             from = chosen.reach;
@@ -652,7 +656,7 @@ impl<'a> CurveEncoder<'a> {
             return Jump::Impossible;
         };
         match self.accept(&arc, from, from + 1).await {
-            Some(samples) => Jump::To(Box::new(Candidate {
+            true => Jump::To(Box::new(Candidate {
                 code: ElementCode {
                     kind: ElementKind::Jump,
                     length: 0,
@@ -662,10 +666,9 @@ impl<'a> CurveEncoder<'a> {
                     span: state.chord_steps,
                 },
                 arc,
-                samples,
                 reach: from + 1,
             })),
-            None => Jump::Impossible,
+            false => Jump::Impossible,
         }
     }
 
@@ -698,7 +701,7 @@ impl<'a> CurveEncoder<'a> {
                     Ok(None) => continue,
                     Ok(Some(arc)) => arc,
                 };
-                if let Some(samples) = self.accept(&arc, 0, j).await {
+                if self.accept(&arc, 0, j).await {
                     return Some(Candidate {
                         code: ElementCode {
                             kind: ElementKind::Corner,
@@ -709,7 +712,6 @@ impl<'a> CurveEncoder<'a> {
                             span: 0,
                         },
                         arc,
-                        samples,
                         reach: j,
                     });
                 }
