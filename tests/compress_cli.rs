@@ -136,6 +136,23 @@ fn best_effort_keeps_the_guarantee_and_codes_the_fornix_smaller() {
     let p = bundled("dipy_fornix_tracks300.tck");
     let (default, _) = round_trip(&p, 0.5, "tck");
     let (best, _) = round_trip_with(&p, 0.5, "tck", &["--effort", "best"]);
+    let dir = tempfile::tempdir().unwrap();
+    let report = |effort: &str| -> serde_json::Value {
+        let out = ok(&[
+            "compress",
+            p.to_str().unwrap(),
+            "--tolerance",
+            "0.5",
+            "--effort",
+            effort,
+            "--json",
+            "-o",
+            dir.path().join("r.sfh").to_str().unwrap(),
+        ]);
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    assert_eq!(report("best")["effort"], "best");
+    assert_eq!(report("default")["effort"], "default");
     assert!(
         (best as f64) < 0.99 * default as f64,
         "{best} against {default}"

@@ -289,6 +289,13 @@ fn compress_file<'py>(
     d.set_item("bytes_out", summary.bytes)?;
     d.set_item("ratio", bytes_in as f64 / summary.bytes.max(1) as f64)?;
     d.set_item("distance", "hausdorff")?;
+    d.set_item(
+        "effort",
+        match effort {
+            Effort::Default => "default",
+            Effort::Best => "best",
+        },
+    )?;
     d.set_item("tolerance", tolerance)?;
     d.set_item("container_version", 3)?;
     d.set_item("mean_distance", py.None())?;

@@ -131,6 +131,7 @@ def test_best_effort_is_the_command_lines_and_keeps_the_guarantee(tmp_path):
     best = (tmp_path / "best.sfh").read_bytes()
     assert best == (tmp_path / "cli.sfh").read_bytes()
     assert report["bytes_out"] < 0.99 * default["bytes_out"]
+    assert (report["effort"], default["effort"]) == ("best", "default")
     rng = np.random.default_rng(8)
     curves = random_curves(rng, 30)
     positions, offsets = pack(curves)

@@ -43,6 +43,8 @@ pub struct CompressReport {
     /// bytes in / bytes out.
     pub ratio: f64,
     pub distance: &'static str,
+    /// `--effort`: `default` or `best` (version 1: `default`).
+    pub effort: &'static str,
     pub tolerance: Option<f64>,
     /// Container version written (3: the arc codec; 1: helix chains).
     pub container_version: u16,
@@ -87,6 +89,7 @@ impl Default for CompressReport {
             bytes_out: 0,
             ratio: 0.0,
             distance: "",
+            effort: "default",
             tolerance: None,
             container_version: 0,
             mean_distance: None,
@@ -415,6 +418,10 @@ fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
         bytes_out: summary.bytes,
         ratio: bytes_in as f64 / summary.bytes.max(1) as f64,
         distance: "hausdorff",
+        effort: match args.effort {
+            EffortArg::Default => "default",
+            EffortArg::Best => "best",
+        },
         tolerance: Some(tolerance),
         container_version: 3,
         mean_distance: None,
