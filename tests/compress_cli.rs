@@ -137,19 +137,18 @@ fn best_effort_keeps_the_guarantee_and_codes_the_fornix_smaller() {
     let (default, _) = round_trip(&p, 0.5, "tck");
     let (best, _) = round_trip_with(&p, 0.5, "tck", &["--effort", "best"]);
     let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.sfh");
+    // `compress` of the fornix at 0.5 mm to `out` with `extra` arguments.
+    let compress = |extra: &[&str]| {
+        let mut args = vec![p.to_str().unwrap(), "--tolerance", "0.5"];
+        args.extend_from_slice(extra);
+        args.extend(["-o", out.to_str().unwrap()]);
+        strandfit(&[&["compress"], &args[..]].concat())
+    };
     let report = |effort: &str| -> serde_json::Value {
-        let out = ok(&[
-            "compress",
-            p.to_str().unwrap(),
-            "--tolerance",
-            "0.5",
-            "--effort",
-            effort,
-            "--json",
-            "-o",
-            dir.path().join("r.sfh").to_str().unwrap(),
-        ]);
-        serde_json::from_slice(&out.stdout).unwrap()
+        let o = compress(&["--effort", effort, "--json"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
     };
     assert_eq!(report("best")["effort"], "best");
     assert_eq!(report("default")["effort"], "default");
@@ -158,23 +157,12 @@ fn best_effort_keeps_the_guarantee_and_codes_the_fornix_smaller() {
         "{best} against {default}"
     );
     // The version-1 helix container has no such search: refused, not ignored.
-    let dir = tempfile::tempdir().unwrap();
-    let out = strandfit(&[
-        "compress",
-        p.to_str().unwrap(),
-        "--tolerance",
-        "0.5",
-        "--distance",
-        "ordered",
-        "--effort",
-        "best",
-        "-o",
-        dir.path().join("v1.sfh").to_str().unwrap(),
-    ]);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    std::fs::remove_file(&out).unwrap();
+    let o = compress(&["--distance", "ordered", "--effort", "best"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--effort"), "{err}");
-    assert!(!dir.path().join("v1.sfh").exists());
+    assert!(!out.exists());
 }
 
 #[test]
