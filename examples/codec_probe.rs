@@ -5,6 +5,7 @@
 //! multiples of the tolerance) override the defaults, to try other steps.
 //!
 //! `cargo run --release --example codec_probe -- FILE TOL [OFFSET LENGTH START FIRST SAGITTA]`
+//! (`STRANDFIT_EFFORT=best` in the environment: `--effort best`)
 use std::process::ExitCode;
 use std::time::Instant;
 

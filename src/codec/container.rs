@@ -158,7 +158,8 @@ pub struct CodecHeader {
     /// The version of strandfit that wrote the file.
     pub written_by: String,
     /// How hard the writer searches ([`super::Effort`]): a setting of the
-    /// encoder, not stored (a header read back has the default).
+    /// encoder, not stored. A header read back has the default, so one
+    /// written with `Best` does not compare equal to itself read back.
     #[serde(skip)]
     pub effort: super::Effort,
 }

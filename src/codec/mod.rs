@@ -193,8 +193,9 @@ use predict::Arc;
 use quantise::Quantiser;
 use reference::{Neighbours, Rule};
 
-/// How a block is coded: the tolerance and the steps (both stored in the
-/// container's header).
+/// How a block is coded: the tolerance, the steps and the model (stored in
+/// the container's header), and how hard the encoder searches (not stored:
+/// the decoder does not need it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CodecParams {
     /// The two-sided Hausdorff tolerance `T` every decoded curve is within.
@@ -212,8 +213,9 @@ pub struct CodecParams {
 /// guarantee either way.
 ///
 /// Measured (`examples/codec_probe`, 2026-11-30): `Best` makes the hair
-/// 3.3 % smaller at 0.5 mm, the field lines 7 % and the dipole lines of
-/// `benches/make_unseen.py` 8 %, for about 1.9 times the CPU of `Default`
+/// 4.0 % smaller at 0.5 mm (1.7 % at 0.1), the field lines 7–8 % and the
+/// dipole lines of `benches/make_unseen.py` 8–10 %, but the fornix at 0.1 mm
+/// and CST_R at 0.5 mm 1 % larger; for about 1.8 times the CPU of `Default`
 /// on 100,000 fornix replicas at 0.5 mm (docs/reference.md, "Session 49").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Effort {
