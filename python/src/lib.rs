@@ -47,13 +47,11 @@ fn check_tolerance(tolerance: f64) -> PyResult<()> {
 
 /// `"default"` or `"best"`, as the command line's `--effort`.
 fn effort_from(effort: &str) -> PyResult<Effort> {
-    match effort {
-        "default" => Ok(Effort::Default),
-        "best" => Ok(Effort::Best),
-        other => Err(PyValueError::new_err(format!(
-            "effort must be \"default\" or \"best\", got {other:?}"
-        ))),
-    }
+    Effort::from_name(effort).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "effort must be \"default\" or \"best\", got {effort:?}"
+        ))
+    })
 }
 
 /// Curves from `(P, 3)` positions and `C + 1` offsets, every point checked.
@@ -289,13 +287,7 @@ fn compress_file<'py>(
     d.set_item("bytes_out", summary.bytes)?;
     d.set_item("ratio", bytes_in as f64 / summary.bytes.max(1) as f64)?;
     d.set_item("distance", "hausdorff")?;
-    d.set_item(
-        "effort",
-        match effort {
-            Effort::Default => "default",
-            Effort::Best => "best",
-        },
-    )?;
+    d.set_item("effort", effort.name())?;
     d.set_item("tolerance", tolerance)?;
     d.set_item("container_version", 3)?;
     d.set_item("mean_distance", py.None())?;

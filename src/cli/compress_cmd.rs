@@ -418,10 +418,7 @@ fn run_codec(args: &CompressArgs, backend: &Backend) -> Result<()> {
         bytes_out: summary.bytes,
         ratio: bytes_in as f64 / summary.bytes.max(1) as f64,
         distance: "hausdorff",
-        effort: match args.effort {
-            EffortArg::Default => "default",
-            EffortArg::Best => "best",
-        },
+        effort: header.effort.name(),
         tolerance: Some(tolerance),
         container_version: 3,
         mean_distance: None,

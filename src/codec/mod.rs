@@ -227,6 +227,32 @@ pub enum Effort {
     Best,
 }
 
+impl Effort {
+    /// Its name as the command line's `--effort` and the reports spell it.
+    ///
+    /// ```
+    /// use strandfit::codec::Effort;
+    ///
+    /// for e in [Effort::Default, Effort::Best] {
+    ///     assert_eq!(Effort::from_name(e.name()), Some(e));
+    /// }
+    /// assert_eq!(Effort::from_name("fast"), None);
+    /// ```
+    pub fn name(self) -> &'static str {
+        match self {
+            Effort::Default => "default",
+            Effort::Best => "best",
+        }
+    }
+
+    /// The effort named `name` ([`name`](Self::name)), if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Effort::Default, Effort::Best]
+            .into_iter()
+            .find(|e| e.name() == name)
+    }
+}
+
 impl CodecParams {
     /// Parameters for tolerance `T`, with the default steps.
     pub fn new(tolerance: f64) -> Self {
