@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::adaptive::{fit_polyline_chain, AdaptiveError, AdaptiveOptions, ChainFit};
 use crate::backend::{Backend, GpuError};
-use crate::codec::{compress_to_bytes, read_range, ArcChecker, CodecHeader, CodecReader};
+use crate::codec::{compress_to_bytes, read_range, ArcChecker, CodecHeader, CodecReader, Effort};
 use crate::io::{Curve, Format, IoError, Metadata, SourceMeta, VecReader};
 
 /// What a batch call reports in place of a path for in-memory curves.
@@ -107,7 +107,8 @@ impl<'a> Polylines<'a> {
 /// (the bytes of a `.sfh` file): each decoded curve is within `tolerance`
 /// of its input in the two-sided Hausdorff distance ([`crate::codec`]).
 /// On the GPU backend the codec's candidate elements are checked by the
-/// `arc_check` kernel; the bytes are the same on every backend.
+/// `arc_check` kernel; the bytes are the same on every backend. (With the
+/// default effort: [`compress_polylines_with_effort`] takes one.)
 ///
 /// ```
 /// use strandfit::{compress_polylines, decompress_polylines, Backend, DVec3, Polylines};
@@ -130,12 +131,46 @@ pub fn compress_polylines(
     tolerance: f64,
     backend: &Backend,
 ) -> Result<Vec<u8>, BatchError> {
+    compress_polylines_with_effort(curves, tolerance, Effort::Default, backend)
+}
+
+/// [`compress_polylines`] with the encoder's [`Effort`] (the command
+/// line's `--effort`): [`Effort::Best`] looks one element ahead, for
+/// fewer bytes in more time; the format, the decoder and the guarantee
+/// are the same.
+///
+/// ```
+/// use strandfit::{codec::Effort, compress_polylines_with_effort, decompress_polylines};
+/// use strandfit::{Backend, DVec3, Polylines};
+///
+/// // A slow wave: --effort best's look-ahead codes it in fewer bytes.
+/// let wave: Vec<DVec3> = (0..400)
+///     .map(|k| {
+///         let s = k as f64 * 0.25;
+///         DVec3::new(s, 4.0 * (0.05 * s).sin(), 2.0 * (0.03 * s).cos())
+///     })
+///     .collect();
+/// let curves = Polylines::new(&wave, &[0, 400]).unwrap();
+/// let cpu = &Backend::Cpu;
+/// let default = compress_polylines_with_effort(curves, 0.05, Effort::Default, cpu).unwrap();
+/// let bytes = compress_polylines_with_effort(curves, 0.05, Effort::Best, cpu).unwrap();
+/// assert!(bytes.len() < default.len());
+/// let (points, _) = decompress_polylines(&bytes).unwrap();
+/// assert!(strandfit::metrics::hausdorff(&wave, &points).unwrap() <= 0.05);
+/// ```
+pub fn compress_polylines_with_effort(
+    curves: Polylines<'_>,
+    tolerance: f64,
+    effort: Effort,
+    backend: &Backend,
+) -> Result<Vec<u8>, BatchError> {
     let meta = Metadata::new(Format::Json);
-    let header = CodecHeader::new(
+    let mut header = CodecHeader::new(
         tolerance,
         SourceMeta::from_metadata(&meta, None),
         Vec::new(),
     );
+    header.effort = effort;
     let mut reader = VecReader::new(
         meta,
         curves

@@ -25,7 +25,9 @@
 //!   [`Backend::sample`], [`Backend::evaluate`], [`Backend::interpolate`],
 //!   [`Backend::interpolate_atph`], [`euler::solve_spirals`], and for
 //!   polylines given as positions and offsets ([`Polylines`]):
-//!   [`compress_polylines`], [`decompress_polylines`], [`fit_polylines`].
+//!   [`compress_polylines`] (with an [`codec::Effort`]:
+//!   [`compress_polylines_with_effort`]), [`decompress_polylines`],
+//!   [`fit_polylines`].
 //! * One curve at a time: [`fit_spline`], [`fit_polyline_chain`],
 //!   [`compress_curve`].
 //! * Subsystems, as namespaces: [`codec`] (the tractography codec and its
@@ -110,7 +112,10 @@ pub use adaptive::{
 };
 pub use atph::AtphCurve;
 pub use backend::{Backend, BackendChoice, GpuEngine, GpuError, PrecisionChoice, Samples};
-pub use batch::{compress_polylines, decompress_polylines, fit_polylines, BatchError, Polylines};
+pub use batch::{
+    compress_polylines, compress_polylines_with_effort, decompress_polylines, fit_polylines,
+    BatchError, Polylines,
+};
 pub use compress::{compress_curve, CompressOptions, CurveOutcome};
 pub use curve::ParamCurve3;
 pub use euler::FrenetProblem;
