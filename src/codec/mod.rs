@@ -2145,10 +2145,16 @@ struct ArcsPlan {
 /// stream of a block (the streams differ in their models only).
 enum CurvePlan {
     Arcs(ArcsPlan),
-    /// A points curve's start, less its prediction, and its residuals.
+    /// A points curve's start, less its prediction, and its residuals;
+    /// and whether its reference flag is coded (there is a curve before
+    /// it). The flag is the plan's, not the neighbours' count when the
+    /// curve is put: a stream opened later (the fit's) codes the held
+    /// curves again after the block has moved on, and a first curve coded
+    /// as points then wrote a flag its decoder does not read.
     Points {
         start: [i64; 3],
         residuals: Vec<Residual>,
+        reference_flag: bool,
     },
     /// Empty and raw curves need nothing.
     Nothing,
@@ -2186,6 +2192,8 @@ impl CurvePlan {
                 along: along_flag,
             } => {
                 let along = along(params.model).then_some(*along_flag);
+                // `neighbours` holds this curve last.
+                let reference_flag = neighbours.len() > 1;
                 match reference {
                     Some(rf) => {
                         // `neighbours` holds this curve last: its reference
@@ -2203,6 +2211,7 @@ impl CurvePlan {
                                 Some(p) => p[k],
                                 None => res.predict_next(grid, k, n, &foot),
                             }),
+                            reference_flag,
                         }
                     }
                     None => CurvePlan::Points {
@@ -2211,6 +2220,7 @@ impl CurvePlan {
                             Some(p) => p[k],
                             None => own_prediction(grid, k, *own, screw(params.model)),
                         }),
+                        reference_flag,
                     },
                 }
             }
@@ -2353,13 +2363,7 @@ impl BlockStream {
     }
 
     /// Codes the curve chosen last (`neighbours` holds it last).
-    fn put_curve(
-        &mut self,
-        code: &CurveCode,
-        neighbours: &mut Neighbours,
-        params: &CodecParams,
-        plan: &CurvePlan,
-    ) {
+    fn put_curve(&mut self, code: &CurveCode, params: &CodecParams, plan: &CurvePlan) {
         let (enc, m, prev) = (&mut self.enc, &mut self.m, &mut self.prev);
         let fit = self.fit as usize;
         let kind = kind_of(code);
@@ -2383,7 +2387,15 @@ impl BlockStream {
                 enc.set_tag(1);
                 m.count.put_unsigned(enc, grid.len() as u64 - 1);
                 enc.set_tag(10);
-                if neighbours.len() > 1 {
+                let CurvePlan::Points {
+                    start,
+                    residuals,
+                    reference_flag,
+                } = plan
+                else {
+                    unreachable!("a points curve is put with its plan")
+                };
+                if *reference_flag {
                     enc.bit(&mut m.has_reference, reference.is_some());
                 }
                 let along = along(params.model).then_some(*along_flag);
@@ -2402,17 +2414,11 @@ impl BlockStream {
                         if Rule::of_model(params.model).walk {
                             enc.bit(&mut m.walk, rf.walk);
                         }
-                        let CurvePlan::Points { start, residuals } = plan else {
-                            unreachable!("a points curve is put with its plan")
-                        };
                         put_lattice(enc, &mut m.parity[0], &mut m.ref_start, *start);
                         enc.set_tag(11);
                         put_residuals(enc, &mut m.ref_residual, along, residuals);
                     }
                     None => {
-                        let CurvePlan::Points { start, residuals } = plan else {
-                            unreachable!("a points curve is put with its plan")
-                        };
                         enc.bit(&mut m.helix, *own == OwnPrediction::Screw);
                         if params.model >= 13 && *own != OwnPrediction::Screw {
                             enc.bit(&mut m.mean_step, *own == OwnPrediction::MeanStep);
@@ -2639,7 +2645,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 for fit in fits {
                     let mut shared = BlockStream::new(params, scale_exp, tally, true, fit);
                     for (c, p) in &held {
-                        shared.put_curve(c, &mut neighbours, params, p);
+                        shared.put_curve(c, params, p);
                     }
                     streams.push(shared);
                 }
@@ -2652,7 +2658,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                     for shared in variants {
                         let mut fitted = BlockStream::new(params, scale_exp, tally, shared, true);
                         for (c, p) in &held {
-                            fitted.put_curve(c, &mut neighbours, params, p);
+                            fitted.put_curve(c, params, p);
                         }
                         streams.push(fitted);
                     }
@@ -2685,7 +2691,7 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
                 held.clear();
             }
             for s in streams.iter_mut() {
-                s.put_curve(&code, &mut neighbours, params, &plan);
+                s.put_curve(&code, params, &plan);
             }
             if let CurveCode::Arcs { elements, .. } = &code {
                 n_elements += 1 + elements.len();

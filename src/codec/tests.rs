@@ -1298,6 +1298,41 @@ fn model_15_fits_first_elements_from_the_nearest_anchors_where_that_pays() {
 }
 
 #[test]
+fn a_first_curve_as_points_is_coded_alike_in_the_streams_opened_after_it() {
+    // A block's fitted streams open only once enough arcs curves are
+    // anchored, and code the curves held until then again. A points curve
+    // codes its reference flag only where a curve came before it; coded
+    // again later, the first curve once wrote that flag where the decoder
+    // reads none, and every block that opened the fit after a points
+    // curve first failed its check ("would not decode": the whole file
+    // refused, found on 700 field lines after one noisy line). Here: a
+    // jittered copy of the first field line (points), then 400 field
+    // lines whose block keeps the fit.
+    let tol = 0.1;
+    let lines = dipole_lines(400, 10.0, 14);
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let noisy: Vec<DVec3> = lines[0]
+        .iter()
+        .map(|&p| {
+            p + DVec3::new(
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+            ) * 3.0
+                * tol
+        })
+        .collect();
+    let curves: Vec<Vec<DVec3>> = std::iter::once(noisy).chain(lines).collect();
+    let block = check_block(&curves, tol);
+    assert_eq!(block.kinds[0], 1, "the first curve goes as points");
+    assert!(block.kinds[1..].iter().filter(|&&k| k == 2).count() >= 380);
+    assert!(
+        fit_flag(&block.bytes),
+        "the block keeps the neighbours' fit"
+    );
+}
+
+#[test]
 fn the_nearest_anchors_are_a_full_sort_s_first() {
     // Against sorting every anchor of the window by (distance, newer
     // curve first, start before end), on random starts and anchors in a
