@@ -1333,6 +1333,49 @@ fn a_first_curve_as_points_is_coded_alike_in_the_streams_opened_after_it() {
 }
 
 #[test]
+fn blocks_that_open_streams_midway_decode_whatever_their_mix_of_kinds() {
+    // The streams a block opens midway (shared magnitudes at its first
+    // points curve, the neighbours' fit once enough arcs curves are
+    // anchored) code the curves held until then again: field lines with
+    // noisy curves (points) and empty ones mixed in at random places,
+    // the first included, every curve back within the tolerance.
+    let tol = 0.1;
+    let mut fitted = 0;
+    for seed in 0..6u64 {
+        let mut rng = ChaCha8Rng::seed_from_u64(100 + seed);
+        let mut curves = dipole_lines(400, 10.0, 40 + seed);
+        for _ in 0..rng.gen_range(1..12) {
+            let at = if rng.gen_bool(0.3) {
+                0
+            } else {
+                rng.gen_range(0..curves.len())
+            };
+            let curve = if rng.gen_bool(0.2) {
+                Vec::new()
+            } else {
+                let base = curves[rng.gen_range(0..curves.len())].clone();
+                let a = rng.gen_range(0.5..4.0) * tol;
+                base.iter()
+                    .map(|&p| {
+                        p + DVec3::new(
+                            rng.gen_range(-a..a),
+                            rng.gen_range(-a..a),
+                            rng.gen_range(-a..a),
+                        )
+                    })
+                    .collect()
+            };
+            curves.insert(at, curve);
+        }
+        let block = check_block(&curves, tol);
+        assert!(
+            block.kinds.contains(&1),
+            "seed {seed}: some curve goes as points"
+        );
+    }
+}
+
+#[test]
 fn the_nearest_anchors_are_a_full_sort_s_first() {
     // Against sorting every anchor of the window by (distance, newer
     // curve first, start before end), on random starts and anchors in a
