@@ -614,12 +614,22 @@ mod tests {
             })
             .collect();
         let params = CodecParams::new(tol);
-        let cpu = encode_block(&curves, &params).unwrap();
+        let twin = TwinArcChecker::<f64>::default();
+        // Not exploring (the first of a small block's two codings), both
+        // kinds come out, and the searches give up where points win.
+        let once = |checker: Option<&dyn ArcChecker>| {
+            crate::codec::encode_block_once(&curves, &params, false, false, checker, false)
+                .unwrap()
+                .0
+        };
+        let (cpu, gpu) = (once(None), once(Some(&twin)));
         assert!(
             cpu.kinds.contains(&1) && cpu.kinds.contains(&2),
             "points and arcs both"
         );
-        let twin = TwinArcChecker::<f64>::default();
+        assert_eq!((gpu.bytes, gpu.kinds), (cpu.bytes, cpu.kinds));
+        // And the block as coded (the smaller of both codings).
+        let cpu = encode_block(&curves, &params).unwrap();
         let b = encode_block_on(&curves, &params, false, Some(&twin)).unwrap();
         assert_eq!(b.bytes, cpu.bytes);
         assert_eq!(b.kinds, cpu.kinds);

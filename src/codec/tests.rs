@@ -1045,8 +1045,43 @@ fn a_large_block_learns_what_points_cost_where_arcs_win_the_close_calls() {
     let block = check_block(&curves, tol);
     let points = block.kinds.iter().filter(|&&k| k == 1).count();
     assert!(points > 680, "{points} of 1100 as points");
-    assert!(!Calibration::for_block(60).explores_points());
-    assert!(Calibration::for_block(1100).explores_points());
+    assert!(Calibration::exploring(true).explores_points());
+    assert!(!Calibration::exploring(false).explores_points());
+}
+
+#[test]
+fn a_small_block_is_coded_with_and_without_exploring_and_the_smaller_kept() {
+    // Under `EXPLORE_MIN_CURVES` exploring may not pay back: the block is
+    // coded both ways. Noisy wall fibres, whose points the block learns
+    // are cheaper than estimated, come out smaller exploring; on every
+    // block here the bytes are the smaller of the two codings, and
+    // decode within the tolerance.
+    let tol = 0.1;
+    let params = CodecParams::new(tol);
+    let mut smaller = 0;
+    for (k, curves) in [
+        noisy_wall_fibres(300, 30, 0.07, 4),
+        noisy_wall_fibres(200, 60, 0.05, 5),
+        dipole_lines(60, 10.0, 6),
+        wall_fibres(40, 30, 7),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        assert!(curves.len() < Calibration::EXPLORE_MIN_CURVES);
+        let once = |explore| {
+            encode_block_once(&curves, &params, false, false, None, explore)
+                .unwrap()
+                .0
+                .bytes
+                .len()
+        };
+        let (without, with) = (once(false), once(true));
+        let block = check_block(&curves, tol);
+        assert_eq!(block.bytes.len(), without.min(with), "block {k}");
+        smaller += (with < without) as usize;
+    }
+    assert!(smaller >= 1, "exploring coded no block smaller");
 }
 
 #[test]
