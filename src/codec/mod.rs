@@ -1477,7 +1477,8 @@ type Chosen = (CurveCode, usize, u64, u64, Option<Vec<[i64; 3]>>);
 /// Chooses one curve's code given the block so far: arcs, or points with
 /// their own or a neighbour's prediction, whichever is estimated cheaper
 /// (with `explore_points`, points also where arcs are estimated at least
-/// [`Calibration::EXPLORE`] of them);
+/// [`Calibration::EXPLORE`] of them; otherwise such a call, gone to arcs,
+/// is counted in `close_calls`);
 /// returns the code and its decoded point count, and adds the decoded curve
 /// to the `neighbours` of the curves after it.
 #[allow(clippy::too_many_arguments)]
@@ -1497,6 +1498,7 @@ fn choose(
     vote: &mut SlideVote,
     screw_vote: &mut RareVote,
     reference_vote: &mut RareVote,
+    close_calls: &mut usize,
 ) -> Chosen {
     if points.is_empty() {
         neighbours.push_empty();
@@ -1603,8 +1605,10 @@ fn choose(
             let n = decoded.len();
             neighbours.push_points(decoded);
             neighbours.set_chords(arc_chords(&a));
-            let saving = bits - arc_bits.unwrap_or(0);
-            (a, n, arc_estimate.unwrap_or(0), saving, None)
+            let e = arc_bits.unwrap_or(0);
+            // A call an exploring block would have sent to points.
+            *close_calls += (e as f64 >= Calibration::EXPLORE * bits as f64) as usize;
+            (a, n, arc_estimate.unwrap_or(0), bits - e, None)
         }
         (_, Some((g, reference, own, bits, start_bits, second_order_bits))) => {
             // Arcs and points are weighed by the rounded points' estimate:
@@ -2526,22 +2530,27 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
     checker: Option<&dyn batch::ArcChecker>,
 ) -> Result<(EncodedBlock, Option<Vec<f64>>), EncodeError> {
     let large = curves.len() >= Calibration::EXPLORE_MIN_CURVES;
-    let first = encode_block_once(curves, params, tally, keep, checker, large)?;
-    if large || !first.0.kinds.contains(&2) {
-        return Ok(first);
+    let (block, tallied, close_calls) =
+        encode_block_once(curves, params, tally, keep, checker, large)?;
+    if large || close_calls == 0 {
+        return Ok((block, tallied));
     }
-    // A small block with arcs curves: coded again exploring the close
-    // calls, the smaller kept (the time of a small block twice).
-    let (mut kept, other) = match encode_block_once(curves, params, tally, keep, checker, true)? {
-        second if second.0.bytes.len() < first.0.bytes.len() => (second, first),
-        second => (first, second),
+    // A small block whose arcs won close calls: coded again exploring
+    // them, the smaller kept (the time of such a block twice; one of
+    // smooth curves has none).
+    let (again, again_tallied, _) = encode_block_once(curves, params, tally, keep, checker, true)?;
+    let (mut kept, other) = if again.bytes.len() < block.bytes.len() {
+        ((again, again_tallied), block)
+    } else {
+        ((block, tallied), again)
     };
-    kept.0.checks.add(&other.0.checks);
+    kept.0.checks.add(&other.checks);
     Ok(kept)
 }
 
 /// [`encode_block_with`] once, the block's close calls explored or not
-/// ([`Calibration::explores_points`]).
+/// ([`Calibration::explores_points`]); with the close calls that went to
+/// arcs unexplored.
 fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
@@ -2549,7 +2558,7 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
     keep: bool,
     checker: Option<&dyn batch::ArcChecker>,
     explore: bool,
-) -> Result<(EncodedBlock, Option<Vec<f64>>), EncodeError> {
+) -> Result<(EncodedBlock, Option<Vec<f64>>, usize), EncodeError> {
     let mut checks = batch::BatchStats::default();
     if !(params.tolerance.is_finite() && params.tolerance > 0.0) {
         return Err(EncodeError::BadTolerance(params.tolerance));
@@ -2618,6 +2627,7 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
     let mut decoded = Vec::with_capacity(if keep { curves.len() } else { 0 });
     let mut n_elements = 0;
     let mut calibration = Calibration::exploring(explore);
+    let mut close_calls = 0;
     // The block's decoded curves: the references.
     let mut neighbours = Neighbours::new(grid_step, q_start, curves.len());
     let mut worth = ArcsWorth::default();
@@ -2663,6 +2673,7 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
                 &mut vote,
                 &mut screw_vote,
                 &mut reference_vote,
+                &mut close_calls,
             );
             if arcs_searched {
                 worth.add(estimate, saving);
@@ -2787,6 +2798,7 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
             checks,
         },
         tallied,
+        close_calls,
     ))
 }
 
