@@ -168,7 +168,8 @@ pub struct BatchStats {
 }
 
 impl BatchStats {
-    /// Adds the counts of `other` (a later part of the same block).
+    /// Adds the counts of `other` (a later part of the same block, or its
+    /// other coding).
     pub fn add(&mut self, other: &BatchStats) {
         self.checked += other.checked;
         self.unsure += other.unsure;

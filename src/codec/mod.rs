@@ -396,7 +396,8 @@ pub struct EncodedBlock {
     /// [`encode_block_keeping`]: what per-point values are carried onto).
     pub decoded: Vec<Vec<DVec3>>,
     /// The batched checks, where a checker was given
-    /// ([`encode_block_on`]).
+    /// ([`encode_block_on`]; of both codings where a small block was
+    /// coded twice).
     pub checks: batch::BatchStats,
 }
 
@@ -1477,8 +1478,8 @@ type Chosen = (CurveCode, usize, u64, u64, Option<Vec<[i64; 3]>>);
 /// Chooses one curve's code given the block so far: arcs, or points with
 /// their own or a neighbour's prediction, whichever is estimated cheaper
 /// (with `explore_points`, points also where arcs are estimated at least
-/// [`Calibration::EXPLORE`] of them; otherwise such a call, gone to arcs,
-/// is counted in `close_calls`);
+/// [`Calibration::EXPLORE`] of them; such a call gone to arcs is counted
+/// in `close_calls` where given);
 /// returns the code and its decoded point count, and adds the decoded curve
 /// to the `neighbours` of the curves after it.
 #[allow(clippy::too_many_arguments)]
@@ -1498,7 +1499,7 @@ fn choose(
     vote: &mut SlideVote,
     screw_vote: &mut RareVote,
     reference_vote: &mut RareVote,
-    close_calls: &mut usize,
+    close_calls: Option<&mut usize>,
 ) -> Chosen {
     if points.is_empty() {
         neighbours.push_empty();
@@ -1607,7 +1608,9 @@ fn choose(
             neighbours.set_chords(arc_chords(&a));
             let e = arc_bits.unwrap_or(0);
             // A call an exploring block would have sent to points.
-            *close_calls += (e as f64 >= Calibration::EXPLORE * bits as f64) as usize;
+            if let Some(c) = close_calls {
+                *c += (e as f64 >= Calibration::EXPLORE * bits as f64) as usize;
+            }
             (a, n, arc_estimate.unwrap_or(0), bits - e, None)
         }
         (_, Some((g, reference, own, bits, start_bits, second_order_bits))) => {
@@ -1752,8 +1755,9 @@ impl Calibration {
     /// 1,100 noisy 30-point wall fibres −1.5 to +0.2 % over five noise
     /// levels; 0.6 sent more of the field lines to points (+0.1–0.2 %).
     const EXPLORE: f64 = 0.7;
-    /// Blocks of at least this many curves explore; smaller ones are
-    /// coded both ways and the smaller kept ([`encode_block_with`]): the
+    /// Blocks of at least this many curves explore; a smaller one is coded
+    /// again exploring where its arcs won a close call it would have
+    /// explored, and the smaller coding kept ([`encode_block_with`]): the
     /// exploration costs up to about `(1 − EXPLORE) · PRIOR` bits, which
     /// many curves pay back and a few may not (the 60-curve EuDX file at
     /// 0.5 mm: 158 B without, 177 B with; the 300-curve fornix at 0.1 mm:
@@ -1772,14 +1776,21 @@ impl Calibration {
     /// of points or more) goes to points: until the block has coded
     /// [`PRIOR`](Self::PRIOR) estimated bits of points. Where arcs win
     /// nearly every call, the points' factor would otherwise stay at its
-    /// prior, which leaves out what the slide saves: on 3,000 noisy
-    /// heart fibres (`benches/make_unseen.py`) at 0.1 mm, 2,999 curves went
-    /// as arcs in 218,233 B; exploring, 2,990 go as points in 200,456 B
-    /// (and 211,159 B with no arcs at all). The shared data's large files
-    /// code the same bytes, 10,000 fornix replicas at 0.1 mm 0.06 % fewer;
-    /// in a 60-curve file it cost 5 % (hence the block size).
+    /// prior, which leaves out what the slide saves. When it was added
+    /// (codec model 12, with close calls from 0.8): on 3,000 noisy heart
+    /// fibres (`benches/make_unseen.py`) at 0.1 mm, 2,999 curves went as
+    /// arcs in 218,233 B; exploring, 2,990 went as points in 200,456 B
+    /// (211,159 B with no arcs at all); the shared data's large files
+    /// coded the same bytes, 10,000 fornix replicas at 0.1 mm 0.06 % fewer;
+    /// a 60-curve file 5 % more (hence [`EXPLORE_MIN_CURVES`](Self::EXPLORE_MIN_CURVES)).
     fn explores_points(&self) -> bool {
-        self.explore && self.points.1 < Self::PRIOR
+        self.explore && self.learning()
+    }
+
+    /// Whether the block has coded fewer than [`PRIOR`](Self::PRIOR)
+    /// estimated bits of points (an exploring block explores then).
+    fn learning(&self) -> bool {
+        self.points.1 < Self::PRIOR
     }
 
     /// The factor on the arcs' estimate.
@@ -2384,7 +2395,9 @@ impl BlockStream {
         }
     }
 
-    /// Codes the curve chosen last (`neighbours` holds it last).
+    /// Codes a curve by its plan ([`CurvePlan::of`], made when the
+    /// neighbours held it last: a curve held and coded again into a stream
+    /// opened later is coded as it was).
     fn put_curve(&mut self, code: &CurveCode, params: &CodecParams, plan: &CurvePlan) {
         let (enc, m, prev) = (&mut self.enc, &mut self.m, &mut self.prev);
         let fit = self.fit as usize;
@@ -2673,7 +2686,11 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
                 &mut vote,
                 &mut screw_vote,
                 &mut reference_vote,
-                &mut close_calls,
+                // Counted where an exploring coding would have explored
+                // (it would still be learning): from the first such call
+                // on, the two codings differ; until then they are one.
+                (!calibration.explores_points() && calibration.learning())
+                    .then_some(&mut close_calls),
             );
             if arcs_searched {
                 worth.add(estimate, saving);
