@@ -1600,7 +1600,7 @@ fn choose(
     match (opt.arcs, pts) {
         (Some((a, decoded)), Some((_, _, _, bits, _, _)))
             if arc_bits.is_some_and(|e| {
-                e < bits && !(explore_points && e as f64 >= Calibration::EXPLORE * bits as f64)
+                e < bits && !(explore_points && Calibration::close_call(e, bits))
             }) =>
         {
             let n = decoded.len();
@@ -1609,7 +1609,7 @@ fn choose(
             let e = arc_bits.unwrap_or(0);
             // A call an exploring block would have sent to points.
             if let Some(c) = close_calls {
-                *c += (e as f64 >= Calibration::EXPLORE * bits as f64) as usize;
+                *c += Calibration::close_call(e, bits) as usize;
             }
             (a, n, arc_estimate.unwrap_or(0), bits - e, None)
         }
@@ -1763,6 +1763,12 @@ impl Calibration {
     /// 0.5 mm: 158 B without, 177 B with; the 300-curve fornix at 0.1 mm:
     /// 8,225 B without, 7,833 B with).
     const EXPLORE_MIN_CURVES: usize = 1024;
+
+    /// Whether arcs estimated at `arcs` bits against points at `points`
+    /// are a close call: at least [`EXPLORE`](Self::EXPLORE) of them.
+    fn close_call(arcs: u64, points: u64) -> bool {
+        arcs as f64 >= Self::EXPLORE * points as f64
+    }
 
     /// A calibration that explores or not.
     fn exploring(explore: bool) -> Self {
