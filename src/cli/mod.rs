@@ -323,7 +323,8 @@ pub enum StorageArg {
 pub enum EffortArg {
     /// Each arc reaches as far as it can.
     Default,
-    /// Each arc chosen one arc ahead: smaller, about 2x the time.
+    /// Each arc also chosen one arc ahead, the smaller coding of each block
+    /// kept: never larger, about 3x the time.
     Best,
 }
 
@@ -369,9 +370,9 @@ pub struct CompressArgs {
     #[arg(long, value_enum, default_value_t = DistanceArg::Hausdorff)]
     pub distance: DistanceArg,
     /// How hard the arc codec searches for a smaller file (same format and
-    /// guarantee): `best` chooses each arc looking one arc ahead, about 2x
-    /// the time (field lines 7-8 %, hair 2-4 % smaller; fibre bundles within
-    /// about 1 %, either way).
+    /// guarantee): `best` also chooses each arc looking one arc ahead and
+    /// keeps each block's smaller coding, about 3x the time (field lines and
+    /// fibre bundles 0.5-3 % smaller; never larger).
     #[arg(long, value_enum, default_value_t = EffortArg::Default)]
     pub effort: EffortArg,
     /// Cap on elements per curve.

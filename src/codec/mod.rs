@@ -212,18 +212,23 @@ pub struct CodecParams {
 /// How hard the encoder searches for a smaller stream: the same format and
 /// guarantee either way.
 ///
-/// Measured (`examples/codec_probe`, 2026-11-30): `Best` makes the hair
-/// 4.0 % smaller at 0.5 mm (1.7 % at 0.1), the field lines 7–8 % and the
-/// dipole lines of `benches/make_unseen.py` 8–10 %, but the fornix at 0.1 mm
-/// and CST_R at 0.5 mm 1 % larger; for about 1.8 times the CPU of `Default`
-/// on 100,000 fornix replicas at 0.5 mm (docs/reference.md, "Session 49").
+/// `Best` codes each block twice, with the look-ahead and without, and
+/// keeps the smaller, so it is never larger than `Default`. Measured
+/// (session 51, `strandfit compress --effort`): the field lines 1.6 %
+/// smaller at 0.01 R☉ (2.9 % at 0.001), 10,000 fornix replicas at 0.5 mm
+/// 1.6 %, the fornix 0.5 % / 1.6 % (0.1 / 0.5 mm), the hair at 0.5 mm the
+/// same; for 3–3.5 times the CPU of `Default`. (Before every element's
+/// kinds were searched, the look-ahead alone made the field lines 7–8 %
+/// smaller, and the fornix at 0.1 mm 1 % larger: docs/reference.md,
+/// "Session 49" and "Session 51".)
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Effort {
     /// Each arc reaches as far along the curve as it can.
     #[default]
     Default,
-    /// Each arc is chosen looking one arc ahead: one a few vertices
-    /// shorter where the next then reaches as far for fewer bits.
+    /// Each arc is also chosen looking one arc ahead (one a few vertices
+    /// shorter where the next then reaches as far for fewer bits), and each
+    /// block's smaller coding kept.
     Best,
 }
 
@@ -2542,6 +2547,36 @@ impl BlockStream {
 }
 
 fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
+    curves: &[C],
+    params: &CodecParams,
+    tally: bool,
+    keep: bool,
+    checker: Option<&dyn batch::ArcChecker>,
+) -> Result<(EncodedBlock, Option<Vec<f64>>), EncodeError> {
+    if params.effort == Effort::Default {
+        return encode_block_searched(curves, params, tally, keep, checker);
+    }
+    // `Best`: the block coded with the look-ahead and without, the smaller
+    // kept, so that it is never larger than `Default`'s (the look-ahead's
+    // chains, each estimated cheaper, came out larger on some blocks: the
+    // hair at 0.5 mm 3 %, session 51).
+    let default = CodecParams {
+        effort: Effort::Default,
+        ..*params
+    };
+    let ahead = encode_block_searched(curves, params, tally, keep, checker)?;
+    let plain = encode_block_searched(curves, &default, tally, keep, checker)?;
+    let (mut kept, other) = if ahead.0.bytes.len() < plain.0.bytes.len() {
+        (ahead, plain)
+    } else {
+        (plain, ahead)
+    };
+    kept.0.checks.add(&other.0.checks);
+    Ok(kept)
+}
+
+/// [`encode_block_with`] at `params`' effort alone.
+fn encode_block_searched<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
     tally: bool,
