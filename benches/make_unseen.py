@@ -16,11 +16,22 @@ dipole.tck      2,000 field lines of a potential field that is not PFSS: a
                 the sphere's radius, like R_sun), traced by RK4 from footpoints
                 on the sphere at a step of 0.02 r until the line returns to
                 r = 1 or leaves r = 2.5. Compress at T = 1e-3 and 1e-2.
+bundles.tck     3,000 streamlines of 12 bundles tracked as a probabilistic
+                tracker does: each bundle a smooth direction field (a random
+                rotation of (1, 0.3 sin, 0.3 cos)), each streamline a walk of
+                0.5 mm steps from a seed near the bundle's axis whose direction
+                keeps 0.8 of itself, takes 0.2 of the field and 0.06 of
+                Gaussian noise per step, 40-140 mm long. Units mm: T = 0.1
+                and 0.5.
+dense.tck       1,500 of those streamlines as a deterministic tracker with
+                spline interpolation writes them: every fourth point kept as a
+                knot (2 mm apart), a Catmull-Rom spline through the knots
+                sampled every 0.2 mm (its curvature jumps at each knot).
 
-Both are float32 .tck (nibabel). numpy + nibabel only; deterministic (--seed).
+All are float32 .tck (nibabel). numpy + nibabel only; deterministic (--seed).
 
     python benches/make_unseen.py -o /tmp/unseen
-    python benches/codec_compare.py --data /tmp/unseen --files heart.tck
+    python benches/codec_compare.py --data /tmp/unseen --files heart.tck bundles.tck dense.tck
     python benches/codec_compare.py --data /tmp/unseen --files dipole.tck \
         --tolerances 1e-3 1e-2
 """
@@ -106,6 +117,49 @@ def dipole(rng, count, step=0.02):
     return lines
 
 
+def bundles(rng, count, step=0.5):
+    def field(x, c):
+        return np.array([1.0, 0.3 * np.sin(x[0] / c[0] + c[1]), 0.3 * np.cos(x[0] / c[2] + c[3])])
+
+    lines = []
+    per = count // 12
+    for b in range(12):
+        c = rng.uniform([15, 0, 20, 0], [40, 6, 50, 6])
+        rot = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+        origin = rng.uniform(-40, 40, 3)
+        for _ in range(per if b < 11 else count - 11 * per):
+            x = rng.normal(0, 3, 3)
+            x[0] = 0
+            d = field(x, c)
+            d /= np.linalg.norm(d)
+            pts = [x.copy()]
+            for _ in range(int(rng.uniform(40, 140) / step)):
+                f = field(x, c)
+                d = 0.8 * d + 0.2 * f / np.linalg.norm(f) + rng.normal(0, 0.06, 3)
+                d /= np.linalg.norm(d)
+                x = x + step * d
+                pts.append(x.copy())
+            lines.append((np.asarray(pts) @ rot.T + origin).astype(np.float32))
+    return lines
+
+
+def catmull_rom(knots, step):
+    """Points every `step` (by arc length) along the Catmull-Rom spline
+    through `knots`."""
+    p = np.vstack([2 * knots[0] - knots[1], knots, 2 * knots[-1] - knots[-2]])
+    t = np.linspace(0, 1, 20, endpoint=False)[:, None]
+    dense = []
+    for i in range(1, len(p) - 2):
+        p0, p1, p2, p3 = p[i - 1], p[i], p[i + 1], p[i + 2]
+        dense.append(0.5 * (2 * p1 + (p2 - p0) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t ** 2
+                            + (3 * p1 - p0 - 3 * p2 + p3) * t ** 3))
+    dense.append(knots[-1:])
+    d = np.vstack(dense)
+    s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(d, axis=0), axis=1))])
+    at = np.linspace(0, s[-1], max(2, int(round(s[-1] / step)) + 1))
+    return np.stack([np.interp(at, s, d[:, a]) for a in range(3)], -1).astype(np.float32)
+
+
 def save(path, curves):
     t = nib.streamlines.Tractogram(curves, affine_to_rasmm=np.eye(4))
     nib.streamlines.save(t, path)
@@ -122,11 +176,17 @@ def main():
     ap.add_argument("--heart-step", type=float, default=0.5, help="mm")
     ap.add_argument("--heart-noise", type=float, default=0.05, help="mm per coordinate")
     ap.add_argument("--dipole-step", type=float, default=0.02, help="of the radius")
+    ap.add_argument("--bundles", type=int, default=3000, help="streamlines")
+    ap.add_argument("--dense-step", type=float, default=0.2, help="mm")
     args = ap.parse_args()
     os.makedirs(args.output, exist_ok=True)
     rng = np.random.default_rng(args.seed)
     save(os.path.join(args.output, "heart.tck"), heart(rng, args.heart, args.heart_step, args.heart_noise))
     save(os.path.join(args.output, "dipole.tck"), dipole(rng, args.dipole, args.dipole_step))
+    tracked = bundles(rng, args.bundles)
+    save(os.path.join(args.output, "bundles.tck"), tracked)
+    knots = [c[::4].astype(np.float64) for c in tracked[::2] if len(c) >= 8]
+    save(os.path.join(args.output, "dense.tck"), [catmull_rom(k, args.dense_step) for k in knots])
 
 
 if __name__ == "__main__":
