@@ -261,6 +261,7 @@ pub fn search_block(
                     mailbox: Some(m),
                     give_up: e.give_up.clone(),
                     look_ahead: e.look_ahead,
+                    bulge_prediction: e.bulge_prediction,
                 })
         })
         .collect();
@@ -400,6 +401,7 @@ mod tests {
                 mailbox: None,
                 give_up: None,
                 look_ahead: false,
+                bulge_prediction: false,
             };
             let o = pts[0];
             let radius = pts

@@ -61,8 +61,9 @@ pub const VERSION: u16 = 3;
 /// assert_eq!(CodecParams::new(0.01).model, MODEL);
 /// assert!(READ_MODELS.contains(&MODEL));
 /// ```
-pub const MODEL: u8 = 15;
-/// The models this build decodes: 12, whose points curves without a
+pub const MODEL: u8 = 16;
+/// The models this build decodes: 15, whose corners' bulges were coded
+/// without a prediction (model 16 predicts them from the G1 arc's); 12, whose points curves without a
 /// reference had no mean-step prediction (model 13 may take it); 11, whose references predicted a step
 /// by matching point indices alone (model 12 may walk them); 10, which coded every residual sign in
 /// one context per axis; 9; 8, whose screw prediction turned the
@@ -92,7 +93,7 @@ pub const MODEL: u8 = 15;
 /// let err = with_model(99).err().unwrap();
 /// assert!(err.to_string().contains("codec model 99"), "{err}");
 /// ```
-pub const READ_MODELS: [u8; 10] = [6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+pub const READ_MODELS: [u8; 11] = [6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16];
 const END_MAGIC: [u8; 4] = *b"SFHE";
 const END_LEN: u64 = 12;
 /// Curves per block: the entropy models learn within a block, so larger

@@ -44,6 +44,9 @@ pub struct CurveEncoder<'a> {
     /// Whether each element is chosen looking one element ahead
     /// ([`CurveEncoder::look_ahead`], `--effort best`).
     pub look_ahead: bool,
+    /// Whether a corner's bulge is coded against
+    /// [`corner_bulge_prediction`] (codec model 16 on).
+    pub bulge_prediction: bool,
 }
 
 /// How many input vertices short of the furthest reach the look-ahead
@@ -301,12 +304,22 @@ impl<'a> CurveEncoder<'a> {
             length: steps - state.chord_steps,
             offset: [a1, a2],
             bulge: [0, 0],
+            bulge_base: [0, 0],
             jump: [0; 3],
             span: state.chord_steps,
         };
         if kind == ElementKind::Corner {
-            let (tries, count) = self.corner_bulges(state.point, end, state.normal, from, j)?;
-            // The estimated bulge, then a straight segment.
+            if self.bulge_prediction {
+                code.bulge_base = corner_bulge_prediction(
+                    state.point,
+                    end,
+                    state.normal,
+                    state.tangent,
+                    self.q.offset,
+                );
+            }
+            let (tries, count) =
+                self.corner_bulges(state.point, end, state.normal, from, j, code.bulge_base)?;
             for b in tries.into_iter().take(count) {
                 let t = corner_from_code(state.point, end, state.normal, b, self.q.offset)?;
                 let arc = match self.candidate_arc(state.point, t, end, from, j) {
@@ -387,8 +400,13 @@ impl<'a> CurveEncoder<'a> {
         c
     }
 
-    /// Bulge codes to try for a corner from `q` to `end`: the estimate, then
-    /// zero (how many of the two are distinct).
+    /// Bulge codes to try for a corner from `q` to `end`: the estimate,
+    /// then `base`, the bulge's prediction (its residual is the cheapest;
+    /// zero, a straight segment's tangent, before model 16), and how many of
+    /// the two are distinct. (With the prediction, zero as a third try made
+    /// 11 of 28 file and tolerance pairs 0.01–0.3 % larger and 2 smaller,
+    /// the heart fibres at 0.1 mm by 0.14 %; the prediction tried first,
+    /// 0.1–0.6 % larger on most.)
     fn corner_bulges(
         &self,
         q: DVec3,
@@ -396,6 +414,7 @@ impl<'a> CurveEncoder<'a> {
         normal: DVec3,
         from: usize,
         to: usize,
+        base: [i64; 2],
     ) -> Option<([[i64; 2]; 2], usize)> {
         let h = self.bulge_estimate(q, end, from, to);
         let (f1, f2) = bulge_frame(q, end, normal)?;
@@ -403,11 +422,7 @@ impl<'a> CurveEncoder<'a> {
             Quantiser::index(h.dot(f1), self.q.offset)?,
             Quantiser::index(h.dot(f2), self.q.offset)?,
         ];
-        if b == [0, 0] {
-            Some(([b, b], 1))
-        } else {
-            Some(([b, [0, 0]], 2))
-        }
+        Some(([b, base], if b == base { 1 } else { 2 }))
     }
 
     /// Furthest-reaching element from `state` past input vertex `from`.
@@ -706,6 +721,7 @@ impl<'a> CurveEncoder<'a> {
                     length: 0,
                     offset: [0, 0],
                     bulge: [0, 0],
+                    bulge_base: [0, 0],
                     jump: k,
                     span: state.chord_steps,
                 },
@@ -752,6 +768,7 @@ impl<'a> CurveEncoder<'a> {
                             length: k[2],
                             offset: [k[0], k[1]],
                             bulge,
+                            bulge_base: [0, 0],
                             jump: [0; 3],
                             span: 0,
                         },
@@ -903,6 +920,46 @@ pub fn bulge_frame(q: DVec3, e: DVec3, normal: DVec3) -> Option<(DVec3, DVec3)> 
         perpendicular_part(normal, u)
     };
     Some((f1, u.cross(f1)))
+}
+
+/// The prediction a corner's bulge code is coded against (model 16 on):
+/// half the bulge of the G1 arc from `q` to `e`, whose start tangent is
+/// the chain's `tangent`, in the corner's bulge frame
+/// ([`bulge_frame`] with `normal`), rounded to offset steps of `step`. A
+/// circular arc's sagitta vector is `(c/2)·tan(θ/2)` along the tangent's
+/// part across the chord (`c` the chord's length, `θ` the tangent's angle
+/// to it), and `tan(θ/2) = sin θ / (1 + cos θ)`: only `+ − × ÷ √`, so the
+/// decoder computes the same integers on every platform. A corner is
+/// chosen where the G1 arc's tangent has drifted from the curve's, so the
+/// coded one lies between it and the chord's: measured on the hair, the
+/// field lines, the fornix and the replicas at 0.5 mm, the whole G1 bulge
+/// as the prediction left the residuals of densely sampled fibres larger
+/// than none, half of it smaller everywhere. Zero where the tangent points
+/// back along the chord or the bulge is not codable.
+pub fn corner_bulge_prediction(
+    q: DVec3,
+    e: DVec3,
+    normal: DVec3,
+    tangent: DVec3,
+    step: f64,
+) -> [i64; 2] {
+    let predict = || -> Option<[i64; 2]> {
+        let (f1, f2) = bulge_frame(q, e, normal)?;
+        let d = e - q;
+        let c = d.length();
+        let u = d / c;
+        let cos = tangent.dot(u);
+        if !(1.0 + cos > 1e-9) {
+            return None;
+        }
+        let across = tangent - u * cos;
+        let h = across * (0.25 * c / (1.0 + cos));
+        let b = [h.dot(f1) / step, h.dot(f2) / step].map(f64::round);
+        b.iter()
+            .all(|x| x.is_finite() && x.abs() < (1u64 << 20) as f64)
+            .then(|| b.map(|x| x as i64))
+    };
+    predict().unwrap_or([0, 0])
 }
 
 /// Start tangent of a corner element from its bulge code.

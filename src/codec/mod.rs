@@ -185,8 +185,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use encoder::{
-    acceptance_tolerance, corner_from_code, element_end, first_end, jump_end, next_state,
-    CurveEncoder,
+    acceptance_tolerance, corner_bulge_prediction, corner_from_code, element_end, first_end,
+    jump_end, next_state, CurveEncoder,
 };
 use entropy::{Adaptation, Bit, Decoder, Encoder, IntModel};
 use predict::Arc;
@@ -300,6 +300,10 @@ pub struct ElementCode {
     pub offset: [i64; 2],
     /// Corner bulge (sagitta vector) in offset steps; zero for G1.
     pub bulge: [i64; 2],
+    /// A corner's bulge is coded as its difference from this prediction
+    /// (not coded: from model 16 on, [`encoder::corner_bulge_prediction`];
+    /// zero before, and for the other kinds).
+    pub bulge_base: [i64; 2],
     /// A jump's end relative to its start, in start steps (the other
     /// fields are then zero).
     pub jump: [i64; 3],
@@ -478,6 +482,7 @@ fn curve_encoder<'a>(
         mailbox: None,
         give_up: Some(encoder::GiveUp::new(arcs_scale)),
         look_ahead: params.effort == Effort::Best,
+        bulge_prediction: bulge_predicted(params.model),
     })
 }
 
@@ -552,7 +557,7 @@ fn element_bits(e: &ElementCode) -> u64 {
         bits += 1;
     }
     if e.kind == ElementKind::Corner {
-        bits += eg_bits(e.bulge[0]) + eg_bits(e.bulge[1]);
+        bits += eg_bits(e.bulge[0] - e.bulge_base[0]) + eg_bits(e.bulge[1] - e.bulge_base[1]);
     }
     bits
 }
@@ -825,6 +830,12 @@ impl ResidualModels {
 /// ([`ResidualModels::sign_after`], [`ResidualModels::shared`]).
 fn sign_after(model: u8) -> bool {
     model >= 11
+}
+
+/// Whether a corner's bulge is coded against half the G1 arc's
+/// ([`encoder::corner_bulge_prediction`]; model 16 on).
+pub(crate) fn bulge_predicted(model: u8) -> bool {
+    model >= 16
 }
 
 /// The two axes other than each, in order: coded before the along axis.
@@ -2537,8 +2548,8 @@ impl BlockStream {
                     }
                     if e.kind == ElementKind::Corner {
                         enc.set_tag(8);
-                        m.bulge[0].put(enc, e.bulge[0]);
-                        m.bulge[1].put(enc, e.bulge[1]);
+                        m.bulge[0].put(enc, e.bulge[0] - e.bulge_base[0]);
+                        m.bulge[1].put(enc, e.bulge[1] - e.bulge_base[1]);
                     }
                 }
             }
@@ -3100,7 +3111,18 @@ pub fn decode_block(
                     };
                     let tangent = match kind {
                         ElementKind::Corner => {
-                            let b = [m.bulge[0].get(&mut dec), m.bulge[1].get(&mut dec)];
+                            let base = if bulge_predicted(params.model) {
+                                corner_bulge_prediction(
+                                    state.point,
+                                    end,
+                                    state.normal,
+                                    state.tangent,
+                                    q.offset,
+                                )
+                            } else {
+                                [0, 0]
+                            };
+                            let b = [0, 1].map(|a| base[a].wrapping_add(m.bulge[a].get(&mut dec)));
                             corner_from_code(state.point, end, state.normal, b, q.offset)
                                 .ok_or_else(|| bad(format!("element {k} has zero length")))?
                         }
