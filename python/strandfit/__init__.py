@@ -97,8 +97,9 @@ def compress_arrays(positions, offsets, tolerance: float = 0.5, effort: str = "d
     effort : {"default", "best"}
         ``"best"`` also chooses each arc looking one arc ahead and keeps
         each block's smaller coding (the command line's ``--effort best``):
-        the same format and guarantee, never larger (field lines and fibre
-        bundles 0.5-3 % smaller), about three times the time.
+        the same format and guarantee, never larger (field lines and the
+        fornix 0.5-3 % smaller, points-coded bundles the same), about three
+        times the time.
 
     Returns
     -------

@@ -372,7 +372,8 @@ pub struct CompressArgs {
     /// How hard the arc codec searches for a smaller file (same format and
     /// guarantee): `best` also chooses each arc looking one arc ahead and
     /// keeps each block's smaller coding, about 3x the time (field lines and
-    /// fibre bundles 0.5-3 % smaller; never larger).
+    /// the fornix 0.5-3 % smaller, points-coded bundles the same; never
+    /// larger).
     #[arg(long, value_enum, default_value_t = EffortArg::Default)]
     pub effort: EffortArg,
     /// Cap on elements per curve.

@@ -321,6 +321,10 @@ impl<'a> CurveEncoder<'a> {
             let (tries, count) =
                 self.corner_bulges(state.point, end, state.normal, from, j, code.bulge_base)?;
             for b in tries.into_iter().take(count) {
+                // (The residual is what is coded: within the coder's range.)
+                if !(0..2).all(|a| super::entropy::codable(b[a].wrapping_sub(code.bulge_base[a]))) {
+                    continue;
+                }
                 let t = corner_from_code(state.point, end, state.normal, b, self.q.offset)?;
                 let arc = match self.candidate_arc(state.point, t, end, from, j) {
                     Err(_) => return None,

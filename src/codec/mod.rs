@@ -405,8 +405,8 @@ pub struct EncodedBlock {
     /// [`encode_block_keeping`]: what per-point values are carried onto).
     pub decoded: Vec<Vec<DVec3>>,
     /// The batched checks, where a checker was given
-    /// ([`encode_block_on`]; of both codings where a small block was
-    /// coded twice).
+    /// ([`encode_block_on`]; of every coding where a block was coded more
+    /// than once: a small block exploring, `Effort::Best` both efforts).
     pub checks: batch::BatchStats,
 }
 
