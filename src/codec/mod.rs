@@ -1234,6 +1234,20 @@ type LatticePredict<'a> = dyn Fn(&[[i64; 3]], usize) -> [i64; 3] + 'a;
 /// / 930 kB in 3.7 s; 8: 143,042 B in 1.8 s.
 const SLIDE_BEAM: usize = 2;
 
+/// The slide's partial choices in a block of fewer than
+/// [`SMALL_BLOCK_POINTS`] points, whose time is a fraction of a second
+/// at most: there the bytes are worth the wider search. Measured against
+/// [`SLIDE_BEAM`] (session 51, model 16, `examples/codec_probe`): the
+/// resampled bundles AF_L, CST_R and CC 1.1–3.1 % smaller at 0.1 / 0.5 mm,
+/// bundles of 50 tracked streamlines resampled to 20 points 3–5 %, the
+/// EuDX and fornix files (arcs) the same; 4 gave about half of that.
+const SMALL_BLOCK_SLIDE_BEAM: usize = 8;
+
+/// Blocks of fewer points than this slide with [`SMALL_BLOCK_SLIDE_BEAM`]
+/// (at most about 0.1 s of compress on 2 cores); a large file's blocks
+/// of 4,096 curves are over it unless its curves are of a few points.
+const SMALL_BLOCK_POINTS: usize = 32_768;
+
 /// What a block has counted of an option its curves may try (a second
 /// slide, an estimate): curves seen, curves that tried it, and how often it
 /// won. Both votes below ask every curve to try it for a first stretch and
@@ -1276,9 +1290,15 @@ impl Tally {
 /// [`SHARE`](Self::SHARE) of the counted ones (both while neither has).
 /// Measured: 2,000 fornix replicas at 0.1 mm 11 % fewer instructions for
 /// 0.1 % more bytes; 3,000 noisy heart fibres (`benches/make_unseen.py`)
-/// 35 % fewer, 42 B fewer.
-#[derive(Default)]
-struct SlideVote(Tally);
+/// 35 % fewer, 42 B fewer. With the slide's beam for the block
+/// ([`SLIDE_BEAM`], or [`SMALL_BLOCK_SLIDE_BEAM`] in a small block).
+struct SlideVote(Tally, usize);
+
+impl Default for SlideVote {
+    fn default() -> Self {
+        SlideVote(Tally::default(), SLIDE_BEAM)
+    }
+}
 
 impl SlideVote {
     const TRIALS: usize = 32;
@@ -1397,13 +1417,14 @@ fn slid_points(
     // The slide against `predict`, kept where its residuals are estimated
     // under `limit` (the rounded points' residuals). The start stays: the
     // residuals' estimates decide.
+    let beam = vote.1;
     let slide = |predict: &LatticePredict, flag: bool, limit: u64| {
         quantise::cheapest_points(
             points,
             half,
             tol * tol,
             g[0],
-            SLIDE_BEAM,
+            beam,
             predict,
             smooth_lattice_bits(),
             lattice_bits,
@@ -2697,6 +2718,9 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
     let mut neighbours = Neighbours::new(grid_step, q_start, curves.len());
     let mut worth = ArcsWorth::default();
     let mut vote = SlideVote::default();
+    if curves.iter().map(|c| c.as_ref().len()).sum::<usize>() < SMALL_BLOCK_POINTS {
+        vote.1 = SMALL_BLOCK_SLIDE_BEAM;
+    }
     let mut screw_vote = RareVote::default();
     let mut reference_vote = RareVote::default();
     let (head, tail) = curves.split_at(FIRST_CHUNK.min(curves.len()));
