@@ -1292,11 +1292,17 @@ impl Tally {
 /// 0.1 % more bytes; 3,000 noisy heart fibres (`benches/make_unseen.py`)
 /// 35 % fewer, 42 B fewer. With the slide's beam for the block
 /// ([`SLIDE_BEAM`], or [`SMALL_BLOCK_SLIDE_BEAM`] in a small block).
-struct SlideVote(Tally, usize);
+struct SlideVote {
+    tally: Tally,
+    beam: usize,
+}
 
 impl Default for SlideVote {
     fn default() -> Self {
-        SlideVote(Tally::default(), SLIDE_BEAM)
+        SlideVote {
+            tally: Tally::default(),
+            beam: SLIDE_BEAM,
+        }
     }
 }
 
@@ -1307,10 +1313,10 @@ impl SlideVote {
     /// The kinds to slide for the block's next mean-step curve.
     fn kinds(&mut self) -> &'static [OwnPrediction] {
         const BOTH: &[OwnPrediction] = &[OwnPrediction::SecondOrder, OwnPrediction::MeanStep];
-        if self.0.must_try(Self::TRIALS) {
+        if self.tally.must_try(Self::TRIALS) {
             return BOTH;
         }
-        let share = self.0.won as f64 / self.0.tried.max(1) as f64;
+        let share = self.tally.won as f64 / self.tally.tried.max(1) as f64;
         if share >= Self::SHARE {
             &[OwnPrediction::MeanStep]
         } else if 1.0 - share >= Self::SHARE {
@@ -1322,7 +1328,7 @@ impl SlideVote {
 
     /// Both kinds were slid and `kind` won.
     fn count(&mut self, kind: OwnPrediction) {
-        self.0.count(kind == OwnPrediction::MeanStep);
+        self.tally.count(kind == OwnPrediction::MeanStep);
     }
 }
 
@@ -1417,7 +1423,7 @@ fn slid_points(
     // The slide against `predict`, kept where its residuals are estimated
     // under `limit` (the rounded points' residuals). The start stays: the
     // residuals' estimates decide.
-    let beam = vote.1;
+    let beam = vote.beam;
     let slide = |predict: &LatticePredict, flag: bool, limit: u64| {
         quantise::cheapest_points(
             points,
@@ -2596,15 +2602,24 @@ fn encode_block_with<C: AsRef<[DVec3]> + Sync>(
         effort: Effort::Default,
         ..*params
     };
-    let ahead = encode_block_searched(curves, params, tally, keep, checker)?;
     let plain = encode_block_searched(curves, &default, tally, keep, checker)?;
-    let (mut kept, other) = if ahead.0.bytes.len() < plain.0.bytes.len() {
-        (ahead, plain)
+    let ahead = encode_block_searched(curves, params, tally, keep, checker)?;
+    Ok(smaller_coding(plain, ahead))
+}
+
+/// Of two codings of one block, `second` where it is strictly smaller,
+/// else `first`; the kept one's batched checks count both's.
+fn smaller_coding(
+    first: (EncodedBlock, Option<Vec<f64>>),
+    second: (EncodedBlock, Option<Vec<f64>>),
+) -> (EncodedBlock, Option<Vec<f64>>) {
+    let (mut kept, other) = if second.0.bytes.len() < first.0.bytes.len() {
+        (second, first)
     } else {
-        (plain, ahead)
+        (first, second)
     };
     kept.0.checks.add(&other.0.checks);
-    Ok(kept)
+    kept
 }
 
 /// [`encode_block_with`] at `params`' effort alone.
@@ -2625,13 +2640,7 @@ fn encode_block_searched<C: AsRef<[DVec3]> + Sync>(
     // them, the smaller kept (the time of such a block twice; one of
     // smooth curves has none).
     let (again, again_tallied, _) = encode_block_once(curves, params, tally, keep, checker, true)?;
-    let (mut kept, other) = if again.bytes.len() < block.bytes.len() {
-        ((again, again_tallied), block)
-    } else {
-        ((block, tallied), again)
-    };
-    kept.0.checks.add(&other.checks);
-    Ok(kept)
+    Ok(smaller_coding((block, tallied), (again, again_tallied)))
 }
 
 /// [`encode_block_with`] once, the block's close calls explored or not
@@ -2719,7 +2728,7 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
     let mut worth = ArcsWorth::default();
     let mut vote = SlideVote::default();
     if curves.iter().map(|c| c.as_ref().len()).sum::<usize>() < SMALL_BLOCK_POINTS {
-        vote.1 = SMALL_BLOCK_SLIDE_BEAM;
+        vote.beam = SMALL_BLOCK_SLIDE_BEAM;
     }
     let mut screw_vote = RareVote::default();
     let mut reference_vote = RareVote::default();
