@@ -856,12 +856,14 @@ fn model_11_blocks_share_magnitudes_across_axes_where_that_codes_smaller() {
         }
         b
     };
-    // A small bundle: three models per field learn too slowly, one shared
-    // by the axes codes smaller. (A close call since small blocks slide
-    // with a wider beam, session 51: of 30 such fibres, seed 9 codes
-    // smaller shared, seeds 5 and 7 per axis.)
-    let small = round_trip(&equal_step_fibres(30, 9));
-    assert!(shared_flag(&small.bytes));
+    // Small bundles: three models per field learn too slowly, and one
+    // shared by the axes often codes smaller. (A close call: of bundles of
+    // 10 such fibres, seeds 2, 4, 5, 6 and 8 of 1–8 code smaller shared
+    // (session 52); of 30, seed 9 did in session 51 and no longer does.)
+    let shared = (1..=8)
+        .filter(|&seed| shared_flag(&round_trip(&equal_step_fibres(10, seed)).bytes))
+        .count();
+    assert!(shared >= 2, "{shared} of 8 small bundles shared");
     // Many fibres along x that wander in z alone, rounded to 0.05 mm: the
     // axes' residuals differ, and models per axis code smaller.
     let mut rng = ChaCha8Rng::seed_from_u64(6);
@@ -1266,6 +1268,60 @@ fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() 
         }
     }
     assert_eq!(last_skipped, 223);
+}
+
+#[test]
+fn a_block_searches_references_only_where_its_trials_saved_a_tenth_slid() {
+    use super::ReferenceVote;
+    // Saving 5 % of the trials' slid bits (a jittered bundle): searched for
+    // the first trials, then every EVERY-th curve only.
+    let mut vote = ReferenceVote::default();
+    let mut searched = Vec::new();
+    for seen in 0..300 {
+        if let Some(trial) = vote.searches() {
+            let expected = seen < ReferenceVote::TRIALS || seen % super::Tally::EVERY == 0;
+            assert_eq!(trial, expected, "curve {seen}");
+            searched.push(seen);
+            vote.count(95, 5);
+        }
+    }
+    let want: Vec<usize> = (0..300)
+        .filter(|&s| s < ReferenceVote::TRIALS || s % super::Tally::EVERY == 0)
+        .collect();
+    assert_eq!(searched, want);
+    // Saving a third on half the trials (a resampled bundle): searched for
+    // every curve, as a trial or not.
+    let mut vote = ReferenceVote::default();
+    for seen in 0..300 {
+        let trial = vote.searches();
+        assert!(trial.is_some(), "curve {seen}");
+        if trial == Some(true) {
+            if seen % 2 == 0 {
+                vote.count(200, 100);
+            } else {
+                vote.count(300, 0);
+            }
+        }
+    }
+    // Saving nothing until curve 100, then half of every trial: 67 trials
+    // of 300 bits saved nothing by then (the first 64, curves 64, 80 and
+    // 96), and the trials at 112, 128, … raise the share until the 17th
+    // (curve 368: 17 · 150 = 2,550 ≥ 0.1 · (20,100 + 17 · 300)); every
+    // curve after it is searched again.
+    let mut vote = ReferenceVote::default();
+    let mut last_skipped = 0;
+    for seen in 0..400 {
+        match vote.searches() {
+            Some(true) => vote.count(
+                if seen >= 100 { 150 } else { 300 },
+                if seen >= 100 { 150 } else { 0 },
+            ),
+            Some(false) => {}
+            None => last_skipped = seen,
+        }
+    }
+    assert_eq!(last_skipped, 367);
+    assert!(vote.searches().is_some());
 }
 
 /// Field lines of a tilted dipole of radius `r` (RK4, steps of `0.02·|x|`),
