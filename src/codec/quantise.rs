@@ -255,10 +255,19 @@ const SLIDE_REACH: f64 = 0.5;
 
 /// The most, in tolerances, that the slide may move a vertex on: where the
 /// input's segments are long against the tolerance (a curve already
-/// simplified, the resampled bundles at 0.1 mm), the tube and the
-/// choice among its points grow with them, and a slide that far is rare
-/// (the prediction's error along the curve is what it buys back).
-const SLIDE_REACH_TOLERANCES: f64 = 16.0;
+/// simplified, the resampled bundles at 0.1 mm, the hair), the tube and
+/// the choice among its points grow with them, and a slide that far buys
+/// nothing back (the prediction's error along the curve is what it
+/// buys). Measured at 16, 3, 2.5 and 2 (session 52, `examples/codec_probe`
+/// over the shared data at both tolerances, 10,000 fornix replicas, the
+/// files of `benches/make_unseen.py` and `benches/resample_bundles.py`):
+/// 3 against 16 took 10 % fewer instructions on the replicas at 0.1 mm
+/// (0.86 mm steps) for the same bytes (+0.04 %), made the hair 0.8 %
+/// smaller and the bundles of 20 points 0.2–1.7 % at 0.1 mm, the noisy
+/// heart fibres (0.51 mm steps, which the cap hardly touches) the same;
+/// 2.5 and 2 took 14 % and 18 % fewer, for 0.2 % and 0.8 % more on the
+/// replicas and up to 2.4 % on the bundles of 20 points at 0.5 mm.
+const SLIDE_REACH_TOLERANCES: f64 = 3.0;
 
 /// Calls `f(k, x)` once for each lattice point `x = k·half` within `√r2`
 /// of the segment `a`–`b` (a point on the boundary may be missed or not
