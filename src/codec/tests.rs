@@ -1215,9 +1215,6 @@ fn a_block_slides_only_the_kind_that_keeps_winning_and_keeps_checking() {
         vote.kinds();
         vote.count(OwnPrediction::SecondOrder);
     }
-    // (Curve TRIALS is an EVERY-th: both.)
-    assert_eq!(vote.kinds(), both);
-    vote.count(OwnPrediction::SecondOrder);
     assert_eq!(vote.kinds(), [OwnPrediction::SecondOrder]);
     // A split vote: both, every curve.
     let mut vote = SlideVote::default();
@@ -1254,20 +1251,20 @@ fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() 
     }
     // A block whose curves turn to curls after 100 curves: the checks
     // find it, and it is estimated for every curve again once its wins
-    // are a tenth of its trials: 66 lost trials by curve 100 (the first
-    // 64 and curves 80 and 96), then the checks at 112, 128, …, 224 win,
-    // and the eighth (8 of 74) passes the share: curve 223 is the last
-    // skipped.
+    // are a tenth of its trials: 65 lost trials by curve 100 (the first
+    // 64 and curve 64), then the checks at 128, 192, …, 576 win, and the
+    // eighth (8 of 73) passes the share: curve 575 is the last skipped.
+    assert_eq!(super::Tally::EVERY, 64);
     let mut vote = RareVote::default();
     let mut last_skipped = 0;
-    for seen in 0..400 {
+    for seen in 0..800 {
         if vote.tries() {
             vote.count(seen >= 100);
         } else {
             last_skipped = seen;
         }
     }
-    assert_eq!(last_skipped, 223);
+    assert_eq!(last_skipped, 575);
 }
 
 #[test]
@@ -1303,14 +1300,15 @@ fn a_block_searches_references_only_where_its_trials_saved_a_tenth_slid() {
             }
         }
     }
-    // Saving nothing until curve 100, then half of every trial: 67 trials
-    // of 300 bits saved nothing by then (the first 64, curves 64, 80 and
-    // 96), and the trials at 112, 128, … raise the share until the 17th
-    // (curve 368: 17 · 150 = 2,550 ≥ 0.1 · (20,100 + 17 · 300)); every
-    // curve after it is searched again.
+    // Saving nothing until curve 100, then half of every trial: 65 trials
+    // of 300 bits saved nothing by then (the first 64, and curve 64), and
+    // the trials at 128, 192, … raise the share until the 17th (curve
+    // 1,152: 17 · 150 = 2,550 ≥ 0.1 · (19,500 + 17 · 300)); every curve
+    // after it is searched again.
+    assert_eq!(super::Tally::EVERY, 64);
     let mut vote = ReferenceVote::default();
     let mut last_skipped = 0;
-    for seen in 0..400 {
+    for seen in 0..1300 {
         match vote.searches() {
             Some(true) => vote.count(
                 if seen >= 100 { 150 } else { 300 },
@@ -1320,7 +1318,7 @@ fn a_block_searches_references_only_where_its_trials_saved_a_tenth_slid() {
             None => last_skipped = seen,
         }
     }
-    assert_eq!(last_skipped, 367);
+    assert_eq!(last_skipped, 1151);
     assert!(vote.searches().is_some());
 }
 
