@@ -1268,9 +1268,9 @@ fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() 
 }
 
 #[test]
-fn a_block_searches_references_only_where_its_trials_saved_a_tenth_slid() {
+fn a_block_searches_references_only_where_its_trials_saved_a_twentieth_slid() {
     use super::ReferenceVote;
-    // Saving 5 % of the trials' slid bits (a jittered bundle): searched for
+    // Saving 3 % of the trials' slid bits (a jittered bundle): searched for
     // the first trials, then every EVERY-th curve only.
     let mut vote = ReferenceVote::default();
     let mut searched = Vec::new();
@@ -1279,7 +1279,7 @@ fn a_block_searches_references_only_where_its_trials_saved_a_tenth_slid() {
             let expected = seen < ReferenceVote::TRIALS || seen % super::Tally::EVERY == 0;
             assert_eq!(trial, expected, "curve {seen}");
             searched.push(seen);
-            vote.count(95, 5);
+            vote.count(97, 3);
         }
     }
     let want: Vec<usize> = (0..300)
@@ -1302,13 +1302,13 @@ fn a_block_searches_references_only_where_its_trials_saved_a_tenth_slid() {
     }
     // Saving nothing until curve 100, then half of every trial: 65 trials
     // of 300 bits saved nothing by then (the first 64, and curve 64), and
-    // the trials at 128, 192, … raise the share until the 17th (curve
-    // 1,152: 17 · 150 = 2,550 ≥ 0.1 · (19,500 + 17 · 300)); every curve
-    // after it is searched again.
+    // the trials at 128, 192, … raise the share until the 8th (curve 576:
+    // 8 · 150 = 1,200 ≥ 0.05 · (19,500 + 8 · 300)); every curve after it
+    // is searched again.
     assert_eq!(super::Tally::EVERY, 64);
     let mut vote = ReferenceVote::default();
     let mut last_skipped = 0;
-    for seen in 0..1300 {
+    for seen in 0..800 {
         match vote.searches() {
             Some(true) => vote.count(
                 if seen >= 100 { 150 } else { 300 },
@@ -1318,7 +1318,7 @@ fn a_block_searches_references_only_where_its_trials_saved_a_tenth_slid() {
             None => last_skipped = seen,
         }
     }
-    assert_eq!(last_skipped, 1151);
+    assert_eq!(last_skipped, 575);
     assert!(vote.searches().is_some());
 }
 
