@@ -4,14 +4,17 @@
 the codec's hardest tractography class at 0.1 mm, points curves at steps of
 several millimetres.
 
-Writes to OUTDIR, each 50 streamlines of --points points (equal arc-length
-steps, numpy.interp):
+Writes to OUTDIR streamlines of --points points (equal arc-length steps,
+numpy.interp):
   fornix50.tck          50 fornix streamlines of ../shared/data (seed 5)
   bundle{0,1,2}.tck     50 consecutive streamlines of each of the first three
                         bundles of benches/make_unseen.py's bundles.tck
                         (a probabilistic tracker's: less alike than a real
                         bundle's after clustering)
   heart50.tck           the first 50 of make_unseen.py's heart.tck
+  tracked.tck           all 3,000 of bundles.tck's streamlines (a file of
+                        many blocks' curves, as a whole tractogram
+                        resampled for clustering would be)
 
     python benches/make_unseen.py -o /tmp/unseen
     python benches/resample_bundles.py /tmp/unseen /tmp/r20
@@ -56,6 +59,7 @@ def main():
         save(f"bundle{k}.tck", [set_number_of_points(bundles[k * 250 + i], n) for i in range(50)])
     heart = nib.streamlines.load(os.path.join(args.unseen, "heart.tck")).streamlines
     save("heart50.tck", [set_number_of_points(heart[i], n) for i in range(50)])
+    save("tracked.tck", [set_number_of_points(s, n) for s in bundles])
 
 
 if __name__ == "__main__":
