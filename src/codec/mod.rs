@@ -1752,16 +1752,12 @@ fn choose(
             // the slid points' is optimistic (they were chosen by the same
             // static cost; weighed by it, the fornix at 0.1 mm went from 2
             // to 19 points curves and grew 0.7 %).
-            // A reference vote's trial (the reference the cheaper of the
-            // rounded points): the own prediction's points slid as well,
-            // the cheaper slid kept, and the vote told what the reference
-            // saved ([`ReferenceVote`]).
-            let own_alternative = own_trial.map(|(kind, bits, start_bits)| {
+            let mut slide = |g, reference, predicted: &[[i64; 3]], kind, bits, start_bits| {
                 slid_points(
                     points,
-                    g.clone(),
-                    None,
-                    &[],
+                    g,
+                    reference,
+                    predicted,
                     kind,
                     bits,
                     start_bits,
@@ -1775,25 +1771,15 @@ fn choose(
                     vote,
                     neighbours,
                 )
+            };
+            // A reference vote's trial (the reference the cheaper of the
+            // rounded points): the own prediction's points slid as well,
+            // the cheaper slid kept, and the vote told what the reference
+            // saved ([`ReferenceVote`]).
+            let own_alternative = own_trial.map(|(kind, bits, start_bits)| {
+                slide(g.clone(), None, &[], kind, bits, start_bits)
             });
-            let slid = slid_points(
-                points,
-                g,
-                reference,
-                &predicted,
-                own,
-                bits,
-                start_bits,
-                second_order_bits,
-                tolerance,
-                half,
-                screw,
-                rule,
-                along,
-                mean_step,
-                vote,
-                neighbours,
-            );
+            let slid = slide(g, reference, &predicted, own, bits, start_bits);
             let (reference, bits, (g, along, own, predicted, slid_bits)) = match own_alternative {
                 Some(alt) if slid.4 >= alt.4 => (None, own_trial.map_or(bits, |t| t.1), alt),
                 Some(alt) => {
