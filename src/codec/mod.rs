@@ -1247,7 +1247,7 @@ const SMALL_BLOCK_POINTS: usize = 32_768;
 
 /// What a block has counted of an option its curves may try (a second
 /// slide, an estimate): curves seen, curves that tried it, and how often it
-/// won. Both votes below ask every curve to try it for a first stretch and
+/// won. The votes below ask every curve to try it for a first stretch and
 /// every [`Tally::EVERY`]th curve after, so that a block whose curves
 /// change kind midway finds it again.
 #[derive(Default)]
@@ -1337,19 +1337,16 @@ impl SlideVote {
 /// costs time and rarely wins on some data: where it has won under
 /// [`SHARE`](Self::SHARE) of its trials, only every [`Tally::EVERY`]th
 /// curve tries it, so that a block whose curves change kind midway finds
-/// it again. Two options are so voted on:
-///
-/// - The screw prediction (a rotation fitted at every point,
-///   [`helix_prediction`]). It wins most curves of curly hair (1,360 of the
-///   2,000 strands at 0.1 mm; without it the hair is 25 % larger) and few
-///   fibres (7 of 2,000 fornix replicas, 190 of 3,000 noisy heart fibres
-///   at 0.1 mm), where its estimate was 5 % of the instructions and what it
-///   won cost more coded than second order or the mean step would have.
-/// - The search for a reference among the curves before
-///   ([`reference::best_reference`]). It wins two thirds of the fornix
-///   replicas and nearly all of a resampled bundle's curves at 0.1 mm, but
-///   62 of 3,000 noisy heart fibres, 11 of the hair's 2,000 strands and 1
-///   of 5,800 field lines (where it was a tenth of the instructions).
+/// it again. The screw prediction (a rotation fitted at every point,
+/// [`helix_prediction`]) is so voted on. It wins most curves of curly hair
+/// (1,360 of the 2,000 strands at 0.1 mm; without it the hair is 25 %
+/// larger) and few fibres (7 of 2,000 fornix replicas, 190 of 3,000 noisy
+/// heart fibres at 0.1 mm), where its estimate was 5 % of the instructions
+/// and what it won cost more coded than second order or the mean step
+/// would have. (The search for a reference was voted on so until session
+/// 52: [`ReferenceVote`]. It won 62 of 3,000 noisy heart fibres, 11 of the
+/// hair's 2,000 strands and 1 of 5,800 field lines, where it was a tenth
+/// of the instructions.)
 #[derive(Default)]
 struct RareVote(Tally);
 
@@ -1392,8 +1389,9 @@ impl RareVote {
 #[derive(Default)]
 struct ReferenceVote {
     tally: Tally,
-    /// The trials' slid estimates, as coded, and what the references saved
-    /// of them.
+    /// The trials' slid estimates without a reference (what their points,
+    /// or the arcs they went to, would have cost without the search), and
+    /// what the references saved of them.
     bits: u64,
     saved: u64,
 }
@@ -1405,10 +1403,11 @@ impl ReferenceVote {
     const SHARE: f64 = 0.05;
 
     /// Whether the block's next points curve searches, and if so whether as
-    /// a trial.
+    /// a trial. (Nothing counted, not searched but for the trials.)
     fn searches(&mut self) -> Option<bool> {
         let trial = self.tally.must_try(Self::TRIALS);
-        (trial || self.saved as f64 >= Self::SHARE * self.bits as f64).then_some(trial)
+        let pays = self.bits > 0 && self.saved as f64 >= Self::SHARE * self.bits as f64;
+        (trial || pays).then_some(trial)
     }
 
     /// A trial's points, estimated at `bits` slid, were `saved` smaller for
@@ -1715,8 +1714,12 @@ fn choose(
         match found {
             // A trial's own prediction is slid too, and the vote is on
             // which is cheaper slid.
+            // (Where the own prediction's points cost more than the arcs,
+            // not: kept, they would be coded where the arcs are cheaper,
+            // and the trial is not counted.)
             Some((rf, bits)) if won => {
-                let own = trial.then_some((own_kind, own, own_start));
+                let own = (trial && arc_bits.is_none_or(|a| own <= a))
+                    .then_some((own_kind, own, own_start));
                 (
                     g,
                     Some(rf),
@@ -1732,11 +1735,16 @@ fn choose(
         }
     });
     match (opt.arcs, pts) {
-        (Some((a, decoded)), Some((_, _, _, bits, _, _, _, _)))
+        (Some((a, decoded)), Some((_, _, _, bits, _, _, trial, _)))
             if arc_bits.is_some_and(|e| {
                 e < bits && !(explore_points && Calibration::close_call(e, bits))
             }) =>
         {
+            // A trial gone to arcs: the search saved nothing (a reference
+            // cheaper than the points is cheaper than the arcs).
+            if trial {
+                reference_vote.count(arc_bits.unwrap_or(0), 0);
+            }
             let n = decoded.len();
             neighbours.push_points(decoded);
             neighbours.set_chords(arc_chords(&a));
@@ -1775,19 +1783,22 @@ fn choose(
             // A reference vote's trial (the reference the cheaper of the
             // rounded points): the own prediction's points slid as well,
             // the cheaper slid kept, and the vote told what the reference
-            // saved ([`ReferenceVote`]).
+            // saved ([`ReferenceVote`]). (That slide is counted in the
+            // block's `SlideVote` as any own prediction's is: it measures
+            // which own kind slides cheaper either way.)
             let own_alternative = own_trial.map(|(kind, bits, start_bits)| {
                 slide(g.clone(), None, &[], kind, bits, start_bits)
             });
             let slid = slide(g, reference, &predicted, own, bits, start_bits);
-            let (reference, bits, (g, along, own, predicted, slid_bits)) = match own_alternative {
-                Some(alt) if slid.4 >= alt.4 => (None, own_trial.map_or(bits, |t| t.1), alt),
-                Some(alt) => {
-                    reference_vote.count(slid.4, alt.4 - slid.4);
-                    (reference, bits, slid)
-                }
-                None => (reference, bits, slid),
-            };
+            let (reference, bits, (g, along, own, predicted, slid_bits)) =
+                match own_alternative.zip(own_trial) {
+                    Some((alt, (_, own_bits, _))) if slid.4 >= alt.4 => (None, own_bits, alt),
+                    Some((alt, _)) => {
+                        reference_vote.count(slid.4, alt.4 - slid.4);
+                        (reference, bits, slid)
+                    }
+                    None => (reference, bits, slid),
+                };
             if trial && reference.is_none() {
                 reference_vote.count(slid_bits, 0);
             }
