@@ -47,6 +47,15 @@ fn check<C: ParamCurve3>(c: &C, t: f64, tol_tan: f64, tol_len: f64) -> Result<()
     prop_assert!((pts[0] - c.eval(0.0)).length() < 1e-9 * scale.max(1.0));
     prop_assert!((pts[n - 1] - c.eval(1.0)).length() < 1e-9 * scale.max(1.0));
     let chords: Vec<f64> = pts.windows(2).map(|w| (w[1] - w[0]).length()).collect();
+    // The extrapolation below needs the curve resolved at this step: a
+    // tight loop (an RRMF spline through sharply turning data can turn
+    // 0.57 rad between samples 0.003 apart) converges at O(h²) only from
+    // a finer step on. Such curves are kept out, not the tolerance raised.
+    let turn = pts
+        .windows(3)
+        .map(|w| (w[1] - w[0]).angle_between(w[2] - w[1]))
+        .fold(0.0, f64::max);
+    prop_assume!(turn < 0.1);
     let poly: f64 = chords.iter().sum();
     prop_assert!(
         poly <= l + 1e-9 * scale,
