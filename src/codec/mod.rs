@@ -1335,15 +1335,26 @@ impl SlideVote {
 
 /// Whether a block still tries, for its next points curve, an option that
 /// costs time and rarely wins on some data: where it has won under
-/// [`SHARE`](Self::SHARE) of its trials, only every [`Tally::EVERY`]th
-/// curve tries it, so that a block whose curves change kind midway finds
-/// it again. The screw prediction (a rotation fitted at every point,
-/// [`helix_prediction`]) is so voted on. It wins most curves of curly hair
-/// (1,360 of the 2,000 strands at 0.1 mm; without it the hair is 25 %
-/// larger) and few fibres (7 of 2,000 fornix replicas, 190 of 3,000 noisy
-/// heart fibres at 0.1 mm), where its estimate was 5 % of the instructions
-/// and what it won cost more coded than second order or the mean step
-/// would have. (The search for a reference was voted on so until session
+/// [`SHARE`](Self::SHARE) of its trials (the first [`TRIALS`](Self::TRIALS)
+/// curves and every [`Tally::EVERY`]th after), only the trials try it, so
+/// that a block whose curves change kind midway finds it again. The screw
+/// prediction (a rotation fitted at every point, [`helix_prediction`]) is
+/// so voted on. It wins most curves of curly hair (1,360 of the 2,000
+/// strands at 0.1 mm; without it the hair is 25 % larger) and few fibres.
+///
+/// A trial counts as won only where the screw is the cheapest own
+/// prediction of the rounded points *and* its points slid are estimated
+/// under those of the best other own prediction slid (both are slid; the
+/// cheaper is kept), and only where the curve goes as points by its own
+/// prediction. Until session 53 the rounded points alone decided: the
+/// screw won over a tenth of the trials of 3,000 noisy heart fibres
+/// (`benches/make_unseen.py`) at 0.1 mm and was estimated for every curve
+/// (a sixth of the encoder's instructions), yet without it their container
+/// was 0.4 % smaller: the slide takes the noise out that the screw's
+/// rotations fit. Judged slid, those fibres took 15.5 % fewer instructions
+/// for 0.37 % fewer bytes (30,000 of them 10–20 % less time), the hair and
+/// the field lines the same bytes (±7 B), the hair 1.2 % more instructions
+/// (its trials slid twice). (The search for a reference was voted on so until session
 /// 52: [`ReferenceVote`]. It won 62 of 3,000 noisy heart fibres, 11 of the
 /// hair's 2,000 strands and 1 of 5,800 field lines, where it was a tenth
 /// of the instructions.)
@@ -1356,12 +1367,14 @@ impl RareVote {
     /// The share of wins under which the block stops trying it.
     const SHARE: f64 = 0.1;
 
-    /// Whether the block's next points curve tries it.
-    fn tries(&mut self) -> bool {
-        self.0.must_try(Self::TRIALS) || self.0.won as f64 >= Self::SHARE * self.0.tried as f64
+    /// Whether the block's next points curve tries it, and if so whether
+    /// as a trial (whose outcome the block counts).
+    fn tries(&mut self) -> Option<bool> {
+        let trial = self.0.must_try(Self::TRIALS);
+        (trial || self.0.won as f64 >= Self::SHARE * self.0.tried as f64).then_some(trial)
     }
 
-    /// It was tried, and won or not.
+    /// A trial's outcome: it won or not.
     fn count(&mut self, won: bool) {
         self.0.count(won);
     }
@@ -1656,7 +1669,7 @@ fn choose(
         let linear = own_with(OwnPrediction::SecondOrder, u64::MAX);
         let bound = linear.saturating_sub(1).min(arc_bits.unwrap_or(u64::MAX));
         let tries = screw_vote.tries();
-        let screw_bits = if tries {
+        let screw_bits = if tries.is_some() {
             own_with(OwnPrediction::Screw, bound)
         } else {
             u64::MAX
@@ -1668,9 +1681,6 @@ fn choose(
         } else {
             (OwnPrediction::SecondOrder, linear)
         };
-        if tries {
-            screw_vote.count(own_kind == OwnPrediction::Screw);
-        }
         // The mean step likewise, under the better of the two (model 13).
         if mean_step {
             let bound = own.saturating_sub(1).min(arc_bits.unwrap_or(u64::MAX));
@@ -1679,11 +1689,38 @@ fn choose(
                 (own_kind, own) = (OwnPrediction::MeanStep, mean);
             }
         }
+        // A screw trial: where the screw is the cheapest own prediction of
+        // the rounded points, the best of the others (and its estimate) to
+        // slide as well ([`RareVote`]'s note on the screw).
+        let screw_trial = (tries == Some(true)).then(|| {
+            (own_kind == OwnPrediction::Screw).then(|| {
+                let mean = if mean_step {
+                    own_with(OwnPrediction::MeanStep, u64::MAX)
+                } else {
+                    u64::MAX
+                };
+                if mean < linear {
+                    (OwnPrediction::MeanStep, mean)
+                } else {
+                    (OwnPrediction::SecondOrder, linear)
+                }
+            })
+        });
         // A neighbour saves at most about a third on bundles: where arcs
         // cost under half the own prediction, it is not looked for.
         let arcs_far_cheaper = arc_bits.is_some_and(|a| 2 * a < own);
         if arcs_far_cheaper {
-            return (g, None, own_kind, own, own_start, linear, false, None);
+            return (
+                g,
+                None,
+                own_kind,
+                own,
+                own_start,
+                linear,
+                false,
+                None,
+                screw_trial,
+            );
         }
         // A reference is used only under the own prediction and the arcs,
         // and costed only that far ([`reference::best_reference`]):
@@ -1699,7 +1736,17 @@ fn choose(
             reference_vote.searches()
         };
         let Some(trial) = trial else {
-            return (g, None, own_kind, own, own_start, linear, false, None);
+            return (
+                g,
+                None,
+                own_kind,
+                own,
+                own_start,
+                linear,
+                false,
+                None,
+                screw_trial,
+            );
         };
         let limit = arc_bits.map_or(own, |a| a.min(own));
         let found = reference::best_reference(
@@ -1729,13 +1776,24 @@ fn choose(
                     linear,
                     trial,
                     own,
+                    None,
                 )
             }
-            _ => (g, None, own_kind, own, own_start, linear, trial, None),
+            _ => (
+                g,
+                None,
+                own_kind,
+                own,
+                own_start,
+                linear,
+                trial,
+                None,
+                screw_trial,
+            ),
         }
     });
     match (opt.arcs, pts) {
-        (Some((a, decoded)), Some((_, _, _, bits, _, _, trial, _)))
+        (Some((a, decoded)), Some((_, _, _, bits, _, _, trial, _, _)))
             if arc_bits.is_some_and(|e| {
                 e < bits && !(explore_points && Calibration::close_call(e, bits))
             }) =>
@@ -1755,7 +1813,20 @@ fn choose(
             }
             (a, n, arc_estimate.unwrap_or(0), bits - e, None)
         }
-        (_, Some((g, reference, own, bits, start_bits, second_order_bits, trial, own_trial))) => {
+        (
+            _,
+            Some((
+                g,
+                reference,
+                own,
+                bits,
+                start_bits,
+                second_order_bits,
+                trial,
+                own_trial,
+                screw_trial,
+            )),
+        ) => {
             // Arcs and points are weighed by the rounded points' estimate:
             // the slid points' is optimistic (they were chosen by the same
             // static cost; weighed by it, the fornix at 0.1 mm went from 2
@@ -1789,6 +1860,17 @@ fn choose(
             let own_alternative = own_trial.map(|(kind, bits, start_bits)| {
                 slide(g.clone(), None, &[], kind, bits, start_bits)
             });
+            // A screw trial coded by its own prediction: the best other
+            // own prediction slid as well, the cheaper slid kept, and the
+            // screw counted as won only where it slid cheaper.
+            let own_points = reference.is_none() && own_trial.is_none();
+            let screw_alternative = match screw_trial {
+                Some(Some((kind, alt_bits))) if own_points => Some((
+                    alt_bits,
+                    slide(g.clone(), None, &[], kind, alt_bits, start_bits),
+                )),
+                _ => None,
+            };
             let slid = slide(g, reference, &predicted, own, bits, start_bits);
             let (reference, bits, (g, along, own, predicted, slid_bits)) =
                 match own_alternative.zip(own_trial) {
@@ -1797,7 +1879,22 @@ fn choose(
                         reference_vote.count(slid.4, alt.4 - slid.4);
                         (reference, bits, slid)
                     }
-                    None => (reference, bits, slid),
+                    None => match screw_alternative {
+                        Some((alt_bits, alt)) => {
+                            screw_vote.count(slid.4 < alt.4);
+                            if alt.4 < slid.4 {
+                                (reference, alt_bits, alt)
+                            } else {
+                                (reference, bits, slid)
+                            }
+                        }
+                        None => {
+                            if own_points && screw_trial == Some(None) {
+                                screw_vote.count(false);
+                            }
+                            (reference, bits, slid)
+                        }
+                    },
                 };
             if trial && reference.is_none() {
                 reference_vote.count(slid_bits, 0);

@@ -1232,11 +1232,13 @@ fn a_block_slides_only_the_kind_that_keeps_winning_and_keeps_checking() {
 #[test]
 fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() {
     use super::RareVote;
-    // Never winning: estimated for the first trials, then every EVERY-th.
+    // Never winning: estimated for the first trials, then every EVERY-th
+    // (each a trial).
     let mut vote = RareVote::default();
     let mut tried = Vec::new();
     for seen in 0..300 {
-        if vote.tries() {
+        if let Some(trial) = vote.tries() {
+            assert!(trial, "curve {seen}");
             tried.push(seen);
             vote.count(false);
         }
@@ -1245,11 +1247,16 @@ fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() 
         .filter(|&s| s < RareVote::TRIALS || s % super::Tally::EVERY == 0)
         .collect();
     assert_eq!(tried, want);
-    // Winning a fifth of its trials: estimated for every curve.
+    // Winning a fifth of its trials: estimated for every curve, the trials
+    // (the first and every EVERY-th) counted.
     let mut vote = RareVote::default();
     for seen in 0..300 {
-        assert!(vote.tries(), "curve {seen}");
-        vote.count(seen % 5 == 0);
+        let trial = vote.tries();
+        let expected = seen < RareVote::TRIALS || seen % super::Tally::EVERY == 0;
+        assert_eq!(trial, Some(expected), "curve {seen}");
+        if expected {
+            vote.count(seen % 5 == 0);
+        }
     }
     // A block whose curves turn to curls after 100 curves: the checks
     // find it, and it is estimated for every curve again once its wins
@@ -1260,10 +1267,10 @@ fn a_block_stops_estimating_the_screw_where_it_rarely_wins_and_keeps_checking() 
     let mut vote = RareVote::default();
     let mut last_skipped = 0;
     for seen in 0..800 {
-        if vote.tries() {
-            vote.count(seen >= 100);
-        } else {
-            last_skipped = seen;
+        match vote.tries() {
+            Some(true) => vote.count(seen >= 100),
+            Some(false) => {}
+            None => last_skipped = seen,
         }
     }
     assert_eq!(last_skipped, 575);
