@@ -1155,6 +1155,57 @@ fn model_13_predicts_noisy_fibres_by_their_mean_step_and_model_12_streams_still_
     assert_under(&b13, &b12, 0.97, (13, 12));
 }
 
+/// The mean step in integers answers as through `f64` wherever it answers,
+/// ties between the two lattices included (small coordinates make many),
+/// and at the coordinate bound `bcc_nearest` refuses beyond.
+#[test]
+fn the_integer_mean_step_is_the_float_one() {
+    use super::{mean_step_exact, mean_step_float};
+    let mut rng = ChaCha8Rng::seed_from_u64(53);
+    let bound = 1i64 << crate::codec::entropy::MAX_BITS;
+    let (mut answered, mut refused) = (0, 0);
+    for case in 0..200_000 {
+        let w = [1, 2, 3, 4][case % 4];
+        let span = match case % 5 {
+            0 => 6,
+            1 => 100,
+            2 => 1 << 20,
+            _ => bound,
+        };
+        let near = |rng: &mut ChaCha8Rng| [0; 3].map(|_| rng.gen_range(-span..=span));
+        let last = near(&mut rng);
+        // Steps of any size, and back points beyond the bound.
+        let step = match case % 3 {
+            0 => [0; 3].map(|_| rng.gen_range(-9..=9)),
+            1 => [0; 3].map(|_| rng.gen_range(-span..=span)),
+            _ => [0; 3].map(|_| rng.gen_range(-bound..=bound)),
+        };
+        let back = [0, 1, 2].map(|a| last[a] - step[a]);
+        let mut g = vec![[0i64; 3]; 6];
+        g[4 - w] = back;
+        g[4] = last;
+        let k = 5;
+        // `mean_step_float` reads g[k − 1] and g[k − 1 − w].
+        match mean_step_exact(last, back, w) {
+            Some(p) => {
+                assert_ne!(w, 3);
+                assert_eq!(
+                    p,
+                    mean_step_float(&g, k, w),
+                    "case {case}: {last:?} {back:?} w {w}"
+                );
+                answered += 1;
+                refused += p.is_none() as usize;
+            }
+            None => assert_eq!(w, 3, "case {case}"),
+        }
+    }
+    assert!(
+        answered > 140_000 && refused > 1_000,
+        "{answered} {refused}"
+    );
+}
+
 #[test]
 fn the_mean_step_continues_a_line_exactly_and_smooths_noise() {
     // Points at equal steps along a line (on the lattice): the mean step
