@@ -1650,6 +1650,32 @@ fn slid_points(
     }
 }
 
+/// A curve's points as [`choose`] weighs them against its arcs: the rounded
+/// points, their prediction and estimate, and what the votes' trials slide
+/// besides.
+struct PointsChoice {
+    grid: Vec<[i64; 3]>,
+    /// The neighbour predicting them, or `None` (their own prediction).
+    reference: Option<reference::Reference>,
+    /// Their own prediction (second order where a reference predicts).
+    own: OwnPrediction,
+    /// Their estimate (bits), the start's included.
+    bits: u64,
+    /// The start's part of `bits`.
+    start_bits: u64,
+    /// Their second-order estimate (bits).
+    second_order_bits: u64,
+    /// A [`ReferenceVote`] trial.
+    trial: bool,
+    /// At such a trial won by a reference: the own prediction (kind,
+    /// estimate, start's bits) to slide as well.
+    own_trial: Option<(OwnPrediction, u64, u64)>,
+    /// A [`RareVote`] trial of the screw: `Some(None)` where the screw was
+    /// not the cheapest own prediction, `Some(Some((kind, estimate)))` where
+    /// it was, with the best other own prediction to slide as well.
+    screw_trial: Option<Option<(OwnPrediction, u64)>>,
+}
+
 /// [`choose`]'s result: the code, its decoded point count, its estimate and
 /// what the arcs saved, and for a slid points curve the predictions its
 /// residuals are from ([`quantise::cheapest_points`]).
@@ -1762,17 +1788,17 @@ fn choose(
         // cost under half the own prediction, it is not looked for.
         let arcs_far_cheaper = arc_bits.is_some_and(|a| 2 * a < own);
         if arcs_far_cheaper {
-            return (
-                g,
-                None,
-                own_kind,
-                own,
-                own_start,
-                linear,
-                false,
-                None,
+            return PointsChoice {
+                grid: g,
+                reference: None,
+                own: own_kind,
+                bits: own,
+                start_bits: own_start,
+                second_order_bits: linear,
+                trial: false,
+                own_trial: None,
                 screw_trial,
-            );
+            };
         }
         // A reference is used only under the own prediction and the arcs,
         // and costed only that far ([`reference::best_reference`]):
@@ -1788,17 +1814,17 @@ fn choose(
             reference_vote.searches()
         };
         let Some(trial) = trial else {
-            return (
-                g,
-                None,
-                own_kind,
-                own,
-                own_start,
-                linear,
-                false,
-                None,
+            return PointsChoice {
+                grid: g,
+                reference: None,
+                own: own_kind,
+                bits: own,
+                start_bits: own_start,
+                second_order_bits: linear,
+                trial: false,
+                own_trial: None,
                 screw_trial,
-            );
+            };
         };
         let limit = arc_bits.map_or(own, |a| a.min(own));
         let found = reference::best_reference(
@@ -1819,33 +1845,33 @@ fn choose(
             Some((rf, bits)) if won => {
                 let own = (trial && arc_bits.is_none_or(|a| own <= a))
                     .then_some((own_kind, own, own_start));
-                (
-                    g,
-                    Some(rf),
-                    OwnPrediction::SecondOrder,
+                PointsChoice {
+                    grid: g,
+                    reference: Some(rf),
+                    own: OwnPrediction::SecondOrder,
                     bits,
-                    0,
-                    linear,
+                    start_bits: 0,
+                    second_order_bits: linear,
                     trial,
-                    own,
-                    None,
-                )
+                    own_trial: own,
+                    screw_trial: None,
+                }
             }
-            _ => (
-                g,
-                None,
-                own_kind,
-                own,
-                own_start,
-                linear,
+            _ => PointsChoice {
+                grid: g,
+                reference: None,
+                own: own_kind,
+                bits: own,
+                start_bits: own_start,
+                second_order_bits: linear,
                 trial,
-                None,
+                own_trial: None,
                 screw_trial,
-            ),
+            },
         }
     });
     match (opt.arcs, pts) {
-        (Some((a, decoded)), Some((_, _, _, bits, _, _, trial, _, _)))
+        (Some((a, decoded)), Some(PointsChoice { bits, trial, .. }))
             if arc_bits.is_some_and(|e| {
                 e < bits && !(explore_points && Calibration::close_call(e, bits))
             }) =>
@@ -1867,8 +1893,8 @@ fn choose(
         }
         (
             _,
-            Some((
-                g,
+            Some(PointsChoice {
+                grid: g,
                 reference,
                 own,
                 bits,
@@ -1877,7 +1903,7 @@ fn choose(
                 trial,
                 own_trial,
                 screw_trial,
-            )),
+            }),
         ) => {
             // Arcs and points are weighed by the rounded points' estimate:
             // the slid points' is optimistic (they were chosen by the same
