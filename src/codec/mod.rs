@@ -1784,21 +1784,23 @@ fn choose(
                 }
             })
         });
+        // The points by their own prediction.
+        let own_choice = |grid, trial| PointsChoice {
+            grid,
+            reference: None,
+            own: own_kind,
+            bits: own,
+            start_bits: own_start,
+            second_order_bits: linear,
+            trial,
+            own_trial: None,
+            screw_trial,
+        };
         // A neighbour saves at most about a third on bundles: where arcs
         // cost under half the own prediction, it is not looked for.
         let arcs_far_cheaper = arc_bits.is_some_and(|a| 2 * a < own);
         if arcs_far_cheaper {
-            return PointsChoice {
-                grid: g,
-                reference: None,
-                own: own_kind,
-                bits: own,
-                start_bits: own_start,
-                second_order_bits: linear,
-                trial: false,
-                own_trial: None,
-                screw_trial,
-            };
+            return own_choice(g, false);
         }
         // A reference is used only under the own prediction and the arcs,
         // and costed only that far ([`reference::best_reference`]):
@@ -1814,17 +1816,7 @@ fn choose(
             reference_vote.searches()
         };
         let Some(trial) = trial else {
-            return PointsChoice {
-                grid: g,
-                reference: None,
-                own: own_kind,
-                bits: own,
-                start_bits: own_start,
-                second_order_bits: linear,
-                trial: false,
-                own_trial: None,
-                screw_trial,
-            };
+            return own_choice(g, false);
         };
         let limit = arc_bits.map_or(own, |a| a.min(own));
         let found = reference::best_reference(
@@ -1857,17 +1849,7 @@ fn choose(
                     screw_trial: None,
                 }
             }
-            _ => PointsChoice {
-                grid: g,
-                reference: None,
-                own: own_kind,
-                bits: own,
-                start_bits: own_start,
-                second_order_bits: linear,
-                trial,
-                own_trial: None,
-                screw_trial,
-            },
+            _ => own_choice(g, trial),
         }
     });
     match (opt.arcs, pts) {
