@@ -1190,19 +1190,21 @@ fn mean_step_float(g: &[[i64; 3]], k: usize, w: usize) -> Option<[i64; 3]> {
 }
 
 /// [`mean_step_float`] in integers, the same answer wherever it gives one:
-/// `None` where it cannot promise that (`w` of 3, whose division `f64`
-/// rounds, or a coordinate of 2⁵⁰ or more).
+/// `None` where it cannot promise that (`w` other than 1, 2 or 4, whose
+/// division `f64` rounds or which no shift divides by, or a coordinate of
+/// 2⁵⁰ or more).
 ///
 /// With `w ∈ {1, 2, 4}` and coordinates under 2⁵⁰, `f64` holds the point
-/// `x = N / w` exactly (`N = w·last + last − back`: a quarter at finest,
-/// under 2⁵²), so `bcc_nearest`'s roundings of `x / 2` are those of the
-/// fraction `N / 2w` (half away from zero; down), and its squared
-/// distances, multiples of `1/w²` under 16, are exact: compared times `w²`
-/// here, ties to the even lattice as there.
+/// `x = N / w` exactly (`N = w·last + last − back`; `|x|` under 1.5·2⁵⁰ in
+/// quarters for `w = 4`, under 2⁵¹ in halves for 2, under 3·2⁵⁰ for 1), so
+/// `bcc_nearest`'s roundings of `x / 2` are those of the fraction `N / 2w`
+/// (half away from zero; down), and its squared distances, multiples of
+/// `1/w²` under 16, are exact: compared times `w²` here, ties to the even
+/// lattice as there.
 #[inline]
 fn mean_step_exact(last: [i64; 3], back: [i64; 3], w: usize) -> Option<Option<[i64; 3]>> {
     const EXACT: i64 = 1 << 50;
-    if w == 3
+    if !matches!(w, 1 | 2 | 4)
         || last
             .iter()
             .chain(&back)
@@ -1397,8 +1399,10 @@ impl SlideVote {
 /// A trial counts as won only where the screw is the cheapest own
 /// prediction of the rounded points *and* its points slid are estimated
 /// under those of the best other own prediction slid (both are slid; the
-/// cheaper is kept), and only where the curve goes as points by its own
-/// prediction. Until session 53 the rounded points alone decided: the
+/// cheaper is kept, the other on a tie: it decodes faster), and only where
+/// the curve goes as points by its own prediction and no reference was the
+/// cheaper of the rounded points (a [`ReferenceVote`] trial's own
+/// alternative is not counted). Until session 53 the rounded points alone decided: the
 /// screw won over a tenth of the trials of 3,000 noisy heart fibres
 /// (`benches/make_unseen.py`) at 0.1 mm and was estimated for every curve
 /// (a sixth of the encoder's instructions), yet without it their container
@@ -1672,7 +1676,9 @@ struct PointsChoice {
     own_trial: Option<(OwnPrediction, u64, u64)>,
     /// A [`RareVote`] trial of the screw: `Some(None)` where the screw was
     /// not the cheapest own prediction, `Some(Some((kind, estimate)))` where
-    /// it was, with the best other own prediction to slide as well.
+    /// it was, with the best other own prediction to slide as well; `None`
+    /// where it is no trial or a reference was the cheaper of the rounded
+    /// points.
     screw_trial: Option<Option<(OwnPrediction, u64)>>,
 }
 
@@ -1921,8 +1927,10 @@ fn choose(
                 slide(g.clone(), None, &[], kind, bits, start_bits)
             });
             // A screw trial coded by its own prediction: the best other
-            // own prediction slid as well, the cheaper slid kept, and the
-            // screw counted as won only where it slid cheaper.
+            // own prediction slid as well, the cheaper slid kept (the other
+            // on a tie), and the screw counted as won only where it slid
+            // cheaper. (A mean-step alternative counts in the block's
+            // `SlideVote` as any own prediction's slide does.)
             let own_points = reference.is_none() && own_trial.is_none();
             let screw_alternative = match screw_trial {
                 Some(Some((kind, alt_bits))) if own_points => Some((
@@ -1942,7 +1950,7 @@ fn choose(
                     None => match screw_alternative {
                         Some((alt_bits, alt)) => {
                             screw_vote.count(slid.4 < alt.4);
-                            if alt.4 < slid.4 {
+                            if alt.4 <= slid.4 {
                                 (reference, alt_bits, alt)
                             } else {
                                 (reference, bits, slid)

@@ -1200,9 +1200,44 @@ fn the_integer_mean_step_is_the_float_one() {
             None => assert_eq!(w, 3, "case {case}"),
         }
     }
-    assert!(
-        answered > 140_000 && refused > 1_000,
-        "{answered} {refused}"
+    assert_eq!(answered, 150_000);
+    assert!(refused > 1_000, "{refused}");
+    // At the bounds: the coordinate bound itself (refused on both sides),
+    // coordinates near 2⁵⁰ with small steps (answered where under it), and
+    // beyond (left to the float).
+    let b = bound;
+    let e = 1i64 << 50;
+    let cases: [([i64; 3], [i64; 3]); 6] = [
+        ([b, 0, 0], [b, 0, 0]),
+        ([b - 1, 0, 0], [b - 1, 0, 0]),
+        ([-b + 1, 3, -2], [-b + 2, 3, -2]),
+        ([e - 1, 5, -7], [e - 6, 5, -7]),
+        ([-(e - 1), 0, 1], [-(e - 1), 0, 1]),
+        ([e, 0, 0], [e - 4, 0, 0]),
+    ];
+    for (last, back) in cases {
+        for w in [1, 2, 4] {
+            let mut g = vec![[0i64; 3]; 6];
+            g[4 - w] = back;
+            g[4] = last;
+            let float = mean_step_float(&g, 5, w);
+            match mean_step_exact(last, back, w) {
+                Some(p) => assert_eq!(p, float, "{last:?} {back:?} w {w}"),
+                None => assert!(last.iter().chain(&back).any(|v| v.abs() >= e)),
+            }
+            // At k = 5 (w = 4) the prediction is the float one.
+            assert_eq!(
+                super::mean_step_prediction(&g, 5),
+                mean_step_float(&g, 5, 4)
+            );
+        }
+    }
+    // x = 2⁴⁰ is beyond `bcc_nearest`'s bound, 2⁴⁰ − 1 within (and rounds
+    // to the even lattice point at the bound).
+    assert_eq!(mean_step_exact([b, 0, 0], [b, 0, 0], 1), Some(None));
+    assert_eq!(
+        mean_step_exact([b - 1, 0, 0], [b - 1, 0, 0], 1),
+        Some(Some([b, 0, 0]))
     );
 }
 
