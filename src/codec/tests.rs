@@ -665,8 +665,16 @@ fn the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does()
     assert!(w.pays());
     w.add(10_000, 0);
     assert!(!w.pays());
-    w.add(0, 60);
-    assert!(w.pays(), "{} of {}", w.saved, w.total);
+    let pays_after = |saving: u64| {
+        let mut w = ArcsWorth::default();
+        w.add(10_000, 0);
+        w.add(0, saving);
+        w.pays()
+    };
+    // `saving / (10,000 + saving)` reaches the share here.
+    let at = (ArcsWorth::SHARE * 10_000.0 / (1.0 - ArcsWorth::SHARE)).ceil() as u64;
+    assert!(!pays_after(at - 1), "{at}");
+    assert!(pays_after(at), "{at}");
 
     // A block of jittered fibres (points win) to the end of its fourth
     // chunk and then two chunks of smooth helices (arcs far cheaper): the
