@@ -372,10 +372,6 @@ impl<'a> CurveEncoder<'a> {
         perp / (4.0 * lambda * (1.0 - lambda))
     }
 
-    /// Accepts `arc` for input vertices `(from, to]` if the two-sided test
-    /// passes (on the samples the decoder draws). With a mailbox the test is
-    /// asked there first: a sure verdict is the reference's
-    /// ([`crate::twin::arc_check`]), an unsure one is decided here.
     /// The arc from `start` along `tangent` to `end` as a candidate for
     /// input vertices `from + 1..=to` ([`Arc::new`]'s error where there is
     /// none), or `None` where (on the CPU) one of them is certainly beyond
@@ -406,13 +402,19 @@ impl<'a> CurveEncoder<'a> {
         circle.arc().map(Some)
     }
 
+    /// Accepts `arc` for input vertices `(from, to]` if the two-sided test
+    /// passes (on the samples the decoder draws). With a mailbox the test is
+    /// asked there first: a sure verdict is the reference's
+    /// ([`crate::twin::arc_check`]), an unsure one is decided here.
     async fn accept(&self, arc: &Arc, from: usize, to: usize) -> bool {
         if let Some(mailbox) = self.mailbox {
             // Boxed: the question's future is large, and every search
-            // future above this one would carry (and move) it on the CPU
-            // path too, where there is no mailbox. Measured (release):
-            // `accept`'s future 224 → 80 bytes, a candidate's 768 → 576;
-            // moving them was 9 % of compressing the fornix replicas.
+            // future above this one would carry (and move) it. Measured
+            // (release): `accept`'s future 224 → 80 bytes, a candidate's
+            // 768 → 576; moving them was 9 % of compressing the fornix
+            // replicas. (Since session 54 the CPU's search does not come
+            // here but for a curve's first element: its candidates and
+            // furthest reaches are checked by `accept_now` directly.)
             let verdict = Box::pin(mailbox.ask(super::batch::CheckRequest {
                 arc: *arc,
                 from,
