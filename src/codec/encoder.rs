@@ -238,7 +238,7 @@ macro_rules! with_code_body {
 /// A candidate element's check through the mailbox.
 macro_rules! with_code_queued {
     ($self:ident, $($arg:expr),* $(,)?) => {
-        $self.candidate_with_code_queued($($arg),*).await
+        $self.candidate_with_code($($arg),*).await
     };
 }
 
@@ -268,9 +268,9 @@ macro_rules! accept_now {
 macro_rules! furthest_body {
     ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, queued) => {
         furthest_body!(@ $self, $state, $frame, $from, $kind, $guess,
-            |j| $self.candidate_queued($state, $frame, $from, j, $kind).await,
+            |j| $self.candidate($state, $frame, $from, j, $kind).await,
             |good, bad, step, last| gallop(good, bad, step, last, async |j| {
-                $self.candidate_queued($state, $frame, $from, j, $kind).await
+                $self.candidate($state, $frame, $from, j, $kind).await
             }).await)
     };
     ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, now) => {
@@ -480,19 +480,11 @@ impl<'a> CurveEncoder<'a> {
         if self.mailbox.is_none() {
             return self.candidate_now(state, frame, from, j, kind);
         }
-        Box::pin(self.candidate_queued(state, frame, from, j, kind)).await
-    }
-
-    /// [`candidate`](Self::candidate), each check asked of the mailbox.
-    async fn candidate_queued(
-        &self,
-        state: &ChainState,
-        frame: &Frame,
-        from: usize,
-        j: usize,
-        kind: ElementKind,
-    ) -> Option<Candidate> {
-        candidate_body!(self, state, frame, from, j, kind, with_code_queued)
+        // (Boxed, the checks asked of the mailbox: its future is large.)
+        Box::pin(
+            async move { candidate_body!(self, state, frame, from, j, kind, with_code_queued) },
+        )
+        .await
     }
 
     /// [`candidate`](Self::candidate), each check made here and now.
@@ -533,33 +525,20 @@ impl<'a> CurveEncoder<'a> {
         if self.mailbox.is_none() {
             return self.candidate_with_code_now(state, frame, from, j, kind, steps, offset);
         }
-        Box::pin(self.candidate_with_code_queued(state, frame, from, j, kind, steps, offset)).await
-    }
-
-    /// [`candidate_with_code`](Self::candidate_with_code), its checks
-    /// asked of the mailbox.
-    #[allow(clippy::too_many_arguments)]
-    async fn candidate_with_code_queued(
-        &self,
-        state: &ChainState,
-        frame: &Frame,
-        from: usize,
-        j: usize,
-        kind: ElementKind,
-        steps: i64,
-        offset: [i64; 2],
-    ) -> Option<Candidate> {
-        with_code_body!(
-            self,
-            state,
-            frame,
-            from,
-            j,
-            kind,
-            steps,
-            offset,
-            accept_queued
-        )
+        Box::pin(async move {
+            with_code_body!(
+                self,
+                state,
+                frame,
+                from,
+                j,
+                kind,
+                steps,
+                offset,
+                accept_queued
+            )
+        })
+        .await
     }
 
     /// [`candidate_with_code`](Self::candidate_with_code), its checks made
@@ -670,19 +649,7 @@ impl<'a> CurveEncoder<'a> {
         if self.mailbox.is_none() {
             return self.furthest_now(state, frame, from, kind, guess);
         }
-        Box::pin(self.furthest_queued(state, frame, from, kind, guess)).await
-    }
-
-    /// [`furthest`](Self::furthest), each check asked of the mailbox.
-    async fn furthest_queued(
-        &self,
-        state: &ChainState,
-        frame: &Frame,
-        from: usize,
-        kind: ElementKind,
-        guess: usize,
-    ) -> Option<Candidate> {
-        furthest_body!(self, state, frame, from, kind, guess, queued)
+        Box::pin(async move { furthest_body!(self, state, frame, from, kind, guess, queued) }).await
     }
 
     /// [`furthest`](Self::furthest), each check made here and now.
