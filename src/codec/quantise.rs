@@ -193,9 +193,7 @@ fn kth_least(values: impl Iterator<Item = f64>, k: usize) -> f64 {
 }
 
 /// A residual's estimated bits, separable by axis: `base + Σₐ axis(dₐ)`
-/// (summed in axis order). [`cheapest_points`] bounds a candidate's cost
-/// from below with `axis(0)` on the axis along the step, so `axis` must be
-/// least at 0.
+/// (summed in axis order).
 #[derive(Clone, Copy)]
 pub struct AxisCost<F> {
     /// The part that does not depend on the residual.
@@ -501,19 +499,6 @@ pub fn cheapest_points(
         /// The prediction its residual is from.
         pred: [i64; 3],
     }
-    /// A candidate for the next point: its cost, or a bound under it
-    /// (`exact` false).
-    #[derive(Clone, Copy)]
-    struct Candidate {
-        key: f64,
-        q: [i64; 3],
-        /// Its residual as coded, where `exact`.
-        coded: [i64; 3],
-        exact: bool,
-        /// Its place in the tube, or `NOT_IN_TUBE` (the prediction).
-        tube: u32,
-    }
-    const NOT_IN_TUBE: u32 = u32::MAX;
     let n = points.len();
     if n == 0 {
         return Some((Vec::new(), 0, Vec::new()));
@@ -540,11 +525,10 @@ pub fn cheapest_points(
     // (usually one or two points, not `PREDICT_LOOKBACK`).
     let mut scratch_from = vec![usize::MAX; n];
     let mut next: Vec<Node> = Vec::new();
-    // The lattice points the slide may move vertex k to (see below), and
-    // one partial choice's candidates among them.
-    // (With its squared distance from the vertex.)
+    // The lattice points the slide may move vertex k to (see below), with
+    // their squared distance from the vertex, and one partial choice's
+    // kept candidates among them.
     let mut tube: Vec<([i64; 3], glam::DVec3, f64)> = Vec::new();
-    let mut cands: Vec<Candidate> = Vec::new();
     let mut top: Vec<(f64, [i64; 3], [i64; 3])> = Vec::with_capacity(beam);
     // Every vertex's nearest lattice point first: a vertex without one
     // within the tolerance (or not codable) ends the search before its
@@ -689,86 +673,60 @@ pub fn cheapest_points(
             // fall, and one dearer than that ends behind `beam` cheaper
             // ones in the stable sort below. (An equal one is searched: it
             // may replace a dearer child of the same point that stands
-            // before an equal one.)
+            // before an equal one.) With `beam = 1`, a candidate must cost
+            // less than the nearest point (pushed already).
             let beat = kth_least(next.iter().map(|o| o.cost), beam);
-            let over = |c: f64| node.cost + c > beat;
-            // What a candidate must cost less than to be kept before
-            // `beam` are: with `beam = 1`, than the nearest point (pushed
-            // already); else anything.
-            let bar = if beam == 1 { c_near } else { f64::INFINITY };
-            // Candidates: the prediction and the vertex's tube, each with a
-            // key that is its cost, or, along the step (whose coded value
-            // needs a square root), a bound under it (the least there, at
-            // 0: sums of larger terms are never smaller, in floating point
-            // too). They are taken cheapest first by (key, order made), a
-            // bound replaced by its cost when it comes first, and the
-            // first `beam` feasible ones kept: feasibility is asked of as
-            // few as can be, and the kept ones are the cheapest `beam`
-            // feasible candidates (ties to the earlier made).
-            cands.clear();
-            let mut add = |q: [i64; 3], key: f64, coded: [i64; 3], exact: bool, tube: u32| {
-                if key < bar && !over(key) && !same_point(q, nearest) {
-                    cands.push(Candidate {
-                        key,
-                        q,
-                        coded,
-                        exact,
-                        tube,
-                    });
+            let within = |c: f64| node.cost + c <= beat && (beam > 1 || c < c_near);
+            // The kept candidates: the cheapest `beam` feasible ones by
+            // (cost as coded, order made: the prediction, then the tube
+            // nearest the vertex first), in that order. Each candidate is
+            // costed exactly (along the step too) and tested only where it
+            // would be kept, in one pass: taking them lazily by a bound
+            // under the cost (session 54's form) asked fewer costs and
+            // tests but branched on every comparison, and the slide's time
+            // was its mispredicted branches.
+            top.clear();
+            let offer = |top: &mut Vec<(f64, [i64; 3], [i64; 3])>, c: f64, q, r| {
+                if top.len() == beam {
+                    top.pop();
+                }
+                let mut i = top.len();
+                top.push((c, q, r));
+                while i > 0 && top[i - 1].0 > c {
+                    top[i] = top[i - 1];
+                    i -= 1;
+                }
+                top[i] = (c, q, r);
+            };
+            // What a candidate must cost less than to enter `top`.
+            let room = |top: &Vec<(f64, [i64; 3], [i64; 3])>| {
+                if top.len() == beam {
+                    top[beam - 1].0
+                } else {
+                    f64::INFINITY
                 }
             };
-            let r_pred = coded([0; 3]);
-            add(pred, cost.of(r_pred), r_pred, true, NOT_IN_TUBE);
-            let zero = (cost.axis)(0);
-            for (i, &(q, ..)) in tube.iter().enumerate() {
-                let d = diff(q);
-                let mut t = d.map(&cost.axis);
-                if let Some(st) = step {
-                    t[st.axis()] = zero;
+            let pred_apart = !same_point(pred, nearest);
+            if pred_apart {
+                let r = coded([0; 3]);
+                let c = cost.of(r);
+                if within(c) && feasible(pred) {
+                    offer(&mut top, c, pred, r);
                 }
-                add(q, cost.sum(t), d, step.is_none(), i as u32);
             }
-            // The kept candidates: (cost, point, residual as coded).
-            top.clear();
-            let live = &mut cands[..];
-            while top.len() < beam {
-                // The least (key, order made) not yet taken.
-                let mut at = usize::MAX;
-                let mut least = f64::INFINITY;
-                for (i, cd) in live.iter().enumerate() {
-                    if cd.key < least {
-                        least = cd.key;
-                        at = i;
-                    }
-                }
-                if at == usize::MAX {
-                    break;
-                }
-                let cd = live[at];
-                if !cd.exact {
-                    let r = coded(diff(cd.q));
-                    live[at] = Candidate {
-                        key: cost.of(r),
-                        coded: r,
-                        exact: true,
-                        ..cd
-                    };
-                    if !(live[at].key < bar) || over(live[at].key) {
-                        live[at].key = f64::INFINITY;
-                    }
+            for &(q, x, _) in tube.iter() {
+                // (The prediction, where it is in the tube, was offered
+                // first at the same cost.)
+                if same_point(q, nearest) || (pred_apart && same_point(q, pred)) {
                     continue;
                 }
-                live[at].key = f64::INFINITY;
+                let r = coded(diff(q));
+                let c = cost.of(r);
                 // A point of the tube is within the tolerance of the input
                 // already: only the output segment into it is asked.
-                let feasible = match tube.get(cd.tube as usize) {
-                    Some(&(_, x, _)) => dist2_to_segment(v, o_prev, x) <= tol2,
-                    None => feasible(cd.q),
-                };
-                if !feasible || top.iter().any(|t| same_point(t.1, cd.q)) {
-                    continue;
+                if c < room(&top) && within(c) && dist2_to_segment(v, o_prev, x) <= tol2 {
+                    offer(&mut top, c, q, r);
                 }
-                top.push((cd.key, cd.q, cd.coded));
             }
             for &(c, q, r) in &top {
                 push(&mut next, q, c, r);
