@@ -499,6 +499,23 @@ pub fn cheapest_points(
         /// The prediction its residual is from.
         pred: [i64; 3],
     }
+    /// A kept candidate: its cost as coded, its squared distance from the
+    /// vertex (`-1` for the prediction, which is made first), the point and
+    /// its residual as coded.
+    #[derive(Clone, Copy)]
+    struct Kept {
+        cost: f64,
+        slid: f64,
+        q: [i64; 3],
+        coded: [i64; 3],
+    }
+    /// Whether a candidate of `cost` and `slid` comes before `k`: cheaper,
+    /// or as cheap and slid less. (Made later, a candidate equal in both
+    /// comes after. `&` and `|`, not `&&` and `||`: no branches.)
+    #[inline(always)]
+    fn goes_before(cost: f64, slid: f64, k: &Kept) -> bool {
+        (cost < k.cost) | ((cost == k.cost) & (slid < k.slid))
+    }
     let n = points.len();
     if n == 0 {
         return Some((Vec::new(), 0, Vec::new()));
@@ -529,7 +546,7 @@ pub fn cheapest_points(
     // their squared distance from the vertex, and one partial choice's
     // kept candidates among them.
     let mut tube: Vec<([i64; 3], glam::DVec3, f64)> = Vec::new();
-    let mut top: Vec<(f64, [i64; 3], [i64; 3])> = Vec::with_capacity(beam);
+    let mut top: Vec<Kept> = Vec::with_capacity(beam);
     // Every vertex's nearest lattice point first: a vertex without one
     // within the tolerance (or not codable) ends the search before its
     // neighbour's tube is sought. (The caller's, where it has them: the
@@ -583,12 +600,14 @@ pub fn cheapest_points(
         });
         lattice_near_segment(v, ahead, half, tol2, |q, x| {
             // (After first: the tube lies along it, so the test before is
-            // rarely asked.)
-            if seg_after.is_some_and(|s| s.dist2(x) <= tol2) || seg_before.dist2(x) <= tol2 {
+            // rarely asked. The nearest point is every partial choice's
+            // child already, never a candidate.)
+            if !same_point(q, nearest)
+                && (seg_after.is_some_and(|s| s.dist2(x) <= tol2) || seg_before.dist2(x) <= tol2)
+            {
                 tube.push((q, x, x.distance_squared(v)));
             }
         });
-        tube.sort_by(|a, b| a.2.total_cmp(&b.2));
         next.clear();
         for pi in level[k - 1]..level[k] {
             let node = &flat[pi];
@@ -676,7 +695,9 @@ pub fn cheapest_points(
             // before an equal one.) With `beam = 1`, a candidate must cost
             // less than the nearest point (pushed already).
             let beat = kth_least(next.iter().map(|o| o.cost), beam);
-            let within = |c: f64| node.cost + c <= beat && (beam > 1 || c < c_near);
+            let bar = if beam > 1 { f64::INFINITY } else { c_near };
+            // (`&`, not `&&`: no branch.)
+            let within = |c: f64| (node.cost + c <= beat) & (c < bar);
             // The kept candidates: the cheapest `beam` feasible ones by
             // (cost as coded, order made: the prediction, then the tube
             // nearest the vertex first), in that order. Each candidate is
@@ -686,50 +707,62 @@ pub fn cheapest_points(
             // tests but branched on every comparison, and the slide's time
             // was its mispredicted branches.
             top.clear();
-            let offer = |top: &mut Vec<(f64, [i64; 3], [i64; 3])>, c: f64, q, r| {
+            // `k` into `top` (which it comes before the last of, if full).
+            let offer = |top: &mut Vec<Kept>, k: Kept| {
                 if top.len() == beam {
                     top.pop();
                 }
                 let mut i = top.len();
-                top.push((c, q, r));
-                while i > 0 && top[i - 1].0 > c {
+                top.push(k);
+                while i > 0 && goes_before(k.cost, k.slid, &top[i - 1]) {
                     top[i] = top[i - 1];
                     i -= 1;
                 }
-                top[i] = (c, q, r);
+                top[i] = k;
             };
-            // What a candidate must cost less than to enter `top`.
-            let room = |top: &Vec<(f64, [i64; 3], [i64; 3])>| {
-                if top.len() == beam {
-                    top[beam - 1].0
-                } else {
-                    f64::INFINITY
-                }
+            // Whether a candidate would enter `top`.
+            let enters = |top: &Vec<Kept>, cost: f64, slid: f64| {
+                top.len() < beam || goes_before(cost, slid, &top[beam - 1])
             };
             let pred_apart = !same_point(pred, nearest);
             if pred_apart {
                 let r = coded([0; 3]);
                 let c = cost.of(r);
                 if within(c) && feasible(pred) {
-                    offer(&mut top, c, pred, r);
+                    let k = Kept {
+                        cost: c,
+                        slid: -1.0,
+                        q: pred,
+                        coded: r,
+                    };
+                    offer(&mut top, k);
                 }
             }
-            for &(q, x, _) in tube.iter() {
-                // (The prediction, where it is in the tube, was offered
-                // first at the same cost.)
-                if same_point(q, nearest) || (pred_apart && same_point(q, pred)) {
-                    continue;
-                }
+            for &(q, x, slid) in tube.iter() {
                 let r = coded(diff(q));
-                let c = cost.of(r);
+                // (The prediction, where it is in the tube, was offered
+                // first at the same cost: never offered twice.)
+                let c = if pred_apart & same_point(q, pred) {
+                    f64::INFINITY
+                } else {
+                    cost.of(r)
+                };
                 // A point of the tube is within the tolerance of the input
                 // already: only the output segment into it is asked.
-                if c < room(&top) && within(c) && dist2_to_segment(v, o_prev, x) <= tol2 {
-                    offer(&mut top, c, q, r);
+                if (c < f64::INFINITY) & within(c) & enters(&top, c, slid)
+                    && dist2_to_segment(v, o_prev, x) <= tol2
+                {
+                    let k = Kept {
+                        cost: c,
+                        slid,
+                        q,
+                        coded: r,
+                    };
+                    offer(&mut top, k);
                 }
             }
-            for &(c, q, r) in &top {
-                push(&mut next, q, c, r);
+            for k in &top {
+                push(&mut next, k.q, k.cost, k.coded);
             }
         }
         next.sort_by(|a, b| a.cost.total_cmp(&b.cost));
