@@ -842,6 +842,7 @@ impl AlongStep {
 
     /// The residual `d` as coded: its along coordinate less twice the
     /// prediction (the same parity), the others as they are.
+    #[inline(always)]
     pub fn coded(&self, d: [i64; 3]) -> [i64; 3] {
         let b = d[0] & 1;
         let mut c = d;
