@@ -598,13 +598,13 @@ pub fn cheapest_points(
             let cap = SLIDE_REACH_TOLERANCES * tol2.sqrt() / a.distance(v);
             v + (a - v) * SLIDE_REACH.min(cap)
         });
+        // (A point within the tolerance of the vertex-to-`ahead` part of
+        // the segment after is within it of that segment, or of the
+        // segment before at the last vertex, where `ahead` is the vertex:
+        // no test of its own. The nearest point is every partial choice's
+        // child already, never a candidate.)
         lattice_near_segment(v, ahead, half, tol2, |q, x| {
-            // (After first: the tube lies along it, so the test before is
-            // rarely asked. The nearest point is every partial choice's
-            // child already, never a candidate.)
-            if !same_point(q, nearest)
-                && (seg_after.is_some_and(|s| s.dist2(x) <= tol2) || seg_before.dist2(x) <= tol2)
-            {
+            if !same_point(q, nearest) {
                 tube.push((q, x, x.distance_squared(v)));
             }
         });
@@ -748,9 +748,10 @@ pub fn cheapest_points(
                     cost.of(r)
                 };
                 // A point of the tube is within the tolerance of the input
-                // already: only the output segment into it is asked.
+                // already: only the output segment into it is asked, which
+                // is within it where its end is (no division).
                 if (c < f64::INFINITY) & within(c) & enters(&top, c, slid)
-                    && dist2_to_segment(v, o_prev, x) <= tol2
+                    && (slid <= tol2 || dist2_to_segment(v, o_prev, x) <= tol2)
                 {
                     let k = Kept {
                         cost: c,
