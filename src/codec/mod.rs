@@ -1294,9 +1294,34 @@ const SLIDE_BEAM: usize = 2;
 /// EuDX and fornix files (arcs) the same; 4 gave about half of that.
 const SMALL_BLOCK_SLIDE_BEAM: usize = 8;
 
+/// The most, in tolerances, that the slide moves a vertex on
+/// ([`quantise::Search::reach`]). Measured at 16, 3, 2.5 and 2 (session
+/// 52, `examples/codec_probe` over the shared data at both tolerances,
+/// 10,000 fornix replicas, the files of `benches/make_unseen.py` and
+/// `benches/resample_bundles.py`): 3 against 16 took 10 % fewer
+/// instructions on the replicas at 0.1 mm (0.86 mm steps) for the same
+/// bytes (+0.04 %), made the hair 0.8 % smaller and the bundles of 20
+/// points 0.2–1.7 % at 0.1 mm; 2 took 18 % fewer for 0.8 % more on the
+/// replicas and up to 2.4 % on the bundles of 20 points at 0.5 mm. Session
+/// 55, large blocks only (whole processes, 2 cores; 100,000 fornix
+/// replicas and `make_unseen.py --heart 30000 --dipole 20000 --bundles
+/// 30000`): against 3, 2.5 / 2 / 1.5 cost the replicas at 0.1 mm 0.2 /
+/// 0.7 / 1.7 % more bytes for 7 / 13 / 21 % less CPU, the noisy heart
+/// fibres 0.3 / 1.0 / 2.4 % (2: 9 % less CPU); every other set, the hair
+/// and the field lines at both tolerances the same within 0.1 % (their
+/// steps reach less). The replicas at 0.1 mm are where `compress` is
+/// slower than DIPY: 2 is the knee.
+const SLIDE_REACH_TOLERANCES: f64 = 2.0;
+
+/// The slide's reach in a small block (as [`SMALL_BLOCK_SLIDE_BEAM`]):
+/// there 2 cost the bundles of 20 points up to 2.4 % at 0.5 mm (session
+/// 52), and the time is a fraction of a second.
+const SMALL_BLOCK_SLIDE_REACH_TOLERANCES: f64 = 3.0;
+
 /// Blocks of fewer points than this slide with [`SMALL_BLOCK_SLIDE_BEAM`]
-/// (at most about 0.1 s of compress on 2 cores); a large file's blocks
-/// of 4,096 curves are over it unless its curves are of a few points.
+/// and [`SMALL_BLOCK_SLIDE_REACH_TOLERANCES`] (at most about 0.1 s of compress on 2
+/// cores); a large file's blocks of 4,096 curves are over it unless its
+/// curves are of a few points.
 const SMALL_BLOCK_POINTS: usize = 32_768;
 
 /// What a block has counted of an option its curves may try (a second
@@ -1346,17 +1371,22 @@ impl Tally {
 /// Measured: 2,000 fornix replicas at 0.1 mm 11 % fewer instructions for
 /// 0.1 % more bytes; 3,000 noisy heart fibres (`benches/make_unseen.py`)
 /// 35 % fewer, 42 B fewer. With the slide's beam for the block
-/// ([`SLIDE_BEAM`], or [`SMALL_BLOCK_SLIDE_BEAM`] in a small block).
+/// and reach for the block ([`SLIDE_BEAM`] and [`SLIDE_REACH_TOLERANCES`], or
+/// [`SMALL_BLOCK_SLIDE_BEAM`] and [`SMALL_BLOCK_SLIDE_REACH_TOLERANCES`] in a small
+/// block).
 struct SlideVote {
     tally: Tally,
-    beam: usize,
+    search: quantise::Search,
 }
 
 impl Default for SlideVote {
     fn default() -> Self {
         SlideVote {
             tally: Tally::default(),
-            beam: SLIDE_BEAM,
+            search: quantise::Search {
+                beam: SLIDE_BEAM,
+                reach: SLIDE_REACH_TOLERANCES,
+            },
         }
     }
 }
@@ -1553,7 +1583,7 @@ fn slid_points(
     // own instance of the slide, the prediction inlined into it; through
     // the `dyn` call the encoder took 0.6 % more instructions on 10,000
     // fornix replicas at 0.1 mm.)
-    let beam = vote.beam;
+    let search = vote.search;
     macro_rules! slide {
         ($predict:expr, $flag:expr, $limit:expr) => {{
             let limit: u64 = $limit;
@@ -1562,7 +1592,7 @@ fn slid_points(
                 half,
                 tol * tol,
                 g[0],
-                beam,
+                search,
                 $predict,
                 smooth_lattice_bits(),
                 lattice_bits,
@@ -3029,7 +3059,10 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
     let mut worth = ArcsWorth::default();
     let mut vote = SlideVote::default();
     if curves.iter().map(|c| c.as_ref().len()).sum::<usize>() < SMALL_BLOCK_POINTS {
-        vote.beam = SMALL_BLOCK_SLIDE_BEAM;
+        vote.search = quantise::Search {
+            beam: SMALL_BLOCK_SLIDE_BEAM,
+            reach: SMALL_BLOCK_SLIDE_REACH_TOLERANCES,
+        };
     }
     let mut screw_vote = RareVote::default();
     let mut reference_vote = ReferenceVote::default();

@@ -258,21 +258,20 @@ impl Segment {
 /// each step further costs the slide a tenth more time.
 const SLIDE_REACH: f64 = 0.5;
 
-/// The most, in tolerances, that the slide may move a vertex on: where the
-/// input's segments are long against the tolerance (a curve already
-/// simplified, the resampled bundles at 0.1 mm, the hair), the tube and
-/// the choice among its points grow with them, and a slide that far buys
-/// nothing back (the prediction's error along the curve is what it
-/// buys). Measured at 16, 3, 2.5 and 2 (session 52, `examples/codec_probe`
-/// over the shared data at both tolerances, 10,000 fornix replicas, the
-/// files of `benches/make_unseen.py` and `benches/resample_bundles.py`):
-/// 3 against 16 took 10 % fewer instructions on the replicas at 0.1 mm
-/// (0.86 mm steps) for the same bytes (+0.04 %), made the hair 0.8 %
-/// smaller and the bundles of 20 points 0.2–1.7 % at 0.1 mm, the noisy
-/// heart fibres (0.51 mm steps, which the cap hardly touches) the same;
-/// 2.5 and 2 took 14 % and 18 % fewer, for 0.2 % and 0.8 % more on the
-/// replicas and up to 2.4 % on the bundles of 20 points at 0.5 mm.
-const SLIDE_REACH_TOLERANCES: f64 = 3.0;
+/// How widely [`cheapest_points`] searches.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Search {
+    /// Partial choices kept from vertex to vertex (1: greedy; at most 16).
+    pub beam: usize,
+    /// The most, in tolerances, that a vertex may slide on (besides
+    /// [`SLIDE_REACH`] of the segment after it). Where the input's
+    /// segments are long against the tolerance (a curve already
+    /// simplified, resampled bundles, noisy fibres at 0.1 mm), the tube
+    /// and the choice among its points grow with it, and a slide that far
+    /// buys little back: the prediction's error along the curve is what it
+    /// buys.
+    pub reach: f64,
+}
 
 /// Calls `f(k, x)` once for each lattice point `x = k·half` within `√r2`
 /// of the segment `a`–`b` (a point on the boundary may be missed or not
@@ -455,11 +454,11 @@ const _: () = assert!(super::predict::AlongStep::STEPS < PREDICT_LOOKBACK);
 /// candidates for a vertex are the prediction, the nearest lattice point
 /// (always feasible, so no point costs more than rounding) and the lattice
 /// points within `√tol2` of the input from the vertex to half-way on to the
-/// next ([`SLIDE_REACH`], at most [`SLIDE_REACH_TOLERANCES`]), found once
-/// per vertex ([`lattice_near_segment`]). The search keeps the `beam`
-/// cheapest partial choices (ending at different points) from vertex to
-/// vertex, so a point a little dearer now may buy cheaper ones after it;
-/// `beam = 1` is greedy. Linear in the curve's length (each vertex's
+/// next ([`SLIDE_REACH`], at most [`Search::reach`]), found once
+/// per vertex ([`lattice_near_segment`]). The search keeps the
+/// [`Search::beam`] cheapest partial choices (ending at different points)
+/// from vertex to vertex, so a point a little dearer now may buy cheaper
+/// ones after it (one: greedy). Linear in the curve's length (each vertex's
 /// candidates bounded by the reach in tolerances): `predict` sees the
 /// chosen points only through `g[k − PREDICT_LOOKBACK..k]` (the rest of
 /// the slice is scratch). `rounded`, where given, are the points' nearest
@@ -476,7 +475,7 @@ pub fn cheapest_points(
     half: f64,
     tol2: f64,
     first: [i64; 3],
-    beam: usize,
+    search: Search,
     predict: impl Fn(&[[i64; 3]], usize) -> [i64; 3],
     cost: AxisCost<impl Fn(i64) -> f64>,
     rate: impl Fn([i64; 3]) -> u64,
@@ -520,7 +519,7 @@ pub fn cheapest_points(
     if n == 0 {
         return Some((Vec::new(), 0, Vec::new()));
     }
-    let beam = beam.clamp(1, 16);
+    let beam = search.beam.clamp(1, 16);
     // The beams of all vertices one after the other (one allocation per
     // curve); vertex k's is flat[level[k]..level[k + 1]].
     let mut flat: Vec<Node> = Vec::with_capacity(n * beam);
@@ -584,7 +583,7 @@ pub fn cheapest_points(
         let seg_after = after.map(|a| Segment::new(v, a));
         // Where vertex k may go: the lattice points within the tolerance
         // of the input from the vertex to half-way on to the one after
-        // ([`SLIDE_REACH`], at most [`SLIDE_REACH_TOLERANCES`]), each
+        // ([`SLIDE_REACH`], at most [`Search::reach`]), each
         // tested against the input segments as `feasible` tests the
         // prediction. (Behind the vertex, a point beyond the tolerance of
         // it is feasible only where the vertex before slid past it: with
@@ -595,7 +594,7 @@ pub fn cheapest_points(
         // fibres of `benches/make_unseen.py` 0.2 % and 0.4 % larger).
         tube.clear();
         let ahead = after.map_or(v, |a| {
-            let cap = SLIDE_REACH_TOLERANCES * tol2.sqrt() / a.distance(v);
+            let cap = search.reach * tol2.sqrt() / a.distance(v);
             v + (a - v) * SLIDE_REACH.min(cap)
         });
         // (A point within the tolerance of the vertex-to-`ahead` part of
@@ -981,7 +980,18 @@ mod tests {
     }
     /// The points chosen against second-order prediction.
     fn slid(pts: &[glam::DVec3], half: f64, tol: f64, first: [i64; 3]) -> Vec<[i64; 3]> {
-        slide_second_order(pts, half, tol, first, 1, false).0
+        slide_second_order(
+            pts,
+            half,
+            tol,
+            first,
+            Search {
+                beam: 1,
+                reach: 3.0,
+            },
+            false,
+        )
+        .0
     }
 
     /// [`cheapest_points`] against second-order prediction, all it returns.
@@ -990,7 +1000,7 @@ mod tests {
         half: f64,
         tol: f64,
         first: [i64; 3],
-        beam: usize,
+        search: Search,
         along: bool,
     ) -> Slid {
         cheapest_points(
@@ -998,7 +1008,7 @@ mod tests {
             half,
             tol * tol,
             first,
-            beam,
+            search,
             second_order,
             RESIDUAL_COST,
             |_| 0,
@@ -1044,11 +1054,15 @@ mod tests {
                 p += dir * tol * rng.gen_range(0.2..20.0);
             }
             let first = bcc_nearest(pts[0], half).unwrap();
-            // Greedy, the codec's beam and a wider one; costed plainly and
-            // as model 10 codes the step (the bound-keyed candidates).
-            let beam = [1, 2, 4][trial % 3];
+            // Greedy, the codec's beam and a wider one, each with the
+            // codec's reaches and a shorter one; costed plainly and as
+            // model 10 codes the step.
+            let search = Search {
+                beam: [1, 2, 4][trial % 3],
+                reach: [3.0, 2.0, 1.0, 3.0][trial % 4],
+            };
             let (g, _, predicted) =
-                slide_second_order(&pts, half, tol, first, beam, trial % 2 == 1);
+                slide_second_order(&pts, half, tol, first, search, trial % 2 == 1);
             assert_eq!(g.len(), n);
             // The predictions returned are those of the chosen points.
             for k in 1..n {
@@ -1113,9 +1127,10 @@ mod tests {
                 })
                 .collect();
             let first = bcc_nearest(pts[0], half).unwrap();
+            let search = |beam| Search { beam, reach: 3.0 };
             let (g1, g4) = (
-                slide_second_order(&pts, half, tol, first, 1, false).0,
-                slide_second_order(&pts, half, tol, first, 4, false).0,
+                slide_second_order(&pts, half, tol, first, search(1), false).0,
+                slide_second_order(&pts, half, tol, first, search(4), false).0,
             );
             assert_eq!(g4[0], first);
             let out: Vec<glam::DVec3> = g4.iter().map(|&k| bcc_point(k, half)).collect();
