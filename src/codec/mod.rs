@@ -2062,8 +2062,14 @@ struct ArcsWorth {
 impl ArcsWorth {
     /// Below this share of the estimated bits, the search is sampled.
     const SHARE: f64 = 0.03;
-    /// One curve in this many is searched while sampled.
-    const SAMPLE: usize = 16;
+    /// One curve in this many is searched while sampled (eight a chunk of
+    /// [`CALIBRATION_CHUNK`]). Measured against 16 (session 55, 2 cores,
+    /// 100,000 fornix replicas and the sets of `benches/make_unseen.py
+    /// --heart 30000 --dipole 20000 --bundles 30000` at 0.1 and 0.5 mm, 20
+    /// file/tolerance pairs of the shared data and the unseen sets): the
+    /// same bytes within 14 B but 3 B on 3,000 heart fibres; the sampled
+    /// search was 5 % of the replicas' time at 0.1 mm with 16.
+    const SAMPLE: usize = 32;
 
     /// A curve whose arcs were searched was estimated at `estimate` bits
     /// as coded, and the arcs saved `saving` of the points' estimate.
