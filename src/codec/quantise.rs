@@ -541,6 +541,8 @@ pub fn cheapest_points(
     // (usually one or two points, not `PREDICT_LOOKBACK`).
     let mut scratch_from = vec![usize::MAX; n];
     let mut next: Vec<Node> = Vec::new();
+    // Each partial choice's step out of its children's along-step windows.
+    let mut step_out = [0u64; 16];
     // The lattice points the slide may move vertex k to (see below), with
     // their squared distance from the vertex, and one partial choice's
     // kept candidates among them.
@@ -633,26 +635,12 @@ pub fn cheapest_points(
             // step length (`AlongStep`): residuals are costed as coded.
             let step = (along && k >= 2)
                 .then(|| super::predict::AlongStep::at(&scratch[..k], k, pred, node.window));
-            // A child's window for the vertex after it: its step in, the
-            // step `STEPS` before out (in the scratch window).
-            let child_window = |q: [i64; 3]| {
-                if !along {
-                    return 0;
-                }
-                let step_in = (0..3)
-                    .map(|a| {
-                        let l = q[a].wrapping_sub(node.q[a]).unsigned_abs();
-                        l.saturating_mul(l)
-                    })
-                    .fold(0u64, u64::saturating_add);
-                let mut w = node.window.saturating_add(step_in);
-                if k > super::predict::AlongStep::STEPS {
-                    w = w.saturating_sub(super::predict::step_length2(
-                        &scratch[..k],
-                        k - super::predict::AlongStep::STEPS,
-                    ));
-                }
-                w
+            // The step that leaves a child's along-step window (the path's
+            // `STEPS` before; its window is made once it is kept, below).
+            step_out[pi - level[k - 1]] = if along && k > super::predict::AlongStep::STEPS {
+                super::predict::step_length2(&scratch[..k], k - super::predict::AlongStep::STEPS)
+            } else {
+                0
             };
             let coded = |d: [i64; 3]| step.map_or(d, |st| st.coded(d));
             let parent = pi as u32;
@@ -666,7 +654,7 @@ pub fn cheapest_points(
                             parent,
                             cost,
                             coded: r,
-                            window: child_window(q),
+                            window: 0,
                             pred,
                         };
                     }
@@ -676,7 +664,7 @@ pub fn cheapest_points(
                         parent,
                         cost,
                         coded: r,
-                        window: child_window(q),
+                        window: 0,
                         pred,
                     });
                 }
@@ -767,6 +755,24 @@ pub fn cheapest_points(
         }
         next.sort_by(|a, b| a.cost.total_cmp(&b.cost));
         next.truncate(beam);
+        // A kept child's window for the vertex after it: its parent's, its
+        // step in, the step `STEPS` before out.
+        if along {
+            for child in next.iter_mut() {
+                let parent = &flat[child.parent as usize];
+                let step_in = (0..3)
+                    .map(|a| {
+                        let l = child.q[a].wrapping_sub(parent.q[a]).unsigned_abs();
+                        l.saturating_mul(l)
+                    })
+                    .fold(0u64, u64::saturating_add);
+                let mut w = parent.window.saturating_add(step_in);
+                if k > super::predict::AlongStep::STEPS {
+                    w = w.saturating_sub(step_out[child.parent as usize - level[k - 1]]);
+                }
+                child.window = w;
+            }
+        }
         flat.extend_from_slice(&next);
         level.push(flat.len());
     }
