@@ -178,6 +178,16 @@ pub fn bcc_point(k: [i64; 3], half: f64) -> glam::DVec3 {
 /// The `k`-th least of `values` (`1 ≤ k ≤ 16`), or infinity when there
 /// are fewer.
 fn kth_least(values: impl Iterator<Item = f64>, k: usize) -> f64 {
+    if k <= 2 {
+        // The slide's beam: the two least in two registers.
+        let (mut a, mut b) = (f64::INFINITY, f64::INFINITY);
+        for v in values {
+            if v < b {
+                (a, b) = if v < a { (v, a) } else { (a, v) };
+            }
+        }
+        return if k == 1 { a } else { b };
+    }
     let mut least = [f64::INFINITY; 16];
     for v in values {
         let mut i = k - 1;
@@ -618,7 +628,7 @@ pub fn cheapest_points(
                 if scratch_from[j] == at {
                     break;
                 }
-                let nd = flat[at];
+                let nd = &flat[at];
                 scratch[j] = nd.q;
                 scratch_from[j] = at;
                 at = nd.parent as usize;
