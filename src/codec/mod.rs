@@ -1319,9 +1319,9 @@ const SLIDE_REACH_TOLERANCES: f64 = 2.0;
 const SMALL_BLOCK_SLIDE_REACH_TOLERANCES: f64 = 3.0;
 
 /// Blocks of fewer points than this slide with [`SMALL_BLOCK_SLIDE_BEAM`]
-/// and [`SMALL_BLOCK_SLIDE_REACH_TOLERANCES`] (at most about 0.1 s of compress on 2
-/// cores); a large file's blocks of 4,096 curves are over it unless its
-/// curves are of a few points.
+/// and [`SMALL_BLOCK_SLIDE_REACH_TOLERANCES`] (at most about 0.1 s of
+/// compress on 2 cores); a large file's blocks of 4,096 curves are over it
+/// unless its curves are of a few points.
 const SMALL_BLOCK_POINTS: usize = 32_768;
 
 /// What a block has counted of an option its curves may try (a second
@@ -1370,10 +1370,10 @@ impl Tally {
 /// [`SHARE`](Self::SHARE) of the counted ones (both while neither has).
 /// Measured: 2,000 fornix replicas at 0.1 mm 11 % fewer instructions for
 /// 0.1 % more bytes; 3,000 noisy heart fibres (`benches/make_unseen.py`)
-/// 35 % fewer, 42 B fewer. With the slide's beam for the block
-/// and reach for the block ([`SLIDE_BEAM`] and [`SLIDE_REACH_TOLERANCES`], or
-/// [`SMALL_BLOCK_SLIDE_BEAM`] and [`SMALL_BLOCK_SLIDE_REACH_TOLERANCES`] in a small
-/// block).
+/// 35 % fewer, 42 B fewer. With the slide's beam and reach for the block
+/// ([`SLIDE_BEAM`] and [`SLIDE_REACH_TOLERANCES`], or
+/// [`SMALL_BLOCK_SLIDE_BEAM`] and [`SMALL_BLOCK_SLIDE_REACH_TOLERANCES`] in
+/// a small block).
 struct SlideVote {
     tally: Tally,
     search: quantise::Search,

@@ -273,8 +273,9 @@ const SLIDE_REACH: f64 = 0.5;
 pub struct Search {
     /// Partial choices kept from vertex to vertex (1: greedy; at most 16).
     pub beam: usize,
-    /// The most, in tolerances, that a vertex may slide on (besides
-    /// [`SLIDE_REACH`] of the segment after it). Where the input's
+    /// The most, in tolerances, that a vertex may slide on (the reach is
+    /// the lesser of this and [`SLIDE_REACH`] of the segment after the
+    /// vertex; a negative one is taken as 0). Where the input's
     /// segments are long against the tolerance (a curve already
     /// simplified, resampled bundles, noisy fibres at 0.1 mm), the tube
     /// and the choice among its points grow with it, and a slide that far
@@ -477,6 +478,10 @@ const _: () = assert!(super::predict::AlongStep::STEPS < PREDICT_LOOKBACK);
 /// prediction's own, so a caller need not predict again) and the
 /// predictions they are residuals of (`predict(points, k)` at `k ≥ 1`; 0 at
 /// the first); `None` if a vertex has no lattice point within `√tol2`.
+/// The promise holds up to rounding (a point on its boundary may pass by a
+/// few ulps: tests within the tube are taken from sums that round
+/// differently); the codec's `tol2` leaves a margin for it
+/// ([`super::encoder::acceptance_tolerance`]).
 /// (Sliding back as well, the vertex then covered by the next segment,
 /// measured no better: 1 % smaller on some files, 3 % larger on others.)
 #[allow(clippy::too_many_arguments)]
@@ -595,25 +600,23 @@ pub fn cheapest_points(
         let seg_after = after.map(|a| Segment::new(v, a));
         // Where vertex k may go: the lattice points within the tolerance
         // of the input from the vertex to half-way on to the one after
-        // ([`SLIDE_REACH`], at most [`Search::reach`]), each
-        // tested against the input segments as `feasible` tests the
-        // prediction. (Behind the vertex, a point beyond the tolerance of
-        // it is feasible only where the vertex before slid past it: with
-        // those the bytes were the same within 0.03 %.) Nearest the vertex
-        // first: of candidates that cost the same, the one that slides
-        // less is kept (measured against the order found: the hair at
-        // 0.1 mm 1.3 % smaller, 10,000 fornix replicas and the noisy heart
-        // fibres of `benches/make_unseen.py` 0.2 % and 0.4 % larger).
+        // ([`SLIDE_REACH`], at most [`Search::reach`]). A point within the
+        // tolerance of that part of the segment after is within it of the
+        // segment (at the last vertex the part is the vertex, which ends
+        // the segment before): no test of its own. (Behind the vertex, a
+        // point beyond the tolerance of it is feasible only where the
+        // vertex before slid past it: with those the bytes were the same
+        // within 0.03 %.) The nearest point is every partial choice's
+        // child already, never a candidate. Of candidates that cost the
+        // same, the one that slides less is kept (measured against the
+        // order found: the hair at 0.1 mm 1.3 % smaller, 10,000 fornix
+        // replicas and the noisy heart fibres of `benches/make_unseen.py`
+        // 0.2 % and 0.4 % larger).
         tube.clear();
         let ahead = after.map_or(v, |a| {
             let cap = search.reach * tol2.sqrt() / a.distance(v);
-            v + (a - v) * SLIDE_REACH.min(cap)
+            v + (a - v) * SLIDE_REACH.min(cap).max(0.0)
         });
-        // (A point within the tolerance of the vertex-to-`ahead` part of
-        // the segment after is within it of that segment, or of the
-        // segment before at the last vertex, where `ahead` is the vertex:
-        // no test of its own. The nearest point is every partial choice's
-        // child already, never a candidate.)
         lattice_near_segment(v, ahead, half, tol2, |q, x| {
             if !same_point(q, nearest) {
                 tube.push((q, x, x.distance_squared(v)));
@@ -747,7 +750,8 @@ pub fn cheapest_points(
                 // A point of the tube is within the tolerance of the input
                 // already: only the output segment into it is asked, which
                 // is within it where its end is (no division).
-                if (c < f64::INFINITY) & within(c) & enters(&top, c, slid)
+                // (An infinite cost is never `within`.)
+                if within(c) & enters(&top, c, slid)
                     && (slid <= tol2 || dist2_to_segment(v, o_prev, x) <= tol2)
                 {
                     let k = Kept {
@@ -1071,11 +1075,11 @@ mod tests {
             }
             let first = bcc_nearest(pts[0], half).unwrap();
             // Greedy, the codec's beam and a wider one, each with the
-            // codec's reaches and a shorter one; costed plainly and as
-            // model 10 codes the step.
+            // codec's reaches, a shorter one and a negative one (taken as
+            // 0); costed plainly and as model 10 codes the step.
             let search = Search {
                 beam: [1, 2, 4][trial % 3],
-                reach: [3.0, 2.0, 1.0, 3.0][trial % 4],
+                reach: [3.0, 2.0, 1.0, -1.0][trial % 4],
             };
             let (g, _, predicted) =
                 slide_second_order(&pts, half, tol, first, search, trial % 2 == 1);
