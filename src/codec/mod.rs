@@ -2062,14 +2062,13 @@ struct ArcsWorth {
 impl ArcsWorth {
     /// Below this share of the estimated bits, the search is sampled.
     const SHARE: f64 = 0.03;
-    /// One curve in this many is searched while sampled (eight a chunk of
-    /// [`CALIBRATION_CHUNK`]). Measured against 16 (session 55, 2 cores,
-    /// 100,000 fornix replicas and the sets of `benches/make_unseen.py
-    /// --heart 30000 --dipole 20000 --bundles 30000` at 0.1 and 0.5 mm, 20
-    /// file/tolerance pairs of the shared data and the unseen sets): the
-    /// same bytes within 14 B but 3 B on 3,000 heart fibres; the sampled
-    /// search was 5 % of the replicas' time at 0.1 mm with 16.
-    const SAMPLE: usize = 32;
+    /// One curve in this many is searched while sampled. (32 was measured
+    /// in session 55: the same bytes within 14 B on every set, 2 % less
+    /// time on the replicas at 0.1 mm; but in a block whose curves turn
+    /// smooth midway, the smooth curves' sample then saved too little
+    /// against the block's noisy total to turn the full search back on:
+    /// `the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does`.)
+    const SAMPLE: usize = 16;
 
     /// A curve whose arcs were searched was estimated at `estimate` bits
     /// as coded, and the arcs saved `saving` of the points' estimate.
