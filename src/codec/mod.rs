@@ -2057,29 +2057,49 @@ fn choose(
 struct ArcsWorth {
     saved: f64,
     total: f64,
+    /// The same of the chunk being coded, and of the one before it.
+    chunk: (f64, f64),
+    last: (f64, f64),
 }
 
 impl ArcsWorth {
     /// Below this share of the estimated bits, the search is sampled.
     const SHARE: f64 = 0.03;
-    /// One curve in this many is searched while sampled. (32 was measured
-    /// in session 55: the same bytes within 14 B on every set, 2 % less
-    /// time on the replicas at 0.1 mm; but in a block whose curves turn
-    /// smooth midway, the smooth curves' sample then saved too little
-    /// against the block's noisy total to turn the full search back on:
-    /// `the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does`.)
-    const SAMPLE: usize = 16;
+    /// One curve in this many is searched while sampled. Measured against
+    /// 16 (session 55): the same bytes within 14 B on every set, 2 % less
+    /// time on the replicas at 0.1 mm.
+    const SAMPLE: usize = 32;
+    /// The share of the last chunk's searched estimates that turns the
+    /// full search back on whatever the block's share: in a block whose
+    /// curves turn smooth midway, a chunk's sample of them saves too little
+    /// against the block's noisy total (at a [`SAMPLE`](Self::SAMPLE) of
+    /// 32, 8 smooth curves against 832 noisy ones:
+    /// `the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does`).
+    /// Four times the block's share: a sample of noisy fibres, whose arcs
+    /// win now and then, rarely passes it by chance.
+    const TURN: f64 = 4.0 * Self::SHARE;
 
     /// A curve whose arcs were searched was estimated at `estimate` bits
     /// as coded, and the arcs saved `saving` of the points' estimate.
     fn add(&mut self, estimate: u64, saving: u64) {
-        self.total += (estimate + saving) as f64;
-        self.saved += saving as f64;
+        let (total, saved) = ((estimate + saving) as f64, saving as f64);
+        self.total += total;
+        self.saved += saved;
+        self.chunk.0 += total;
+        self.chunk.1 += saved;
+    }
+
+    /// The chunk being coded ends.
+    fn end_chunk(&mut self) {
+        self.last = std::mem::take(&mut self.chunk);
     }
 
     /// Whether the next chunk searches every curve's arcs.
     fn pays(&self) -> bool {
-        self.total == 0.0 || self.saved >= Self::SHARE * self.total
+        let (last_total, last_saved) = self.last;
+        self.total == 0.0
+            || self.saved >= Self::SHARE * self.total
+            || (last_total > 0.0 && last_saved >= Self::TURN * last_total)
     }
 }
 
@@ -3209,6 +3229,7 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
                 held.push((code, plan));
             }
         }
+        worth.end_chunk();
     }
     let finished: Vec<(bool, Vec<u8>, Option<Vec<f64>>)> = streams
         .into_iter()

@@ -173,6 +173,10 @@ struct TckReader {
     /// Index of the next streamline.
     index: u64,
     done: bool,
+    /// The streamline being read (kept between streamlines: each is then
+    /// allocated once, at its length, rather than grown by doubling, which
+    /// touched fresh memory the kernel had to zero).
+    points: Vec<DVec3>,
 }
 
 impl TckReader {
@@ -320,6 +324,7 @@ impl TckReader {
             buf_at: data_at,
             index: 0,
             done: false,
+            points: Vec::new(),
         })
     }
 
@@ -386,7 +391,16 @@ impl TckReader {
 
     fn read_curve(&mut self) -> Result<Option<Curve>, IoError> {
         let index = self.index;
-        let mut points = Vec::new();
+        let mut points = std::mem::take(&mut self.points);
+        points.clear();
+        let r = self.read_points(index, &mut points);
+        self.points = points;
+        r.map(|done| done.then(|| Curve::from_points(self.points.as_slice().to_vec())))
+    }
+
+    /// The points of streamline `index` into `points`: `true` at its NaN
+    /// separator, `false` at the end of the data.
+    fn read_points(&mut self, index: u64, points: &mut Vec<DVec3>) -> Result<bool, IoError> {
         loop {
             let at = self.offset();
             let err = |path: &Path, reason: String| {
@@ -405,11 +419,11 @@ impl TckReader {
                     ));
                 }
                 self.check_count(index, false)?;
-                return Ok(None);
+                return Ok(false);
             };
             if t.iter().all(|v| v.is_nan()) {
                 self.index += 1;
-                return Ok(Some(Curve::from_points(points)));
+                return Ok(true);
             }
             if t.iter().all(|v| v.is_infinite()) {
                 if !points.is_empty() {
@@ -422,7 +436,7 @@ impl TckReader {
                     ));
                 }
                 self.check_count(index, true)?;
-                return Ok(None);
+                return Ok(false);
             }
             if t.iter().any(|v| !v.is_finite()) {
                 return Err(err(
