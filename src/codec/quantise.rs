@@ -563,6 +563,12 @@ pub fn cheapest_points(
     // kept candidates among them.
     let mut tube: Vec<([i64; 3], glam::DVec3, f64)> = Vec::new();
     let mut top: Vec<Kept> = Vec::with_capacity(beam);
+    const EMPTY: Kept = Kept {
+        cost: f64::INFINITY,
+        slid: f64::INFINITY,
+        q: [0; 3],
+        coded: [0; 3],
+    };
     // Every vertex's nearest lattice point first: a vertex without one
     // within the tolerance (or not codable) ends the search before its
     // neighbour's tube is sought. (The caller's, where it has them: the
@@ -660,7 +666,13 @@ pub fn cheapest_points(
             // (`c` the cost of `q`'s residual as coded, `r`.)
             let push = |next: &mut Vec<Node>, q: [i64; 3], c: f64, r: [i64; 3]| {
                 let cost = node.cost + c;
-                if let Some(o) = next.iter_mut().find(|o| same_point(o.q, q)) {
+                // (The whole list scanned, the last match kept: no exit
+                // from the scan to mispredict. A point is in it once.)
+                let mut found = usize::MAX;
+                for (i, o) in next.iter().enumerate() {
+                    found = if same_point(o.q, q) { i } else { found };
+                }
+                if let Some(o) = next.get_mut(found) {
                     if cost < o.cost {
                         *o = Node {
                             q,
@@ -706,14 +718,16 @@ pub fn cheapest_points(
             // under the cost (session 54's form) asked fewer costs and
             // tests but branched on every comparison, and the slide's time
             // was its mispredicted branches.
+            // (`top` is `beam` long, its empty places infinitely dear: a
+            // candidate enters where it comes before the last, with no
+            // test of the length.)
             top.clear();
-            // `k` into `top` (which it comes before the last of, if full).
-            let offer = |top: &mut Vec<Kept>, k: Kept| {
-                if top.len() == beam {
-                    top.pop();
-                }
-                let mut i = top.len();
-                top.push(k);
+            top.resize(beam, EMPTY);
+            let mut kept = 0;
+            // `k` into `top` (which it comes before the last of).
+            let mut offer = |top: &mut Vec<Kept>, k: Kept| {
+                kept += 1;
+                let mut i = beam - 1;
                 while i > 0 && goes_before(k.cost, k.slid, &top[i - 1]) {
                     top[i] = top[i - 1];
                     i -= 1;
@@ -721,9 +735,8 @@ pub fn cheapest_points(
                 top[i] = k;
             };
             // Whether a candidate would enter `top`.
-            let enters = |top: &Vec<Kept>, cost: f64, slid: f64| {
-                top.len() < beam || goes_before(cost, slid, &top[beam - 1])
-            };
+            let enters =
+                |top: &Vec<Kept>, cost: f64, slid: f64| goes_before(cost, slid, &top[beam - 1]);
             let pred_apart = !same_point(pred, nearest);
             if pred_apart {
                 let r = coded([0; 3]);
@@ -763,7 +776,7 @@ pub fn cheapest_points(
                     offer(&mut top, k);
                 }
             }
-            for k in &top {
+            for k in &top[..kept.min(beam)] {
                 push(&mut next, k.q, k.cost, k.coded);
             }
         }
