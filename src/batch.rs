@@ -148,7 +148,7 @@ pub fn compress_polylines(
 /// let wave: Vec<DVec3> = (0..600)
 ///     .map(|k| {
 ///         let s = k as f64 * 0.2;
-///         DVec3::new(s, 3.0 * (0.08 * s).sin(), 3.0 * (0.05 * s).cos())
+///         DVec3::new(s, 3.0 * (0.12 * s).sin(), 3.0 * (0.07 * s).cos())
 ///     })
 ///     .collect();
 /// let curves = Polylines::new(&wave, &[0, 600]).unwrap();

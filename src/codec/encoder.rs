@@ -263,8 +263,6 @@ macro_rules! accept_now {
     };
 }
 
-/// [`CurveEncoder::furthest`]'s body, written once for both of its forms
-/// (`queued` or `now`: how a candidate is checked).
 /// Vertices past the reach to beat that [`CurveEncoder::furthest`] tries
 /// for the first that passes, before it gallops from there. Session 56:
 /// the straight and corner kinds were searched from the chain's end like
@@ -281,6 +279,8 @@ macro_rules! accept_now {
 /// and 4 within 2 %.
 const TRIES_BEYOND: usize = 3;
 
+/// [`CurveEncoder::furthest`]'s body, written once for both of its forms
+/// (`queued` or `now`: how a candidate is checked).
 macro_rules! furthest_body {
     ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, $beat:ident, queued) => {
         furthest_body!(@ $self, $state, $frame, $from, $kind, $guess, $beat,
@@ -667,8 +667,9 @@ impl<'a> CurveEncoder<'a> {
     }
 
     /// Furthest-reaching element from `state` past input vertex `from`, or
-    /// with `beat`, only one reaching past that vertex (the first of
-    /// [`TRIES_BEYOND`] vertices after it that passes, galloped from).
+    /// with `beat`, only one reaching past that vertex (the guess where it
+    /// lies beyond, else the first of [`TRIES_BEYOND`] vertices after
+    /// `beat` that passes, galloped from).
     /// `guess`: the span of the previous element. Curves change slowly, so
     /// the search starts there: one check usually confirms it, and the
     /// galloping or bisection then takes a few more, instead of growing

@@ -173,9 +173,10 @@ struct TckReader {
     /// Index of the next streamline.
     index: u64,
     done: bool,
-    /// The streamline being read (kept between streamlines: each is then
-    /// allocated once, at its length, rather than grown by doubling, which
-    /// touched fresh memory the kernel had to zero).
+    /// The streamline being read, kept between streamlines (it keeps the
+    /// longest one's capacity): each curve handed out is a copy allocated
+    /// once, at its length, where each grew by doubling, which touched
+    /// fresh memory the kernel had to zero.
     points: Vec<DVec3>,
 }
 
