@@ -2087,13 +2087,16 @@ impl ArcsWorth {
     /// against the block's noisy total (at a [`SAMPLE`](Self::SAMPLE) of
     /// 32, 8 smooth curves against the 88 noisy ones searched of 832:
     /// `the_arcs_search_is_sampled_where_it_saves_nothing_and_resumes_where_it_does`).
-    /// Four times the block's share: a sample of noisy fibres, whose arcs
-    /// win now and then, rarely passes it by chance; a sample that saves
-    /// between the two waits for the block's share (8 curves a chunk).
+    /// Eight times the block's share: at four, the samples of 3,000 noisy
+    /// heart fibres (`benches/make_unseen.py`, 0.1 mm), whose arcs win now
+    /// and then, passed it often enough that full searches took 11 % more
+    /// cycles, for 99 B (0.05 %); at eight, as without it. A sample that
+    /// saves between the two waits for the block's share (8 curves a
+    /// chunk).
     /// Measured with `SAMPLE` (session 56): the bytes within 21 B of
     /// session 55's on every set, 1.5–1.8 % fewer cycles on the replicas
     /// and the heart fibres at 0.1 mm.
-    const TURN: f64 = 4.0 * Self::SHARE;
+    const TURN: f64 = 8.0 * Self::SHARE;
 
     /// A curve whose arcs were searched was estimated at `estimate` bits
     /// as coded, and the arcs saved `saving` of the points' estimate.
