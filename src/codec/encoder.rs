@@ -312,31 +312,18 @@ macro_rules! furthest_body {
             }
         }
         if good.is_none() {
-            match beat {
-                // Only a reach beyond `b` is wanted: the vertex after it
-                // decides, as the search takes the reaches that pass for a
-                // prefix (a reach that passes beyond one that fails is
-                // found only by chance either way).
-                Some(b) => {
-                    for $j in b + 1..=(b + TRIES_BEYOND).min(last) {
-                        if bad.is_some_and(|x| $j >= x) {
-                            break;
-                        }
-                        good = $candidate;
-                        if good.is_some() {
-                            break;
-                        }
-                    }
-                }
-                // The nearest vertex may be too close for the length step:
-                // take the first of the next few that passes.
-                None => {
-                    for $j in from + 1..=(from + 4).min(last) {
-                        good = $candidate;
-                        if good.is_some() {
-                            break;
-                        }
-                    }
+            // The first of a few vertices that passes, short of a vertex
+            // known to fail: after the chain's end (the nearest vertex may
+            // be too close for the length step), or with `beat` after it
+            // (only a reach beyond it is wanted; the search takes the
+            // reaches that pass for a prefix, which they are not always,
+            // hence more than one try: [`TRIES_BEYOND`]).
+            let (first, tries) = beat.map_or((from + 1, 4), |b| (b + 1, TRIES_BEYOND));
+            let end = (first + tries - 1).min(last).min(bad.map_or(usize::MAX, |x| x - 1));
+            for $j in first..=end {
+                good = $candidate;
+                if good.is_some() {
+                    break;
                 }
             }
         }
