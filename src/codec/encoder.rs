@@ -45,7 +45,7 @@ pub struct CurveEncoder<'a> {
     /// ([`CurveEncoder::look_ahead`], `--effort best`).
     pub look_ahead: bool,
     /// Whether a corner's bulge is coded against
-    /// [`corner_bulge_prediction`] (codec model 16 on).
+    /// [`CornerChord::bulge_prediction`] (codec model 16 on).
     pub bulge_prediction: bool,
 }
 
@@ -186,24 +186,23 @@ macro_rules! with_code_body {
             span: state.chord_steps,
         };
         if kind == ElementKind::Corner {
+            // (The frame found once for the prediction and every bulge.)
+            let chord = CornerChord::new(state.point, end, state.normal);
             if $self.bulge_prediction {
-                code.bulge_base = corner_bulge_prediction(
-                    state.point,
-                    end,
-                    state.normal,
-                    state.tangent,
-                    $self.q.offset,
-                );
+                code.bulge_base = chord.map_or([0, 0], |c| {
+                    c.bulge_prediction(state.tangent, $self.q.offset)
+                });
             }
+            let chord = chord?;
             let (tries, count) =
-                $self.corner_bulges(state.point, end, state.normal, from, j, code.bulge_base)?;
+                $self.corner_bulges(&chord, state.point, end, from, j, code.bulge_base)?;
             for b in tries.into_iter().take(count) {
                 // (The residual is what is coded: within the coder's range.)
                 let residual = [0, 1].map(|a| b[a].wrapping_sub(code.bulge_base[a]));
                 if !residual.into_iter().all(super::entropy::codable) {
                     continue;
                 }
-                let t = corner_from_code(state.point, end, state.normal, b, $self.q.offset)?;
+                let t = chord.tangent(b, $self.q.offset);
                 let arc = match $self.candidate_arc(state.point, t, end, from, j) {
                     Err(_) => return None,
                     Ok(None) => continue,
@@ -628,7 +627,8 @@ impl<'a> CurveEncoder<'a> {
         c
     }
 
-    /// Bulge codes to try for a corner from `q` to `end`: the estimate,
+    /// Bulge codes to try for a corner from `q` to `end` (`chord`, with
+    /// its bulge frame): the estimate,
     /// then `base`, the bulge's prediction (its residual is the cheapest;
     /// zero, a straight segment's tangent, before model 16), and how many of
     /// the two are distinct. (With the prediction, zero as a third try made
@@ -637,15 +637,15 @@ impl<'a> CurveEncoder<'a> {
     /// 0.1–0.6 % larger on most.)
     fn corner_bulges(
         &self,
+        chord: &CornerChord,
         q: DVec3,
         end: DVec3,
-        normal: DVec3,
         from: usize,
         to: usize,
         base: [i64; 2],
     ) -> Option<([[i64; 2]; 2], usize)> {
         let h = self.bulge_estimate(q, end, from, to);
-        let (f1, f2) = bulge_frame(q, end, normal)?;
+        let (f1, f2) = chord.frame();
         let b = [
             Quantiser::index(h.dot(f1), self.q.offset)?,
             Quantiser::index(h.dot(f2), self.q.offset)?,
@@ -978,13 +978,14 @@ impl<'a> CurveEncoder<'a> {
             }
             let end = first_end(q0, k, self.q.first);
             let h = self.bulge_estimate(q0, end, 0, j);
-            let (f1, f2) = bulge_frame(q0, end, DVec3::ZERO)?;
+            let chord = CornerChord::new(q0, end, DVec3::ZERO)?;
+            let (f1, f2) = chord.frame();
             let b = [
                 Quantiser::index(h.dot(f1), self.q.offset)?,
                 Quantiser::index(h.dot(f2), self.q.offset)?,
             ];
             for bulge in [b, [0, 0]] {
-                let t = corner_from_code(q0, end, DVec3::ZERO, bulge, self.q.offset)?;
+                let t = chord.tangent(bulge, self.q.offset);
                 let arc = match self.candidate_arc(q0, t, end, 0, j) {
                     Err(_) => return None,
                     Ok(None) if b == [0, 0] => break,
@@ -1118,62 +1119,97 @@ pub fn first_end(q0: DVec3, k: [i64; 3], step: f64) -> DVec3 {
     q0 + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * step
 }
 
+/// A corner's chord from `q` to `e` with its bulge frame, found once for
+/// the bulge's prediction ([`CornerChord::bulge_prediction`]) and the
+/// tangents of the bulges tried ([`CornerChord::tangent`]): before session
+/// 57 each of those found the frame again, four times a corner candidate
+/// (on the tracker's streamlines of `benches/make_unseen.py`, where 83 % of
+/// the elements are corners, 8 % of compress's cycles in the frame alone).
+/// The arithmetic is the same in every form, so the decoder, which builds
+/// one per corner, finds the encoder's tangents bit for bit.
+#[derive(Clone, Copy, Debug)]
+pub struct CornerChord {
+    /// The chord `e − q`, its length `c` and direction `u`.
+    d: DVec3,
+    c: f64,
+    u: DVec3,
+    /// The bulge frame: unit vectors across the chord, `f1` towards the
+    /// perpendicular part of the chain's normal, `f2 = u × f1`.
+    f1: DVec3,
+    f2: DVec3,
+}
+
+impl CornerChord {
+    /// The chord from `q` to `e` and its bulge frame, `f1` towards
+    /// `normal`'s perpendicular part (a deterministic perpendicular when
+    /// `normal` is zero); `None` for a chord of zero or non-finite length.
+    pub fn new(q: DVec3, e: DVec3, normal: DVec3) -> Option<CornerChord> {
+        let d = e - q;
+        let c = d.length();
+        if c == 0.0 || !c.is_finite() {
+            return None;
+        }
+        let u = d / c;
+        let f1 = if normal == DVec3::ZERO {
+            super::predict::any_perpendicular(u)
+        } else {
+            perpendicular_part(normal, u)
+        };
+        Some(CornerChord {
+            d,
+            c,
+            u,
+            f1,
+            f2: u.cross(f1),
+        })
+    }
+
+    /// The bulge frame `(f1, f2)`.
+    pub fn frame(&self) -> (DVec3, DVec3) {
+        (self.f1, self.f2)
+    }
+
+    /// The prediction a corner's bulge code is coded against (model 16 on):
+    /// half the bulge of the G1 arc along this chord, whose start tangent is
+    /// the chain's `tangent`, in the chord's bulge frame, rounded to offset
+    /// steps of `step`. A circular arc's sagitta vector is `(c/2)·tan(θ/2)` along the tangent's
+    /// part across the chord (`c` the chord's length, `θ` the tangent's angle
+    /// to it), and `tan(θ/2) = sin θ / (1 + cos θ)`: only `+ − × ÷ √`, so the
+    /// decoder computes the same integers on every platform. A corner is
+    /// chosen where the G1 arc's tangent has drifted from the curve's, so the
+    /// coded one lies between it and the chord's: measured on the hair, the
+    /// field lines, the fornix and the replicas at 0.5 mm, the whole G1 bulge
+    /// as the prediction left the residuals of densely sampled fibres larger
+    /// than none, half of it smaller everywhere. Zero where the tangent points
+    /// back along the chord or the bulge is not codable.
+    pub fn bulge_prediction(&self, tangent: DVec3, step: f64) -> [i64; 2] {
+        let predict = || -> Option<[i64; 2]> {
+            let cos = tangent.dot(self.u);
+            if !(1.0 + cos > 1e-9) {
+                return None;
+            }
+            let across = tangent - self.u * cos;
+            let h = across * (0.25 * self.c / (1.0 + cos));
+            let b = [h.dot(self.f1) / step, h.dot(self.f2) / step].map(f64::round);
+            b.iter()
+                .all(|x| x.is_finite() && x.abs() < (1u64 << 20) as f64)
+                .then(|| b.map(|x| x as i64))
+        };
+        predict().unwrap_or([0, 0])
+    }
+
+    /// The corner's start tangent from its bulge code ([`corner_from_code`]).
+    pub fn tangent(&self, bulge: [i64; 2], step: f64) -> DVec3 {
+        let h = (self.f1 * bulge[0] as f64 + self.f2 * bulge[1] as f64) * step;
+        corner_tangent(self.d / self.c, self.c, h)
+    }
+}
+
 /// The bulge frame of a corner from `q` to `e`: two unit vectors
 /// perpendicular to the chord, the first towards `normal`'s perpendicular
 /// part (a deterministic perpendicular when `normal` is zero).
 pub fn bulge_frame(q: DVec3, e: DVec3, normal: DVec3) -> Option<(DVec3, DVec3)> {
-    let d = e - q;
-    let c = d.length();
-    if c == 0.0 || !c.is_finite() {
-        return None;
-    }
-    let u = d / c;
-    let f1 = if normal == DVec3::ZERO {
-        super::predict::any_perpendicular(u)
-    } else {
-        perpendicular_part(normal, u)
-    };
-    Some((f1, u.cross(f1)))
-}
-
-/// The prediction a corner's bulge code is coded against (model 16 on):
-/// half the bulge of the G1 arc from `q` to `e`, whose start tangent is
-/// the chain's `tangent`, in the corner's bulge frame
-/// ([`bulge_frame`] with `normal`), rounded to offset steps of `step`. A
-/// circular arc's sagitta vector is `(c/2)·tan(θ/2)` along the tangent's
-/// part across the chord (`c` the chord's length, `θ` the tangent's angle
-/// to it), and `tan(θ/2) = sin θ / (1 + cos θ)`: only `+ − × ÷ √`, so the
-/// decoder computes the same integers on every platform. A corner is
-/// chosen where the G1 arc's tangent has drifted from the curve's, so the
-/// coded one lies between it and the chord's: measured on the hair, the
-/// field lines, the fornix and the replicas at 0.5 mm, the whole G1 bulge
-/// as the prediction left the residuals of densely sampled fibres larger
-/// than none, half of it smaller everywhere. Zero where the tangent points
-/// back along the chord or the bulge is not codable.
-pub fn corner_bulge_prediction(
-    q: DVec3,
-    e: DVec3,
-    normal: DVec3,
-    tangent: DVec3,
-    step: f64,
-) -> [i64; 2] {
-    let predict = || -> Option<[i64; 2]> {
-        let (f1, f2) = bulge_frame(q, e, normal)?;
-        let d = e - q;
-        let c = d.length();
-        let u = d / c;
-        let cos = tangent.dot(u);
-        if !(1.0 + cos > 1e-9) {
-            return None;
-        }
-        let across = tangent - u * cos;
-        let h = across * (0.25 * c / (1.0 + cos));
-        let b = [h.dot(f1) / step, h.dot(f2) / step].map(f64::round);
-        b.iter()
-            .all(|x| x.is_finite() && x.abs() < (1u64 << 20) as f64)
-            .then(|| b.map(|x| x as i64))
-    };
-    predict().unwrap_or([0, 0])
+    CornerChord::new(q, e, normal).map(|c| c.frame())
 }
 
 /// Start tangent of a corner element from its bulge code.
@@ -1184,11 +1220,7 @@ pub fn corner_from_code(
     bulge: [i64; 2],
     step: f64,
 ) -> Option<DVec3> {
-    let (f1, f2) = bulge_frame(q, e, normal)?;
-    let d = e - q;
-    let c = d.length();
-    let h = (f1 * bulge[0] as f64 + f2 * bulge[1] as f64) * step;
-    Some(corner_tangent(d / c, c, h))
+    CornerChord::new(q, e, normal).map(|c| c.tangent(bulge, step))
 }
 
 /// The chain state after an element. After a straight segment the

@@ -185,8 +185,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use encoder::{
-    acceptance_tolerance, corner_bulge_prediction, corner_from_code, element_end, first_end,
-    jump_end, next_state, CurveEncoder,
+    acceptance_tolerance, corner_from_code, element_end, first_end, jump_end, next_state,
+    CornerChord, CurveEncoder,
 };
 use entropy::{Adaptation, Bit, Decoder, Encoder, IntModel};
 use predict::Arc;
@@ -301,7 +301,7 @@ pub struct ElementCode {
     /// Corner bulge (sagitta vector) in offset steps; zero for G1.
     pub bulge: [i64; 2],
     /// A corner's bulge is coded as its difference from this prediction
-    /// (not coded: from model 16 on, [`encoder::corner_bulge_prediction`];
+    /// (not coded: from model 16 on, [`encoder::CornerChord::bulge_prediction`];
     /// zero before, and for the other kinds).
     pub bulge_base: [i64; 2],
     /// A jump's end relative to its start, in start steps (the other
@@ -833,7 +833,7 @@ fn sign_after(model: u8) -> bool {
 }
 
 /// Whether a corner's bulge is coded against half the G1 arc's
-/// ([`encoder::corner_bulge_prediction`]; model 16 on).
+/// ([`encoder::CornerChord::bulge_prediction`]; model 16 on).
 pub(crate) fn bulge_predicted(model: u8) -> bool {
     model >= 16
 }
@@ -3528,20 +3528,17 @@ pub fn decode_block(
                     };
                     let tangent = match kind {
                         ElementKind::Corner => {
-                            let base = if bulge_predicted(params.model) {
-                                corner_bulge_prediction(
-                                    state.point,
-                                    end,
-                                    state.normal,
-                                    state.tangent,
-                                    q.offset,
-                                )
-                            } else {
-                                [0, 0]
+                            let chord = CornerChord::new(state.point, end, state.normal);
+                            let base = match chord {
+                                Some(c) if bulge_predicted(params.model) => {
+                                    c.bulge_prediction(state.tangent, q.offset)
+                                }
+                                _ => [0, 0],
                             };
                             let b = [0, 1].map(|a| base[a].wrapping_add(m.bulge[a].get(&mut dec)));
-                            corner_from_code(state.point, end, state.normal, b, q.offset)
+                            chord
                                 .ok_or_else(|| bad(format!("element {k} has zero length")))?
+                                .tangent(b, q.offset)
                         }
                         ElementKind::Straight | ElementKind::Jump => {
                             (end - state.point).normalize()

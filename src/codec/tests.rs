@@ -1901,7 +1901,12 @@ fn densely_sampled_fibres_take_corners_and_straights_wherever_they_reach_further
 
 #[test]
 fn a_corners_bulge_is_predicted_as_half_the_g1_arcs() {
-    use encoder::{bulge_frame, corner_bulge_prediction, corner_from_code};
+    use encoder::{bulge_frame, corner_from_code, CornerChord};
+    let corner_bulge_prediction = |q, e, normal, tangent, step| {
+        CornerChord::new(q, e, normal)
+            .unwrap()
+            .bulge_prediction(tangent, step)
+    };
     // Arcs of radius 5 from the origin along +x, bending towards +y, to
     // the end at angle φ: the G1 arc's sagitta vector is the arc's middle
     // less the chord's; twice the prediction (at a fine step) is it, and
