@@ -318,7 +318,7 @@ impl Encoder {
     }
 
     /// Codes `bit` in the adaptive context `ctx`.
-    #[inline]
+    #[inline(always)]
     pub fn bit(&mut self, ctx: &mut Bit, bit: bool) {
         if self.adaptation == Adaptation::Fixed || self.tally.is_some() {
             return self.bit_slow(ctx, bit);

@@ -1118,6 +1118,9 @@ pub enum OwnPrediction {
 /// second order (first order for the second point), or the screw
 /// continuation of the last steps ([`helix_prediction`] as `screw` says),
 /// or the mean step ([`mean_step_prediction`]), as `own` says.
+/// (Inlined into the slide and the estimates, the screw's rotation fit
+/// called out of line: the common predictions then cost no call.)
+#[inline(always)]
 fn own_prediction(g: &[[i64; 3]], k: usize, own: OwnPrediction, screw: Screw) -> [i64; 3] {
     if own == OwnPrediction::Screw && k >= 4 {
         if let Some(p) = helix_prediction(g, k, screw) {
@@ -1180,7 +1183,8 @@ fn mean_step_prediction(g: &[[i64; 3]], k: usize) -> Option<[i64; 3]> {
 }
 
 /// [`mean_step_prediction`] through `f64` and [`quantise::bcc_nearest`]:
-/// its definition.
+/// its definition (rarely asked: out of line).
+#[inline(never)]
 fn mean_step_float(g: &[[i64; 3]], k: usize, w: usize) -> Option<[i64; 3]> {
     let p = [0, 1, 2].map(|a| {
         let last = g[k - 1][a] as f64;
@@ -1240,6 +1244,7 @@ fn mean_step_exact(last: [i64; 3], back: [i64; 3], w: usize) -> Option<Option<[i
 /// otherwise, or where that is undefined, the one that took the pair
 /// `(d₀, d₁)` to `(d₁, d₂)` of the last three steps. `None` where the steps
 /// are (nearly) collinear and the rotation is undefined.
+#[inline(never)]
 fn helix_prediction(g: &[[i64; 3]], k: usize, screw: Screw) -> Option<[i64; 3]> {
     let v = |i: usize| DVec3::new(g[i][0] as f64, g[i][1] as f64, g[i][2] as f64);
     if screw.pairs >= 2 && k >= 5 {
