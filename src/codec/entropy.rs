@@ -359,6 +359,17 @@ impl Encoder {
 
     /// Codes the low `n` bits of `v` at probability one half, high first.
     pub fn direct(&mut self, v: u64, n: usize) {
+        if self.adaptation == Adaptation::WarmUp && self.tally.is_none() {
+            // `bit` in a fresh context (probability exactly one half, in
+            // `PROB_BITS`), its update dropped: the same bounds.
+            for k in (0..n).rev() {
+                self.encode(
+                    (self.range >> PROB_BITS) << (PROB_BITS - 1),
+                    (v >> k) & 1 == 1,
+                );
+            }
+            return;
+        }
         for k in (0..n).rev() {
             let mut half = Bit::default();
             self.bit(&mut half, (v >> k) & 1 == 1);

@@ -866,6 +866,7 @@ pub fn step_length2(g: &[[i64; 3]], i: usize) -> u64 {
 /// (0 for `k ≤ 1`): one step in, one out, in integers (saturating, which
 /// only steps beyond `2^31` lattice units reach: the encoder's slide and
 /// the decoder update it in the same order, so they agree even then).
+#[inline]
 pub fn step_window(g: &[[i64; 3]], k: usize, before: u64) -> u64 {
     if k < 2 {
         return 0;
