@@ -1036,7 +1036,9 @@ fn along(model: u8) -> bool {
 /// The estimated bits of the lattice points `g` against `predict` from
 /// their third point on, with the along-step prediction and without (the
 /// start and the second point are coded alike either way).
-fn along_bits(g: &[[i64; 3]], predict: &dyn Fn(usize) -> [i64; 3]) -> (u64, u64) {
+/// (Generic, not `&dyn`: each prediction inlined into its own instance.)
+#[inline]
+fn along_bits(g: &[[i64; 3]], predict: impl Fn(usize) -> [i64; 3]) -> (u64, u64) {
     let (mut on, mut off) = (0u64, 0u64);
     let mut window = 0;
     for k in 2..g.len() {
@@ -1579,17 +1581,24 @@ fn slid_points(
     // tolerances, 10,000 fornix replicas at 0.1 mm), 5 % kept the resampled
     // bundles' gain (7–9 % at 0.1 mm) and most of the hair's, and made the
     // replicas 0.7 % smaller where no margin made them 0.2 % larger.
-    let flag = |predict: &dyn Fn(usize) -> [i64; 3], bits: u64| {
+    // (A generic function, not a closure taking `&dyn Fn`: the prediction
+    // inlined into each instance of `along_bits`.)
+    fn flag(
+        along: bool,
+        g: &[[i64; 3]],
+        predict: impl Fn(usize) -> [i64; 3],
+        bits: u64,
+    ) -> (bool, u64) {
         if !along {
             return (false, bits);
         }
-        let (on, off) = along_bits(&g, predict);
+        let (on, off) = along_bits(g, predict);
         if on.saturating_mul(21) < off.saturating_mul(20) {
             (true, bits - off + on)
         } else {
             (false, bits)
         }
-    };
+    }
     // The slide against `predict`, kept where its residuals are estimated
     // under `limit` (the rounded points' residuals). The start stays: the
     // residuals' estimates decide.
@@ -1646,7 +1655,7 @@ fn slid_points(
                     OwnPrediction::SecondOrder => second_order_bits,
                     _ => bits,
                 } - own_start_bits;
-                let (flag, rounded) = flag(&predict, rounded);
+                let (flag, rounded) = flag(along, &g, predict, rounded);
                 let own = |g: &[[i64; 3]], k| own_prediction(g, k, kind, screw);
                 let (grid, bits, predicted) = match slide!(own, flag, rounded) {
                     Some((grid, bits, predicted)) => (grid, bits, Some(predicted)),
@@ -1663,7 +1672,7 @@ fn slid_points(
             return (grid, flag, kind, predicted, own_start_bits + bits);
         }
         None => {
-            let (flag, bits) = flag(&|k| own_prediction(&g, k, own_kind, screw), bits);
+            let (flag, bits) = flag(along, &g, |k| own_prediction(&g, k, own_kind, screw), bits);
             let own = |g: &[[i64; 3]], k| own_prediction(g, k, own_kind, screw);
             let rounded = bits - own_start_bits;
             (slide!(own, flag, rounded), flag, own_start_bits, rounded)
@@ -1678,9 +1687,9 @@ fn slid_points(
             // all (the same values: a prediction depends on the points
             // before it only).
             let (flag, bits) = if reference_predicted.len() == n {
-                flag(&|k| reference_predicted[k], bits)
+                flag(along, &g, |k| reference_predicted[k], bits)
             } else {
-                flag(&|k| res.predict_next(&g, k, n, &foot), bits)
+                flag(along, &g, |k| res.predict_next(&g, k, n, &foot), bits)
             };
             let predict = |g: &[[i64; 3]], k| res.predict_next(g, k, n, &foot);
             let rounded = bits - start_bits;
