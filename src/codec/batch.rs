@@ -262,6 +262,7 @@ pub fn search_block(
                     give_up: e.give_up.clone(),
                     look_ahead: e.look_ahead,
                     bulge_prediction: e.bulge_prediction,
+                    corner_first: e.corner_first,
                 })
         })
         .collect();
@@ -402,6 +403,7 @@ mod tests {
                 give_up: None,
                 look_ahead: false,
                 bulge_prediction: false,
+                corner_first: false,
             };
             let o = pts[0];
             let radius = pts

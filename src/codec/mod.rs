@@ -441,7 +441,19 @@ pub fn curve_options(
     half: f64,
     arcs_scale: f64,
 ) -> CurveOptions {
-    match curve_encoder(points, params, half, arcs_scale) {
+    curve_options_ordered(points, params, half, arcs_scale, false)
+}
+
+/// [`curve_options`], the search after a corner trying the corner first
+/// where `corner_first` ([`encoder::CurveEncoder::corner_first`]).
+fn curve_options_ordered(
+    points: &[DVec3],
+    params: &CodecParams,
+    half: f64,
+    arcs_scale: f64,
+    corner_first: bool,
+) -> CurveOptions {
+    match curve_encoder(points, params, half, arcs_scale, corner_first) {
         None => CurveOptions {
             points: None,
             arcs: None,
@@ -460,12 +472,14 @@ pub fn curve_options(
 /// The encoder of one curve (`None` for an empty curve, or one so far out
 /// that `f32` output leaves no tolerance); its arcs search gives up where
 /// the points are cheaper, by the block's `arcs_scale` so far
-/// ([`encoder::GiveUp`]).
+/// ([`encoder::GiveUp`]); with `corner_first`, an element after a corner
+/// searches the corner first ([`encoder::CurveEncoder::corner_first`]).
 fn curve_encoder<'a>(
     points: &'a [DVec3],
     params: &CodecParams,
     half: f64,
     arcs_scale: f64,
+    corner_first: bool,
 ) -> Option<CurveEncoder<'a>> {
     if points.is_empty() {
         return None;
@@ -483,6 +497,7 @@ fn curve_encoder<'a>(
         give_up: Some(encoder::GiveUp::new(arcs_scale)),
         look_ahead: params.effort == Effort::Best,
         bulge_prediction: bulge_predicted(params.model),
+        corner_first,
     })
 }
 
@@ -2127,6 +2142,11 @@ impl ArcsWorth {
         self.last = std::mem::take(&mut self.chunk);
     }
 
+    /// Whether any curve's arcs have been searched and counted.
+    fn measured(&self) -> bool {
+        self.total > 0.0
+    }
+
     /// Whether the next chunk searches every curve's arcs.
     fn pays(&self) -> bool {
         let (last_total, last_saved) = self.last;
@@ -2527,6 +2547,7 @@ const FIRST_CHUNK: usize = 64;
 
 /// The options of a chunk of a block's curves, searched in parallel (or
 /// with `checker`, all together, their checks in batches).
+#[allow(clippy::too_many_arguments)]
 fn chunk_options<C: AsRef<[DVec3]> + Sync>(
     curves: &[C],
     params: &CodecParams,
@@ -2534,13 +2555,14 @@ fn chunk_options<C: AsRef<[DVec3]> + Sync>(
     arcs_scale: f64,
     checker: Option<&dyn batch::ArcChecker>,
     search_arcs: impl Fn(usize) -> bool + Sync,
+    corner_first: bool,
 ) -> (Vec<CurveOptions>, batch::BatchStats) {
     // A curve whose arcs are not searched goes as points where it can.
     let points_only = |i: usize, pts: &[DVec3]| -> Option<CurveOptions> {
         if search_arcs(i) {
             return None;
         }
-        let grid = match curve_encoder(pts, params, half, arcs_scale)?.points_code() {
+        let grid = match curve_encoder(pts, params, half, arcs_scale, false)?.points_code() {
             Some(CurveCode::Points { grid, .. }) => grid,
             _ => return None,
         };
@@ -2554,8 +2576,9 @@ fn chunk_options<C: AsRef<[DVec3]> + Sync>(
             .par_iter()
             .enumerate()
             .map(|(i, pts)| {
-                points_only(i, pts.as_ref())
-                    .unwrap_or_else(|| curve_options(pts.as_ref(), params, half, arcs_scale))
+                points_only(i, pts.as_ref()).unwrap_or_else(|| {
+                    curve_options_ordered(pts.as_ref(), params, half, arcs_scale, corner_first)
+                })
             })
             .collect();
         return (options, batch::BatchStats::default());
@@ -2570,7 +2593,7 @@ fn chunk_options<C: AsRef<[DVec3]> + Sync>(
         .zip(&only)
         .map(|(pts, only)| match only {
             Some(_) => None,
-            None => curve_encoder(pts.as_ref(), params, half, arcs_scale),
+            None => curve_encoder(pts.as_ref(), params, half, arcs_scale, corner_first),
         })
         .collect();
     let (arcs, stats) = batch::search_block(&encoders, checker);
@@ -2580,15 +2603,15 @@ fn chunk_options<C: AsRef<[DVec3]> + Sync>(
         .zip(arcs)
         .zip(only)
         .map(|((pts, arcs), only)| {
-            only.unwrap_or_else(
-                || match curve_encoder(pts.as_ref(), params, half, arcs_scale) {
+            only.unwrap_or_else(|| {
+                match curve_encoder(pts.as_ref(), params, half, arcs_scale, corner_first) {
                     Some(enc) => finish_options(&enc, arcs),
                     None => CurveOptions {
                         points: None,
                         arcs: None,
                     },
-                },
-            )
+                }
+            })
         })
         .collect();
     (options, stats)
@@ -3138,6 +3161,11 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
         // ([`encoder::GiveUp`], [`ArcsWorth`]).
         let sampled = !worth.pays();
         let searched = |i: usize| !sampled || i.is_multiple_of(ArcsWorth::SAMPLE);
+        // The corner first after a corner only where the arcs are known to
+        // pay: a block's first chunk, and a sample, measure what they save
+        // with the cheapest kind first, as `ArcsWorth::SHARE` was measured
+        // (`encoder::CurveEncoder::corner_first`).
+        let corner_first = !sampled && worth.measured();
         let options = chunk_options(
             chunk,
             params,
@@ -3145,6 +3173,7 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
             calibration.arcs_scale(),
             checker,
             searched,
+            corner_first,
         );
         checks.add(&options.1);
         for (i, (points, opt)) in chunk.iter().zip(options.0).enumerate() {
