@@ -786,7 +786,8 @@ impl<'a> CurveEncoder<'a> {
         // the first element).
         let mut last_kind: Option<ElementKind> = None;
         while from < n - 1 {
-            // Every kind is searched, the cheapest first, and a costlier one
+            // Every kind is searched (the cheapest first, but after a
+            // corner where `corner_first`, below), and a costlier one
             // kept where it reaches further than the one kept so far (a
             // straight segment costs a kind flag more, a corner also a
             // bulge): a corner leaves the tangent the G1 arcs inherit, whose
@@ -820,9 +821,12 @@ impl<'a> CurveEncoder<'a> {
                 };
             let mut chosen: Option<Candidate> = None;
             for (i, kind) in order.into_iter().enumerate() {
-                let found = match (i, ahead.take()) {
-                    (0, Some(found)) => found,
-                    _ => {
+                // (The look-ahead's search is a G1 search from the chain's
+                // end: only ever the first of the cheapest-first order.)
+                debug_assert!(ahead.is_none() || (i == 0 && kind == ElementKind::G1));
+                let found = match ahead.take() {
+                    Some(found) => found,
+                    None => {
                         // (Searched only as far as the reach kept so far,
                         // or beyond it where this kind is not the cheaper.)
                         let beat = chosen.as_ref().map(|g| {

@@ -3164,7 +3164,11 @@ fn encode_block_once<C: AsRef<[DVec3]> + Sync>(
         // The corner first after a corner only where the arcs are known to
         // pay: a block's first chunk, and a sample, measure what they save
         // with the cheapest kind first, as `ArcsWorth::SHARE` was measured
-        // (`encoder::CurveEncoder::corner_first`).
+        // (`encoder::CurveEncoder::corner_first`). (A chunk searched in full
+        // is counted in `worth` too, as searched: corner first. A block
+        // near the share may so stay searched in full a chunk longer; on
+        // the sets measured, the heart fibres and the replicas at 0.1 mm
+        // kept the same containers.)
         let corner_first = !sampled && worth.measured();
         let options = chunk_options(
             chunk,

@@ -600,6 +600,7 @@ fn the_corner_first_search_keeps_the_promise_and_the_bytes() {
     let half = quantise::lattice_half(tol, 128.0).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(57);
     let (mut plain_bits, mut first_bits, mut corners, mut elements) = (0u64, 0u64, 0, 0);
+    let mut differ = 0;
     for _ in 0..40 {
         // Steps of 0.5 mm whose direction wanders by up to 0.25 rad a step.
         let mut p = DVec3::new(rng.gen_range(-30.0..30.0), rng.gen_range(-30.0..30.0), 0.0);
@@ -629,13 +630,16 @@ fn the_corner_first_search_keeps_the_promise_and_the_bytes() {
         }
         plain_bits += estimated_bits(&plain);
         first_bits += estimated_bits(&first);
+        differ += (plain != first) as usize;
         if let CurveCode::Arcs { elements: e, .. } = &plain {
             corners += e.iter().filter(|e| e.kind == ElementKind::Corner).count();
             elements += e.len();
         }
     }
-    // Corners follow corners here: the order is exercised.
+    // Corners follow corners here, and the order is exercised: it finds
+    // other chains (a search order that ignored the flag would not).
     assert!(2 * corners > elements, "{corners} corners of {elements}");
+    assert!(differ >= 10, "{differ} of 40 chains differ");
     assert!(
         (first_bits as f64) < 1.02 * plain_bits as f64,
         "corner first {first_bits} bits, cheapest first {plain_bits}"
