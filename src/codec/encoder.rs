@@ -287,16 +287,31 @@ macro_rules! accept_now {
 /// and 4 within 2 %.
 const TRIES_BEYOND: usize = 3;
 
+/// [`TRIES_BEYOND`] for the cheaper kinds searched after a corner
+/// ([`CORNER_FIRST`]): only the corner's own reach (where the cheaper kind
+/// wins the tie) and the guess. Measured (session 58, cachegrind's cycles
+/// proxy, single thread, at 0.1 mm against 3): the tracker's streamlines
+/// of `benches/make_unseen.py` 5.1 % fewer cycles for 0.21 % more bytes
+/// (0.07 % at 0.5 mm), the dense ones 4.7 % for 0.07 %, the hair at 0.5 mm
+/// 3.6 % for 0.003 %; the solar field lines at 0.001 R☉ 0.05 % larger,
+/// every other of the 20 file and tolerance pairs checked within 0.03 %.
+/// (2 tries: a third of the cycles for a quarter of the bytes.) Where
+/// corners follow corners the G1 and straight elements that pass beyond
+/// the corner's reach but not at it are few: the cheaper kinds' searches
+/// drew 309,000 candidates for 10,000 elements kept, 220,000 with one try.
+const TRIES_AFTER_CORNER: usize = 1;
+
 /// The kinds of an element in the order they are searched: the cheapest
 /// first ([`CurveEncoder::chain`]).
 const CHEAPEST_FIRST: [ElementKind; 3] =
     [ElementKind::G1, ElementKind::Straight, ElementKind::Corner];
 
 /// The order after a corner: the corner first, then the cheaper kinds only
-/// from its reach on. Measured (session 57) on the tracker's streamlines
-/// of `benches/make_unseen.py` at 0.1 mm, where 83 % of the elements are
-/// corners: the G1 and straight searches from the chain's end drew 15 of
-/// the 27 candidate arcs an element and won 16 % of them.
+/// from its reach on ([`TRIES_AFTER_CORNER`] tries). Measured (session 57)
+/// on the tracker's streamlines of `benches/make_unseen.py` at 0.1 mm,
+/// where 83 % of the elements are corners: the G1 and straight searches
+/// from the chain's end drew 15 of the 27 candidate arcs an element and
+/// won 16 % of them.
 const CORNER_FIRST: [ElementKind; 3] =
     [ElementKind::Corner, ElementKind::G1, ElementKind::Straight];
 
@@ -315,25 +330,26 @@ fn cost_rank(kind: ElementKind) -> u8 {
 /// [`CurveEncoder::furthest`]'s body, written once for both of its forms
 /// (`queued` or `now`: how a candidate is checked).
 macro_rules! furthest_body {
-    ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, $beat:ident, queued) => {
-        furthest_body!(@ $self, $state, $frame, $from, $kind, $guess, $beat,
+    ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, $beat:ident, $tries:ident, queued) => {
+        furthest_body!(@ $self, $state, $frame, $from, $kind, $guess, $beat, $tries,
             |j| $self.candidate($state, $frame, $from, j, $kind).await,
             |good, bad, step, last| gallop(good, bad, step, last, async |j| {
                 $self.candidate($state, $frame, $from, j, $kind).await
             }).await)
     };
-    ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, $beat:ident, now) => {
-        furthest_body!(@ $self, $state, $frame, $from, $kind, $guess, $beat,
+    ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, $beat:ident, $tries:ident, now) => {
+        furthest_body!(@ $self, $state, $frame, $from, $kind, $guess, $beat, $tries,
             |j| $self.candidate_now($state, $frame, $from, j, $kind),
             |good, bad, step, last| gallop_now(good, bad, step, last, |j| {
                 $self.candidate_now($state, $frame, $from, j, $kind)
             }))
     };
     (@ $self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident,
-        $beat:ident,
+        $beat:ident, $tries:ident,
         |$j:ident| $candidate:expr,
         |$good:ident, $bad:ident, $step:ident, $last:ident| $gallop:expr) => {{
-        let (from, guess, beat): (usize, usize, Option<usize>) = ($from, $guess, $beat);
+        let (from, guess, beat, tries_beyond): (usize, usize, Option<usize>, usize) =
+            ($from, $guess, $beat, $tries);
         let last = $self.points.len() - 1;
         let mut good = None;
         let mut bad = None;
@@ -350,8 +366,9 @@ macro_rules! furthest_body {
             // be too close for the length step), or with `beat` after it
             // (only a reach beyond it is wanted; the search takes the
             // reaches that pass for a prefix, which they are not always,
-            // hence more than one try: [`TRIES_BEYOND`]).
-            let (first, tries) = beat.map_or((from + 1, 4), |b| (b + 1, TRIES_BEYOND));
+            // hence more than one try: [`TRIES_BEYOND`], but
+            // [`TRIES_AFTER_CORNER`]).
+            let (first, tries) = beat.map_or((from + 1, 4), |b| (b + 1, tries_beyond));
             let end = (first + tries - 1).min(last).min(bad.map_or(usize::MAX, |x| x - 1));
             for $j in first..=end {
                 good = $candidate;
@@ -689,8 +706,8 @@ impl<'a> CurveEncoder<'a> {
 
     /// Furthest-reaching element from `state` past input vertex `from`, or
     /// with `beat`, only one reaching past that vertex (the guess where it
-    /// lies beyond, else the first of [`TRIES_BEYOND`] vertices after
-    /// `beat` that passes, galloped from).
+    /// lies beyond, else the first of `tries` vertices after `beat` that
+    /// passes, galloped from: [`TRIES_BEYOND`], or [`TRIES_AFTER_CORNER`]).
     /// `guess`: the span of the previous element. Curves change slowly, so
     /// the search starts there: one check usually confirms it, and the
     /// galloping or bisection then takes a few more, instead of growing
@@ -706,12 +723,15 @@ impl<'a> CurveEncoder<'a> {
         kind: ElementKind,
         guess: usize,
         beat: Option<usize>,
+        tries: usize,
     ) -> Option<Candidate> {
         if self.mailbox.is_none() {
-            return self.furthest_now(state, frame, from, kind, guess, beat);
+            return self.furthest_now(state, frame, from, kind, guess, beat, tries);
         }
-        Box::pin(async move { furthest_body!(self, state, frame, from, kind, guess, beat, queued) })
-            .await
+        Box::pin(async move {
+            furthest_body!(self, state, frame, from, kind, guess, beat, tries, queued)
+        })
+        .await
     }
 
     /// [`furthest`](Self::furthest), each check made here and now.
@@ -723,8 +743,9 @@ impl<'a> CurveEncoder<'a> {
         kind: ElementKind,
         guess: usize,
         beat: Option<usize>,
+        tries: usize,
     ) -> Option<Candidate> {
-        furthest_body!(self, state, frame, from, kind, guess, beat, now)
+        furthest_body!(self, state, frame, from, kind, guess, beat, tries, now)
     }
 
     /// The arcs for this curve and the points they decode to, or `None`
@@ -836,7 +857,13 @@ impl<'a> CurveEncoder<'a> {
                                 g.reach
                             }
                         });
-                        self.furthest(&state, frame, from, kind, span, beat).await
+                        let tries = if i > 0 && order == CORNER_FIRST {
+                            TRIES_AFTER_CORNER
+                        } else {
+                            TRIES_BEYOND
+                        };
+                        self.furthest(&state, frame, from, kind, span, beat, tries)
+                            .await
                     }
                 };
                 if let Some(c) = found {
@@ -940,7 +967,15 @@ impl<'a> CurveEncoder<'a> {
         };
         let (st, fr) = after(&c);
         let next = self
-            .furthest(&st, &fr, c.reach, ElementKind::G1, c.reach - from, None)
+            .furthest(
+                &st,
+                &fr,
+                c.reach,
+                ElementKind::G1,
+                c.reach - from,
+                None,
+                TRIES_BEYOND,
+            )
             .await;
         let per_vertex = |a: &ElementCode, b: &ElementCode, reach: usize| {
             (super::element_bits(a) + super::element_bits(b)) as f64 / (reach - from) as f64
