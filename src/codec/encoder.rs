@@ -330,30 +330,29 @@ fn cost_rank(kind: ElementKind) -> u8 {
 /// [`CurveEncoder::furthest`]'s body, written once for both of its forms
 /// (`queued` or `now`: how a candidate is checked).
 macro_rules! furthest_body {
-    ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, $beat:ident, $tries:ident, queued) => {
-        furthest_body!(@ $self, $state, $frame, $from, $kind, $guess, $beat, $tries,
+    ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, $beat:ident, queued) => {
+        furthest_body!(@ $self, $state, $frame, $from, $kind, $guess, $beat,
             |j| $self.candidate($state, $frame, $from, j, $kind).await,
             |good, bad, step, last| gallop(good, bad, step, last, async |j| {
                 $self.candidate($state, $frame, $from, j, $kind).await
             }).await)
     };
-    ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, $beat:ident, $tries:ident, now) => {
-        furthest_body!(@ $self, $state, $frame, $from, $kind, $guess, $beat, $tries,
+    ($self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident, $beat:ident, now) => {
+        furthest_body!(@ $self, $state, $frame, $from, $kind, $guess, $beat,
             |j| $self.candidate_now($state, $frame, $from, j, $kind),
             |good, bad, step, last| gallop_now(good, bad, step, last, |j| {
                 $self.candidate_now($state, $frame, $from, j, $kind)
             }))
     };
     (@ $self:ident, $state:ident, $frame:ident, $from:ident, $kind:ident, $guess:ident,
-        $beat:ident, $tries:ident,
+        $beat:ident,
         |$j:ident| $candidate:expr,
         |$good:ident, $bad:ident, $step:ident, $last:ident| $gallop:expr) => {{
-        let (from, guess, beat, tries_beyond): (usize, usize, Option<usize>, usize) =
-            ($from, $guess, $beat, $tries);
+        let (from, guess, beat): (usize, usize, Option<(usize, usize)>) = ($from, $guess, $beat);
         let last = $self.points.len() - 1;
         let mut good = None;
         let mut bad = None;
-        if guess > 4 && from + guess < last && beat.is_none_or(|b| from + guess > b) {
+        if guess > 4 && from + guess < last && beat.is_none_or(|(b, _)| from + guess > b) {
             let $j = from + guess;
             match $candidate {
                 Some(c) => good = Some(c),
@@ -368,7 +367,7 @@ macro_rules! furthest_body {
             // reaches that pass for a prefix, which they are not always,
             // hence more than one try: [`TRIES_BEYOND`], but
             // [`TRIES_AFTER_CORNER`]).
-            let (first, tries) = beat.map_or((from + 1, 4), |b| (b + 1, tries_beyond));
+            let (first, tries) = beat.map_or((from + 1, 4), |(b, tries)| (b + 1, tries));
             let end = (first + tries - 1).min(last).min(bad.map_or(usize::MAX, |x| x - 1));
             for $j in first..=end {
                 good = $candidate;
@@ -705,9 +704,10 @@ impl<'a> CurveEncoder<'a> {
     }
 
     /// Furthest-reaching element from `state` past input vertex `from`, or
-    /// with `beat`, only one reaching past that vertex (the guess where it
-    /// lies beyond, else the first of `tries` vertices after `beat` that
-    /// passes, galloped from: [`TRIES_BEYOND`], or [`TRIES_AFTER_CORNER`]).
+    /// with `beat = Some((vertex, tries))`, only one reaching past that
+    /// vertex (the guess where it lies beyond, else the first of `tries`
+    /// vertices after it that passes, galloped from: [`TRIES_BEYOND`], or
+    /// [`TRIES_AFTER_CORNER`]).
     /// `guess`: the span of the previous element. Curves change slowly, so
     /// the search starts there: one check usually confirms it, and the
     /// galloping or bisection then takes a few more, instead of growing
@@ -722,16 +722,13 @@ impl<'a> CurveEncoder<'a> {
         from: usize,
         kind: ElementKind,
         guess: usize,
-        beat: Option<usize>,
-        tries: usize,
+        beat: Option<(usize, usize)>,
     ) -> Option<Candidate> {
         if self.mailbox.is_none() {
-            return self.furthest_now(state, frame, from, kind, guess, beat, tries);
+            return self.furthest_now(state, frame, from, kind, guess, beat);
         }
-        Box::pin(async move {
-            furthest_body!(self, state, frame, from, kind, guess, beat, tries, queued)
-        })
-        .await
+        Box::pin(async move { furthest_body!(self, state, frame, from, kind, guess, beat, queued) })
+            .await
     }
 
     /// [`furthest`](Self::furthest), each check made here and now.
@@ -742,10 +739,9 @@ impl<'a> CurveEncoder<'a> {
         from: usize,
         kind: ElementKind,
         guess: usize,
-        beat: Option<usize>,
-        tries: usize,
+        beat: Option<(usize, usize)>,
     ) -> Option<Candidate> {
-        furthest_body!(self, state, frame, from, kind, guess, beat, tries, now)
+        furthest_body!(self, state, frame, from, kind, guess, beat, now)
     }
 
     /// The arcs for this curve and the points they decode to, or `None`
@@ -850,20 +846,19 @@ impl<'a> CurveEncoder<'a> {
                     None => {
                         // (Searched only as far as the reach kept so far,
                         // or beyond it where this kind is not the cheaper.)
-                        let beat = chosen.as_ref().map(|g| {
-                            if cost_rank(kind) < cost_rank(g.code.kind) {
-                                g.reach - 1
-                            } else {
-                                g.reach
-                            }
-                        });
-                        let tries = if i > 0 && order == CORNER_FIRST {
+                        let tries = if order == CORNER_FIRST {
                             TRIES_AFTER_CORNER
                         } else {
                             TRIES_BEYOND
                         };
-                        self.furthest(&state, frame, from, kind, span, beat, tries)
-                            .await
+                        let beat = chosen.as_ref().map(|g| {
+                            if cost_rank(kind) < cost_rank(g.code.kind) {
+                                (g.reach - 1, tries)
+                            } else {
+                                (g.reach, tries)
+                            }
+                        });
+                        self.furthest(&state, frame, from, kind, span, beat).await
                     }
                 };
                 if let Some(c) = found {
@@ -967,15 +962,7 @@ impl<'a> CurveEncoder<'a> {
         };
         let (st, fr) = after(&c);
         let next = self
-            .furthest(
-                &st,
-                &fr,
-                c.reach,
-                ElementKind::G1,
-                c.reach - from,
-                None,
-                TRIES_BEYOND,
-            )
+            .furthest(&st, &fr, c.reach, ElementKind::G1, c.reach - from, None)
             .await;
         let per_vertex = |a: &ElementCode, b: &ElementCode, reach: usize| {
             (super::element_bits(a) + super::element_bits(b)) as f64 / (reach - from) as f64
