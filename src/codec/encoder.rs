@@ -272,7 +272,9 @@ macro_rules! accept_now {
 }
 
 /// Vertices past the reach to beat that [`CurveEncoder::furthest`] tries
-/// for the first that passes, before it gallops from there. Session 56:
+/// for the first that passes, before it gallops from there, in the
+/// cheapest-first order ([`CHEAPEST_FIRST`]; after a corner,
+/// [`TRIES_AFTER_CORNER`]). Session 56:
 /// the straight and corner kinds were searched from the chain's end like
 /// the G1 arc, though only a reach beyond the G1 arc's (or the straight
 /// one's) is kept. Searched only beyond it, the tracker's streamlines of
@@ -288,17 +290,20 @@ macro_rules! accept_now {
 const TRIES_BEYOND: usize = 3;
 
 /// [`TRIES_BEYOND`] for the cheaper kinds searched after a corner
-/// ([`CORNER_FIRST`]): only the corner's own reach (where the cheaper kind
-/// wins the tie) and the guess. Measured (session 58, cachegrind's cycles
-/// proxy, single thread, at 0.1 mm against 3): the tracker's streamlines
-/// of `benches/make_unseen.py` 5.1 % fewer cycles for 0.21 % more bytes
-/// (0.07 % at 0.5 mm), the dense ones 4.7 % for 0.07 %, the hair at 0.5 mm
-/// 3.6 % for 0.003 %; the solar field lines at 0.001 R☉ 0.05 % larger,
-/// every other of the 20 file and tolerance pairs checked within 0.03 %.
-/// (2 tries: a third of the cycles for a quarter of the bytes.) Where
-/// corners follow corners the G1 and straight elements that pass beyond
-/// the corner's reach but not at it are few: the cheaper kinds' searches
-/// drew 309,000 candidates for 10,000 elements kept, 220,000 with one try.
+/// ([`CORNER_FIRST`]): one try past the reach kept so far (for the G1 arc
+/// after a corner that passed, the corner's own reach, where the cheaper
+/// kind wins the tie), and the guess. Measured (session 58, cachegrind's
+/// cycles proxy, single thread, against 3; at 0.1 mm unless stated): the
+/// tracker's streamlines of `benches/make_unseen.py` 5.1 % fewer cycles for
+/// 0.21 % more bytes (0.07 % at 0.5 mm), the dense ones 4.7 % for 0.07 %,
+/// the hair at 0.5 mm 3.6 % for 0.003 %; the solar field lines at 0.001 R☉
+/// 0.05 % larger, every other of the 20 file and tolerance pairs checked
+/// within 0.03 %. (2 tries: under half the cycles for under a third of the
+/// bytes.) Where corners follow corners the G1 and straight elements that
+/// pass beyond the corner's reach but not at it are few: on the tracker's
+/// streamlines the cheaper kinds' searches drew 309,000 candidates (with
+/// one try 220,000) for the 10,000 G1 and straight elements kept of
+/// 46,000.
 const TRIES_AFTER_CORNER: usize = 1;
 
 /// The kinds of an element in the order they are searched: the cheapest
@@ -365,7 +370,8 @@ macro_rules! furthest_body {
             // be too close for the length step), or with `beat` after it
             // (only a reach beyond it is wanted; the search takes the
             // reaches that pass for a prefix, which they are not always,
-            // hence more than one try: [`TRIES_BEYOND`], but
+            // hence more than one try in the cheapest-first order,
+            // [`TRIES_BEYOND`]; after a corner only
             // [`TRIES_AFTER_CORNER`]).
             let (first, tries) = beat.map_or((from + 1, 4), |(b, tries)| (b + 1, tries));
             let end = (first + tries - 1).min(last).min(bad.map_or(usize::MAX, |x| x - 1));
