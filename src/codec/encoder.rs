@@ -858,11 +858,8 @@ impl<'a> CurveEncoder<'a> {
                             TRIES_BEYOND
                         };
                         let beat = chosen.as_ref().map(|g| {
-                            if cost_rank(kind) < cost_rank(g.code.kind) {
-                                (g.reach - 1, tries)
-                            } else {
-                                (g.reach, tries)
-                            }
+                            let wins_ties = cost_rank(kind) < cost_rank(g.code.kind);
+                            (if wins_ties { g.reach - 1 } else { g.reach }, tries)
                         });
                         self.furthest(&state, frame, from, kind, span, beat).await
                     }
